@@ -1,0 +1,1 @@
+//! Power spectral densities of random matter, and their blur by Gaussians (S2.14–S2.17).

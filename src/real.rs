@@ -1,0 +1,70 @@
+//! The scalar type the crate is generic over.
+//!
+//! Every numeric type in `gmueller` is generic over `T: Real`, implemented for `f32` (what
+//! renderers run) and `f64` (the reference precision of the tests).
+
+use nalgebra::RealField;
+use num_complex::Complex;
+
+/// A real floating-point scalar: `f32` or `f64`.
+///
+/// This is [`nalgebra::RealField`] (which brings `sqrt`, `sin_cos`, `exp_m1`, `hypot`, …) plus
+/// `Copy`, and two lossless-enough conversions to and from `f64` for literals and error reports.
+///
+/// # Examples
+/// ```
+/// use gmueller::real::Real;
+/// fn half<T: Real>(x: T) -> T { x * T::lit(0.5) }
+/// assert_eq!(half(3.0_f32), 1.5);
+/// assert_eq!(half(3.0_f64).to_f64(), 1.5);
+/// ```
+pub trait Real: RealField + Copy + Default + Send + Sync + 'static {
+    /// Machine epsilon of the type (`2⁻²³` for `f32`, `2⁻⁵²` for `f64`).
+    const EPSILON: Self;
+
+    /// Converts an `f64` literal to `Self` (rounding to nearest for `f32`).
+    #[must_use]
+    fn lit(x: f64) -> Self;
+
+    /// Converts `self` to `f64` (exact for both implementations).
+    #[must_use]
+    fn to_f64(self) -> f64;
+
+    /// The complex number `re + i·im`.
+    #[inline]
+    #[must_use]
+    fn cplx(re: Self, im: Self) -> Complex<Self> {
+        Complex::new(re, im)
+    }
+}
+
+impl Real for f32 {
+    const EPSILON: Self = f32::EPSILON;
+    #[inline]
+    fn lit(x: f64) -> Self {
+        x as f32
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
+
+impl Real for f64 {
+    const EPSILON: Self = f64::EPSILON;
+    #[inline]
+    fn lit(x: f64) -> Self {
+        x
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+/// `true` when the real and imaginary parts of `z` are both finite.
+#[inline]
+#[must_use]
+pub fn complex_is_finite<T: Real>(z: Complex<T>) -> bool {
+    z.re.is_finite() && z.im.is_finite()
+}
