@@ -156,7 +156,10 @@ impl<T: Real> JonesVector<T> {
     #[must_use]
     pub fn circular(hand: Handedness) -> Self {
         let h = T::lit(core::f64::consts::FRAC_1_SQRT_2);
-        Self(Vector2::new(re(h), Complex::new(T::zero(), hand.s3_sign::<T>() * h)))
+        Self(Vector2::new(
+            re(h),
+            Complex::new(T::zero(), hand.s3_sign::<T>() * h),
+        ))
     }
 
     /// Elliptical polarization of unit intensity with major-axis azimuth `azimuth` (ψ, radians from
@@ -506,7 +509,8 @@ impl<T: Real> JonesMatrix<T> {
     pub fn inverse(&self) -> Option<Self> {
         let det = self.determinant();
         let norm2 = self.0.iter().fold(T::zero(), |acc, z| acc + z.norm_sqr());
-        if !(det.norm_sqr().sqrt() > T::lit(8.0) * T::EPSILON * norm2) {
+        let det_abs = det.norm_sqr().sqrt();
+        if !det_abs.is_finite() || det_abs <= T::lit(8.0) * T::EPSILON * norm2 {
             return None;
         }
         let m = &self.0;
