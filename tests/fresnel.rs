@@ -73,7 +73,7 @@ fn flip_s3(m: Matrix4<f64>) -> Matrix4<f64> {
 }
 
 /// Textbook Fresnel amplitudes written independently with real angles (Hecht, *Optics*, §4.6.2,
-/// eqs. 4.34, 4.40, with our r_p sign = Born & Wolf's r_∥): for a real index and no TIR.
+/// eqs. 4.34, 4.40, with our `r_p` sign = Born & Wolf's `r_∥`): for a real index and no TIR.
 fn textbook_real(theta_i: f64, n: f64) -> (f64, f64, f64, f64) {
     let theta_t = (theta_i.sin() / n).asin();
     let ci = theta_i.cos();
@@ -384,7 +384,7 @@ fn try_coefficients_validates() {
 proptest! {
     #[test]
     fn lossless_dielectric_conserves_energy_and_matches_textbook(
-        theta_i in 0.0..1.5707f64, n in 1.01..4.0f64, inverse in any::<bool>()
+        theta_i in 0.0..std::f64::consts::FRAC_PI_2, n in 1.01..4.0f64, inverse in any::<bool>()
     ) {
         // n > 1 (external) and n < 1 (internal reflection, TIR beyond the critical angle).
         let n = if inverse { 1.0 / n } else { n };
@@ -394,7 +394,7 @@ proptest! {
 
     #[test]
     fn s_polarized_light_reflects_with_r_s(
-        theta_i in 0.0..1.5707f64, n in 0.2..4.0f64, k in 0.0..5.0f64
+        theta_i in 0.0..std::f64::consts::FRAC_PI_2, n in 0.2..4.0f64, k in 0.0..5.0f64
     ) {
         s_light_reflects_with_rs::<f64>(theta_i, n, k);
         s_light_reflects_with_rs::<f32>(theta_i, n, k);
@@ -402,7 +402,7 @@ proptest! {
 
     #[test]
     fn absorbing_media_conserve_energy_and_keep_stokes_valid(
-        theta_i in 0.0..1.5707f64, n in 0.05..5.0f64, k in 0.0..8.0f64
+        theta_i in 0.0..std::f64::consts::FRAC_PI_2, n in 0.05..5.0f64, k in 0.0..8.0f64
     ) {
         absorbing::<f64>(theta_i, n, k);
         absorbing::<f32>(theta_i, n, k);
