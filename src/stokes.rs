@@ -289,6 +289,9 @@ impl<T: Real> Stokes<T> {
     }
 
     /// The one-point CSD matrix `C = ½ Σ_k S_k σ_k` of this light (the inverse of S1.2).
+    ///
+    /// Exactly Hermitian; positive semidefinite up to the rounding slack [`Stokes::new`] allows
+    /// (`det C = ¼ (S0² − |S|²)`).
     #[must_use]
     pub fn to_csd(&self) -> CsdMatrix<T> {
         CsdMatrix {
