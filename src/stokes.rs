@@ -1,9 +1,17 @@
 //! Stokes parameters, the cross-spectral density (CSD) matrix, and `A_mül` between them (S1.1–S1.3).
+//!
+//! A CSD matrix `C = ⟨E(r₁) E(r₂)†⟩` (S1.1) and the generalized Stokes parameters
+//! `S = A_mül vec(C)` (S1.2) carry the same information; `vec` is column stacking
+//! ([`crate::stack::stack`], erratum 1). Equivalently `S_k = tr(σ_k C)` and `C = ½ Σ_k S_k σ_k`
+//! with σ₀ = I, σ₁ = diag(1, −1), σ₂ = [[0, 1], [1, 0]], σ₃ = [[0, −i], [i, 0]].
 
-use nalgebra::{Matrix4, Vector4};
+use core::ops::{Add, Mul, Neg, Sub};
+
+use nalgebra::{Matrix2, Matrix4, Vector4};
 use num_complex::Complex;
 
 use crate::error::{Error, ensure_finite};
+use crate::jones::JonesVector;
 use crate::real::Real;
 
 /// The matrix `A_mül` of S1.3 that maps the (column-)stacked CSD matrix to Stokes parameters.
@@ -112,6 +120,194 @@ impl<T: Real> Stokes<T> {
     pub fn s0(&self) -> T {
         self.0[0]
     }
+
+    /// `S1 = C_xx − C_yy`: positive for x̂-polarized light.
+    #[inline]
+    #[must_use]
+    pub fn s1(&self) -> T {
+        self.0[1]
+    }
+
+    /// `S2 = 2 Re C_xy`: positive for light polarized at +45° (between x̂ and ŷ).
+    #[inline]
+    #[must_use]
+    pub fn s2(&self) -> T {
+        self.0[2]
+    }
+
+    /// `S3 = 2 Im⟨E_x* E_y⟩`: positive for the circular state `(1, i)/√2` under `e^{−iωt}`.
+    #[inline]
+    #[must_use]
+    pub fn s3(&self) -> T {
+        self.0[3]
+    }
+
+    /// `|(S1, S2, S3)|`, the polarized intensity.
+    #[inline]
+    #[must_use]
+    pub fn polarized_intensity(&self) -> T {
+        (self.s1() * self.s1() + self.s2() * self.s2() + self.s3() * self.s3()).sqrt()
+    }
+
+    /// The degree of polarization, in `[0, 1]` (up to rounding).
+    ///
+    /// # Formula
+    /// ```text
+    /// DoP = √(S1² + S2² + S3²) / S0
+    /// ```
+    /// Zero intensity (`S0 = 0`, which validity forces to be the zero vector) returns 0.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::Stokes;
+    /// let s = Stokes::new(2.0_f64, 1.0, 0.0, 0.0).unwrap();
+    /// assert!((s.degree_of_polarization() - 0.5).abs() < 1e-15);
+    /// assert_eq!(Stokes::new(0.0_f64, 0.0, 0.0, 0.0).unwrap().degree_of_polarization(), 0.0);
+    /// ```
+    #[must_use]
+    pub fn degree_of_polarization(&self) -> T {
+        ratio_or_zero(self.polarized_intensity(), self.s0())
+    }
+
+    /// The degree of linear polarization, in `[0, 1]` (up to rounding).
+    ///
+    /// # Formula
+    /// ```text
+    /// DoLP = √(S1² + S2²) / S0
+    /// ```
+    /// Zero intensity returns 0.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::Stokes;
+    /// let s = Stokes::new(1.0_f64, 0.6, 0.0, 0.8).unwrap();
+    /// assert!((s.degree_of_linear_polarization() - 0.6).abs() < 1e-15);
+    /// ```
+    #[must_use]
+    pub fn degree_of_linear_polarization(&self) -> T {
+        ratio_or_zero(self.s1().hypot(self.s2()), self.s0())
+    }
+
+    /// The **signed** degree of circular polarization, in `[−1, 1]` (up to rounding).
+    ///
+    /// # Formula
+    /// ```text
+    /// DoCP = S3 / S0
+    /// ```
+    /// Positive for the state `(1, i)/√2` (the field turns from x̂ toward ŷ under `e^{−iωt}`; Born &
+    /// Wolf's left-handed, seen facing the source). Take `abs()` for the unsigned degree. Zero
+    /// intensity returns 0.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::Stokes;
+    /// let s = Stokes::new(1.0_f64, 0.6, 0.0, -0.8).unwrap();
+    /// assert!((s.degree_of_circular_polarization() + 0.8).abs() < 1e-15);
+    /// ```
+    #[must_use]
+    pub fn degree_of_circular_polarization(&self) -> T {
+        ratio_or_zero(self.s3(), self.s0())
+    }
+
+    /// The azimuth ψ of the polarization ellipse's major axis, in `(−π/2, π/2]`, radians from x̂
+    /// toward ŷ.
+    ///
+    /// # Formula
+    /// ```text
+    /// ψ = ½ atan2(S2, S1)
+    /// ```
+    /// Undefined for circular or unpolarized light (`S1 = S2 = 0`); then 0 is returned
+    /// (`atan2(±0, ±0)` is finite, never NaN).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::Stokes;
+    /// let s = Stokes::new(1.0_f64, 0.0, 1.0, 0.0).unwrap(); // +45° linear
+    /// assert!((s.azimuth() - core::f64::consts::FRAC_PI_4).abs() < 1e-15);
+    /// ```
+    #[must_use]
+    pub fn azimuth(&self) -> T {
+        if self.s1() == T::zero() && self.s2() == T::zero() {
+            return T::zero();
+        }
+        T::lit(0.5) * self.s2().atan2(self.s1())
+    }
+
+    /// The ellipticity angle χ of the polarization ellipse, in `[−π/4, π/4]`.
+    ///
+    /// # Formula
+    /// ```text
+    /// χ = ½ asin(S3 / √(S1² + S2² + S3²))
+    /// ```
+    /// `tan χ` is the signed ratio of minor to major axis; `χ > 0` has the handedness of
+    /// `(1, i)/√2` (`S3 > 0`). Unpolarized or zero light (`|S| = 0`) returns 0. The ratio is clamped
+    /// to `[−1, 1]` against rounding.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::Stokes;
+    /// let s = Stokes::new(2.0_f64, 0.0, 0.0, 1.0).unwrap(); // partially polarized, circular part
+    /// assert!((s.ellipticity_angle() - core::f64::consts::FRAC_PI_4).abs() < 1e-15);
+    /// ```
+    #[must_use]
+    pub fn ellipticity_angle(&self) -> T {
+        let r = ratio_or_zero(self.s3(), self.polarized_intensity());
+        T::lit(0.5) * r.clamp(-T::one(), T::one()).asin()
+    }
+
+    /// The fully polarized part `(|S|, S1, S2, S3)` of the decomposition `S = S_pol + S_unpol`.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::Stokes;
+    /// let s = Stokes::new(2.0_f64, 0.0, 0.6, 0.8).unwrap();
+    /// assert!((s.polarized_part().s0() - 1.0).abs() < 1e-15);
+    /// assert!((s.unpolarized_part().s0() - 1.0).abs() < 1e-15);
+    /// ```
+    #[must_use]
+    pub fn polarized_part(&self) -> Self {
+        Self(Vector4::new(
+            self.polarized_intensity(),
+            self.s1(),
+            self.s2(),
+            self.s3(),
+        ))
+    }
+
+    /// The unpolarized part `(S0 − |S|, 0, 0, 0)`, with `S0 − |S|` clamped at 0 against the
+    /// rounding slack allowed by [`Stokes::new`].
+    #[must_use]
+    pub fn unpolarized_part(&self) -> Self {
+        let u = (self.s0() - self.polarized_intensity()).max(T::zero());
+        Self(Vector4::new(u, T::zero(), T::zero(), T::zero()))
+    }
+
+    /// The same light as [`GeneralizedStokes`] (real components; the one-point case r₁ = r₂).
+    #[must_use]
+    pub fn to_generalized(&self) -> GeneralizedStokes<T> {
+        GeneralizedStokes(self.0.map(|x| Complex::new(x, T::zero())))
+    }
+
+    /// The one-point CSD matrix `C = ½ Σ_k S_k σ_k` of this light (the inverse of S1.2).
+    ///
+    /// Exactly Hermitian; positive semidefinite up to the rounding slack [`Stokes::new`] allows
+    /// (`det C = ¼ (S0² − |S|²)`).
+    #[must_use]
+    pub fn to_csd(&self) -> CsdMatrix<T> {
+        CsdMatrix {
+            m: self.to_generalized().csd_matrix(),
+            one_point: true,
+        }
+    }
+}
+
+/// `num / den`, or 0 when `den` is 0 (the degenerate zero-intensity / unpolarized cases).
+fn ratio_or_zero<T: Real>(num: T, den: T) -> T {
+    if den == T::zero() {
+        T::zero()
+    } else {
+        num / den
+    }
 }
 
 /// Generalized (two-point) Stokes parameters: a complex 4-vector `A_mül vec(C(r₁, r₂))` (S1.2).
@@ -136,5 +332,297 @@ impl<T: Real> GeneralizedStokes<T> {
     #[must_use]
     pub fn vector(&self) -> Vector4<Complex<T>> {
         self.0
+    }
+}
+
+impl<T: Real> GeneralizedStokes<T> {
+    /// The generalized Stokes parameters of a CSD matrix (S1.2), in closed form.
+    ///
+    /// # Formula
+    /// ```text
+    /// S1.2:  S = A_mül vec(C):   S0 = C_xx + C_yy,   S1 = C_xx − C_yy,
+    ///                            S2 = C_xy + C_yx,   S3 = i (C_xy − C_yx)
+    /// ```
+    /// For a one-point (Hermitian) CSD all four are real.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::{CsdMatrix, GeneralizedStokes};
+    /// use nalgebra::Matrix2;
+    /// use num_complex::Complex;
+    /// let z = |re: f64, im: f64| Complex::new(re, im);
+    /// let c = CsdMatrix::two_point(Matrix2::new(z(1.0, 0.5), z(0.0, 1.0), z(2.0, 0.0), z(0.5, 0.0))).unwrap();
+    /// let s = GeneralizedStokes::from_csd(&c);
+    /// assert!((s.vector()[3] - z(-1.0, -2.0)).norm() < 1e-15); // i (i − 2)
+    /// ```
+    #[must_use]
+    pub fn from_csd(c: &CsdMatrix<T>) -> Self {
+        let m = &c.m;
+        let (xx, xy, yx, yy) = (m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]);
+        let d = xy - yx;
+        Self(Vector4::new(
+            xx + yy,
+            xx - yy,
+            xy + yx,
+            // i · d
+            Complex::new(-d.im, d.re),
+        ))
+    }
+
+    /// The CSD matrix described by these parameters (the inverse of S1.2), as a two-point CSD.
+    ///
+    /// # Formula
+    /// ```text
+    /// vec(C) = A_mül⁻¹ S  ⇔  C = ½ Σ_k S_k σ_k = ½ ⎡ S0 + S1      S2 − i S3 ⎤
+    ///                                              ⎣ S2 + i S3    S0 − S1   ⎦
+    /// ```
+    /// The result is flagged two-point (not validated as Hermitian); use
+    /// [`CsdMatrix::to_stokes`] to validate it as a one-point CSD.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::{CsdMatrix, GeneralizedStokes};
+    /// use nalgebra::{Matrix2, Vector4};
+    /// use num_complex::Complex;
+    /// let z = |re: f64, im: f64| Complex::new(re, im);
+    /// let m = Matrix2::new(z(1.0, 0.5), z(0.0, 1.0), z(2.0, 0.0), z(0.5, 0.0));
+    /// let back = GeneralizedStokes::from_csd(&CsdMatrix::two_point(m).unwrap()).to_csd();
+    /// assert!((back.matrix() - m).norm() < 1e-15);
+    /// ```
+    #[must_use]
+    pub fn to_csd(&self) -> CsdMatrix<T> {
+        CsdMatrix {
+            m: self.csd_matrix(),
+            one_point: false,
+        }
+    }
+
+    /// `½ Σ_k S_k σ_k`.
+    fn csd_matrix(&self) -> Matrix2<Complex<T>> {
+        let h = T::lit(0.5);
+        let s = &self.0;
+        // i · S3
+        let is3 = Complex::new(-s[3].im, s[3].re);
+        Matrix2::new(
+            (s[0] + s[1]) * h,
+            (s[2] - is3) * h,
+            (s[2] + is3) * h,
+            (s[0] - s[1]) * h,
+        )
+    }
+}
+
+impl<T: Real> Add for GeneralizedStokes<T> {
+    type Output = Self;
+    /// Component-wise sum (incoherent superposition of the underlying fields' CSDs).
+    #[inline]
+    fn add(self, rhs: Self) -> Self {
+        Self(self.0 + rhs.0)
+    }
+}
+
+impl<T: Real> Sub for GeneralizedStokes<T> {
+    type Output = Self;
+    #[inline]
+    fn sub(self, rhs: Self) -> Self {
+        Self(self.0 - rhs.0)
+    }
+}
+
+impl<T: Real> Neg for GeneralizedStokes<T> {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        Self(-self.0)
+    }
+}
+
+impl<T: Real> Mul<T> for GeneralizedStokes<T> {
+    type Output = Self;
+    /// Scaling by a real factor.
+    #[inline]
+    fn mul(self, rhs: T) -> Self {
+        Self(self.0.map(|z| z * rhs))
+    }
+}
+
+impl<T: Real> Mul<Complex<T>> for GeneralizedStokes<T> {
+    type Output = Self;
+    /// Scaling by a complex factor (e.g. a propagation phase `e^{ik r̂·(r₁−r₂)}`).
+    #[inline]
+    fn mul(self, rhs: Complex<T>) -> Self {
+        Self(self.0 * rhs)
+    }
+}
+
+/// A 2×2 cross-spectral density (CSD) matrix `C = ⟨E(r₁) E(r₂)†⟩` (S1.1).
+///
+/// Built either as a validated **one-point** CSD ([`CsdMatrix::one_point`], r₁ = r₂: Hermitian
+/// positive semidefinite, the coherency matrix of classical optics) or as a **two-point** CSD
+/// ([`CsdMatrix::two_point`]: any finite complex matrix, since `C(r₁, r₂)† = C(r₂, r₁)` need not
+/// equal `C(r₁, r₂)`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CsdMatrix<T: Real> {
+    m: Matrix2<Complex<T>>,
+    /// Validated Hermitian positive semidefinite.
+    one_point: bool,
+}
+
+impl<T: Real> CsdMatrix<T> {
+    /// Relative tolerance, in machine epsilons, of the one-point checks: `|C − C†|` entries and the
+    /// negative slack of `C_xx`, `C_yy` (scaled by `max |C_ij|`) and `det C` (scaled by its square).
+    pub const TOLERANCE_ULPS: f64 = 256.0;
+
+    /// A validated one-point CSD matrix (Hermitian, positive semidefinite).
+    ///
+    /// The stored matrix is the Hermitian part `½(C + C†)` of the input, so that downstream
+    /// results (Stokes parameters) are exactly real.
+    ///
+    /// # Formula
+    /// ```text
+    /// S1.1 (r₁ = r₂):  C = ⟨E E†⟩ = C†,   C_xx ≥ 0,   C_yy ≥ 0,   det C = C_xx C_yy − |C_xy|² ≥ 0
+    /// ```
+    /// Each check allows `tol = TOLERANCE_ULPS · ε` relative to `s = max |C_ij|`: asymmetry
+    /// `≤ tol·s`, diagonal `≥ −tol·s`, `det ≥ −tol·s²`.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] for NaN or ∞ entries; [`Error::NotHermitian`] if `|C − C†|` exceeds the
+    /// tolerance; [`Error::NotPositiveDefinite`] if a diagonal entry or the determinant is
+    /// negative beyond it (reporting the smallest eigenvalue of the Hermitian part).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::CsdMatrix;
+    /// use nalgebra::Matrix2;
+    /// use num_complex::Complex;
+    /// let z = |re: f64, im: f64| Complex::new(re, im);
+    /// let c = CsdMatrix::one_point(Matrix2::new(z(1.0, 0.0), z(0.0, -0.5), z(0.0, 0.5), z(1.0, 0.0))).unwrap();
+    /// let s = c.to_stokes().unwrap();
+    /// assert!((s.s3() - 1.0).abs() < 1e-15); // 2 Im C_yx
+    /// assert!(CsdMatrix::one_point(Matrix2::new(z(1.0, 0.0), z(2.0, 0.0), z(2.0, 0.0), z(1.0, 0.0))).is_err());
+    /// ```
+    pub fn one_point(m: Matrix2<Complex<T>>) -> Result<Self, Error> {
+        ensure_finite("CSD matrix entry", m.iter().flat_map(|z| [z.re, z.im]))?;
+        let scale = m.iter().fold(T::zero(), |acc, z| acc.max(z.re.hypot(z.im)));
+        let tol = T::lit(Self::TOLERANCE_ULPS) * T::EPSILON;
+        let adj = m.adjoint();
+        let asym = (m - adj)
+            .iter()
+            .fold(T::zero(), |acc, z| acc.max(z.re.hypot(z.im)));
+        if asym > tol * scale {
+            return Err(Error::NotHermitian {
+                what: "one-point CSD matrix",
+                asymmetry: asym.to_f64(),
+            });
+        }
+        let h = (m + adj) * Complex::new(T::lit(0.5), T::zero());
+        let (a, d, b) = (h[(0, 0)].re, h[(1, 1)].re, h[(0, 1)]);
+        let det = a * d - b.norm_sqr();
+        if a < -tol * scale || d < -tol * scale || det < -tol * scale * scale {
+            // Smallest eigenvalue of the Hermitian 2×2: (a + d)/2 − √(((a − d)/2)² + |b|²).
+            let half = T::lit(0.5);
+            let min_eig = half * (a + d) - (half * (a - d)).hypot(b.re.hypot(b.im));
+            return Err(Error::NotPositiveDefinite {
+                what: "one-point CSD matrix",
+                min_eigenvalue: min_eig.to_f64(),
+            });
+        }
+        Ok(Self {
+            m: h,
+            one_point: true,
+        })
+    }
+
+    /// A two-point CSD matrix `C(r₁, r₂)`: any finite complex 2×2 matrix.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] for NaN or ∞ entries.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::CsdMatrix;
+    /// use nalgebra::Matrix2;
+    /// use num_complex::Complex;
+    /// let z = |re: f64, im: f64| Complex::new(re, im);
+    /// assert!(CsdMatrix::two_point(Matrix2::new(z(1.0, 1.0), z(2.0, 0.0), z(0.0, 0.0), z(-1.0, 0.0))).is_ok());
+    /// assert!(CsdMatrix::two_point(Matrix2::new(z(f64::NAN, 0.0), z(0.0, 0.0), z(0.0, 0.0), z(0.0, 0.0))).is_err());
+    /// ```
+    pub fn two_point(m: Matrix2<Complex<T>>) -> Result<Self, Error> {
+        ensure_finite("CSD matrix entry", m.iter().flat_map(|z| [z.re, z.im]))?;
+        Ok(Self {
+            m,
+            one_point: false,
+        })
+    }
+
+    /// The one-point CSD `E E†` of a fully polarized, fully coherent field (Hermitian, rank 1).
+    ///
+    /// # Formula
+    /// ```text
+    /// C = E E† = ⎡ |E_x|²     E_x E_y* ⎤
+    ///            ⎣ E_y E_x*   |E_y|²   ⎦
+    /// ```
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::{jones::JonesVector, stokes::CsdMatrix};
+    /// use num_complex::Complex;
+    /// let h = core::f64::consts::FRAC_1_SQRT_2;
+    /// let e = JonesVector::new(Complex::new(h, 0.0), Complex::new(0.0, h)).unwrap();
+    /// let s = CsdMatrix::from_jones_vector(&e).to_stokes().unwrap();
+    /// assert!((s.s3() - 1.0).abs() < 1e-15); // (1, i)/√2 has S3 = +1
+    /// ```
+    #[must_use]
+    pub fn from_jones_vector(e: &JonesVector<T>) -> Self {
+        let (x, y) = (e.ex(), e.ey());
+        let xy = x * y.conj();
+        Self {
+            m: Matrix2::new(
+                Complex::new(x.norm_sqr(), T::zero()),
+                xy,
+                xy.conj(),
+                Complex::new(y.norm_sqr(), T::zero()),
+            ),
+            one_point: true,
+        }
+    }
+
+    /// The entries `[[C_xx, C_xy], [C_yx, C_yy]]`.
+    #[inline]
+    #[must_use]
+    pub fn matrix(&self) -> Matrix2<Complex<T>> {
+        self.m
+    }
+
+    /// `true` if this matrix was validated (or built) as a one-point CSD.
+    #[inline]
+    #[must_use]
+    pub fn is_one_point(&self) -> bool {
+        self.one_point
+    }
+
+    /// The generalized Stokes parameters `A_mül vec(C)` (S1.2); see [`GeneralizedStokes::from_csd`].
+    #[inline]
+    #[must_use]
+    pub fn to_generalized_stokes(&self) -> GeneralizedStokes<T> {
+        GeneralizedStokes::from_csd(self)
+    }
+
+    /// The classical Stokes vector of a one-point CSD, `Re(A_mül vec(C))`.
+    ///
+    /// For a matrix built by [`CsdMatrix::one_point`] / [`CsdMatrix::from_jones_vector`] this
+    /// always succeeds; the result is a valid Stokes vector up to the validation tolerance (it
+    /// is not re-checked against [`Stokes::new`]'s slack, since `S0² − |S|² = 4 det C`).
+    ///
+    /// # Errors
+    /// For a two-point CSD, the checks of [`CsdMatrix::one_point`] are run first and their error
+    /// is returned if the matrix is not Hermitian positive semidefinite.
+    pub fn to_stokes(&self) -> Result<Stokes<T>, Error> {
+        let c = if self.one_point {
+            *self
+        } else {
+            Self::one_point(self.m)?
+        };
+        Ok(Stokes(GeneralizedStokes::from_csd(&c).0.map(|z| z.re)))
     }
 }
