@@ -339,8 +339,10 @@ fn change<T: Real>(from: &Frame<T>, to: &Frame<T>) -> Change<T> {
     let b = dot(&to.x, &from.y);
     let c = dot(&to.y, &from.x);
     let d = dot(&to.y, &from.y);
-    // det P = k̂·k̂′: the projection keeps orientation iff k̂·k̂′ ≥ 0.
-    let flip = dot(&from.k, &to.k) < T::zero();
+    // det P = k̂·k̂′: the projection keeps orientation iff k̂·k̂′ ≥ 0. S2.3's singular case
+    // (x̂′ ∥ k̂ or ŷ′ ∥ k̂) has k̂·k̂′ = 0, which rounding (frames are orthonormal to 256 ε) may
+    // make slightly negative: it counts as a rotation, as the text says, unless k̂·k̂′ < −256 ε.
+    let flip = dot(&from.k, &to.k) < -Frame::<T>::tolerance();
     let phi = if flip {
         // Closest reflection [[cos ψ, sin ψ], [sin ψ, −cos ψ]] to P: ψ = atan2(b + c, a − d).
         // It is diag(1, −1) times the rotation to `to.reversed()` (rows (a, b), (−c, −d)).
@@ -381,8 +383,8 @@ impl<T: Real> Change<T> {
 /// ```text
 /// P = ⎡ x̂′·x̂  x̂′·ŷ ⎤ = ⎡ a  b ⎤      (S2.3 before normalizing the projections)
 ///     ⎣ ŷ′·x̂  ŷ′·ŷ ⎦   ⎣ c  d ⎦
-/// k̂·k̂′ ≥ 0:  φ = atan2(c − b, a + d)      (τ = R(−φ), the rotation closest to P)
-/// k̂·k̂′ < 0:  φ = atan2(−(b + c), a − d)   (τ = diag(1, −1) R(−φ), the closest reflection)
+/// k̂·k̂′ ≥ −256 ε:  φ = atan2(c − b, a + d)      (τ = R(−φ), the rotation closest to P)
+/// k̂·k̂′ < −256 ε:  φ = atan2(−(b + c), a − d)   (τ = diag(1, −1) R(−φ), the closest reflection)
 /// ```
 /// When x̂′⊥ and ŷ′⊥ are orthogonal (same k̂, or k̂′ tilted about x̂′ or ŷ′), P's normalized rows
 /// are exactly τ and φ is the angle from x̂′⊥ to x̂, as in S2.3. In S2.3's singular case (x̂′ ∥ k̂,
@@ -409,7 +411,8 @@ pub fn rotation_angle<T: Real>(from: &Frame<T>, to: &Frame<T>) -> T {
     change(from, to).phi
 }
 
-/// `true` when the frame change `from → to` reverses transverse handedness (`k̂·k̂′ < 0`), so that
+/// `true` when the frame change `from → to` reverses transverse handedness (`k̂·k̂′ < 0`, beyond a
+/// rounding margin of `256 ε` so that S2.3's singular case `k̂·k̂′ = 0` counts as a rotation), so that
 /// [`tau`] is a reflection and [`frame_change_mueller`] flips the signs of S2 and S3.
 ///
 /// # Examples
@@ -442,7 +445,8 @@ pub fn reverses_handedness<T: Real>(from: &Frame<T>, to: &Frame<T>) -> bool {
 /// **Backward frames** (`k̂·k̂′ < 0`, e.g. specular reflection at incidence below 45° in s/p
 /// frames): the projection reverses orientation and S2.3's matrix is a reflection. τ is then
 /// `diag(1, −1) τ(from, to.reversed())`. It is discontinuous across `k̂·k̂′ = 0`, where the
-/// projection loses a dimension. `τ(to, from) = τ(from, to)ᵀ` always.
+/// projection loses a dimension; exactly at `k̂·k̂′ = 0` (S2.3's singular case) and within a
+/// rounding margin of `256 ε` below it, τ is the rotation. `τ(to, from) = τ(from, to)ᵀ` always.
 ///
 /// # Examples
 /// ```
