@@ -250,7 +250,7 @@ fn rotation_mueller_at_zero_and_pi() {
 }
 
 /// Turning the frame by ψ = +45° (x̂′ = (x̂+ŷ)/√2, ŷ′ = (−x̂+ŷ)/√2): the field E = x̂ has components
-/// (x̂′·E, ŷ′·E) = (1/√2, −1/√2), so by hand S2 = 2 Re(E_x′ E_y′*) = −1.
+/// (x̂′·E, ŷ′·E) = (1/√2, −1/√2), so by hand `S2 = 2 Re(E_x′ E_y′*) = −1`.
 #[test]
 fn forty_five_degree_frame_maps_s1_to_minus_s2() {
     let f = Frame::from_direction_and_x(Vector3::z(), Vector3::x()).unwrap();
