@@ -635,17 +635,18 @@ pub fn jones_matrix_to_frames<T: Real>(
     JonesMatrix(t_out * j.0 * t_in.transpose())
 }
 
-/// Converters between this crate's conventions and other libraries'.
-///
-/// Each function is an involution (its own inverse), so one function converts both ways.
-///
-/// | other convention | who | converter |
-/// |---|---|---|
-/// | time dependence `e^{+iωt}` (S3 sign) | Mitsuba 3, pypolar, py-pol's elements | `flip_time_convention_*` |
-/// | frame rotation `rotator(θ)` | Mitsuba 3 | [`mitsuba_rotator`] |
-/// | component order (p, s) instead of (s, p) | various Fresnel codes | `swap_sp_*` |
-/// | complex index `n − iκ` | `e^{+iωt}` codes | [`flip_time_convention_index`] |
 pub mod convention {
+    //! Converters between this crate's conventions and other libraries'.
+    //!
+    //! Each function is an involution (its own inverse), so one function converts both ways.
+    //!
+    //! | other convention | who | converter |
+    //! |---|---|---|
+    //! | time dependence `e^{+iωt}` (S3 sign) | Mitsuba 3, pypolar, py-pol's elements | `flip_time_convention_*` |
+    //! | frame rotation `rotator(θ)` | Mitsuba 3 | [`mitsuba_rotator`] |
+    //! | component order (p, s) instead of (s, p) | various Fresnel codes | `swap_sp_*` |
+    //! | complex index `n − iκ` | `e^{+iωt}` codes | [`flip_time_convention_index`] |
+
     use nalgebra::{Matrix2, Matrix4, Vector2};
     use num_complex::Complex;
 
