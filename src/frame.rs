@@ -376,7 +376,7 @@ impl<T: Real> Change<T> {
     }
 }
 
-/// S2.3's angle φ of the frame change `from → to`, in `(−π, π]`: the new transverse basis is the
+/// S2.3's angle φ of the frame change `from → to`, in `[−π, π]`: the new transverse basis is the
 /// old one turned by `ψ = −φ` counter-clockwise about k̂ (seen facing the source).
 ///
 /// # Formula
