@@ -5,8 +5,8 @@
 //! Equation numbers `S1.x`, `S2.x` refer to that supplemental.
 //!
 //! ## Module map (one module per concept)
-//! - [`real`]: the scalar trait [`Real`](real::Real) (`f32`, `f64`).
-//! - [`error`]: the [`Error`](error::Error) returned by validated constructors.
+//! - [`real`]: the scalar trait [`Real`] (`f32`, `f64`).
+//! - [`error`]: the [`Error`] returned by validated constructors.
 //! - [`jones`]: Jones vectors and matrices, standard polarization elements.
 //! - [`fresnel`]: Fresnel coefficients of dielectric and conducting interfaces as Jones matrices.
 //! - [`stack`]: the stack operator and Kronecker product, Lemma S1.1.
