@@ -14,6 +14,7 @@
 //! - [`mueller`]: classical and generalized Mueller matrices (S1.7) and their analysis.
 //! - [`frame`]: transverse frames, τ (S2.3) and the rotation Mueller matrix T(φ) (S2.4).
 //! - [`gaussian`]: anisotropic Gaussians and their Fourier transforms (Lemma S2.1, Corollary S2.2).
+//! - [`packet`]: the canonical wave packet (Definition 3.1): Stokes vector, coherence shapes, sources.
 //! - [`psd`]: power spectral densities of random matter and their Gaussian blur (S2.14–S2.17).
 //!
 //! ## Conventions
@@ -28,6 +29,7 @@ pub mod fresnel;
 pub mod gaussian;
 pub mod jones;
 pub mod mueller;
+pub mod packet;
 pub mod psd;
 pub mod real;
 pub mod stack;
