@@ -152,7 +152,7 @@ impl<T: Real> WavePacket<T> {
     /// use gmueller::stokes::Stokes;
     /// use nalgebra::Vector3;
     /// let frame = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-    /// let w = CoherenceShape::isotropic(20.0).unwrap(); // 20 µm coherence width
+    /// let w = CoherenceShape::<f64>::isotropic(20.0).unwrap(); // 20 µm coherence width
     /// let s = Stokes::new(1.0, 0.0, 1.0, 0.0).unwrap(); // +45° linear
     /// let p = WavePacket::new(s, w, w, frame, 0.5).unwrap();
     /// assert!((p.correlation().re - 0.5).abs() < 1e-15 && (p.chi() - 2.0).abs() < 1e-15);
