@@ -274,7 +274,7 @@ pub fn coefficients<T: Real>(cos_theta_i: T, eta: Complex<T>) -> FresnelCoeffici
 ///
 /// Computed without cancellation: the larger of `√((|z| ± Re z)/2)` first, the other as
 /// `Im z / (2 ·)`.
-fn principal_sqrt<T: Real>(z: Complex<T>) -> Complex<T> {
+pub(crate) fn principal_sqrt<T: Real>(z: Complex<T>) -> Complex<T> {
     let (a, b) = (z.re, z.im);
     let r = a.hypot(b);
     let half = T::lit(0.5);

@@ -1,0 +1,138 @@
+//! The geometry of one interaction: directions, angles, `h`, and the s/p frames.
+
+use nalgebra::{Vector2, Vector3};
+
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::real::Real;
+
+/// Everything about the directions of one interaction that the kernel and the pBSDFs need.
+///
+/// The surface frame is a [`Frame`] whose k̂ is the surface normal n̂ and whose (x̂, ŷ) = (t̂₁, t̂₂)
+/// span the tangent plane; light arrives from and leaves into the side n̂ points to.
+///
+/// # Formula
+/// ```text
+/// ŝ = −k̂_packet      (from the surface toward the source; DESIGN erratum 6)
+/// h = k (r̂ + ŝ),     h_t = (h·t̂₁, h·t̂₂)          (h_t = 0 at the specular direction)
+/// cos θ_i = ŝ·n̂,     cos θ_o = r̂·n̂
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Geometry<T: Real> {
+    /// Wavenumber `k = 2π/λ`.
+    pub k: T,
+    /// The surface frame (t̂₁, t̂₂, n̂).
+    pub surface: Frame<T>,
+    /// ŝ: unit vector from the surface toward the source.
+    pub to_source: Vector3<T>,
+    /// r̂: the exit direction (unit).
+    pub exit: Vector3<T>,
+    /// `cos θ_i = ŝ·n̂` (> 0).
+    pub cos_i: T,
+    /// `cos θ_o = r̂·n̂` (> 0).
+    pub cos_o: T,
+    /// The tangential part of `h = k(r̂ + ŝ)` in (t̂₁, t̂₂), rad/length.
+    pub h_t: Vector2<T>,
+    /// The incident beam's s/p frame ([`Frame::sp`] of the propagation direction −ŝ).
+    pub incident_sp: Frame<T>,
+    /// The exit beam's s/p frame ([`Frame::sp`] of r̂): the frame of the kernel's output.
+    pub exit_sp: Frame<T>,
+}
+
+impl<T: Real> Geometry<T> {
+    /// The geometry of light arriving from `to_source` (ŝ) and leaving along `exit` (r̂) at a
+    /// surface with frame `surface` (k̂ = n̂), at wavenumber `k`. Both directions are normalised.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] or [`Error::InvalidBasis`] for zero or non-finite directions;
+    /// [`Error::OutOfRange`] when either direction is not strictly above the surface
+    /// (`cos θ ≤ 0`): the surface kernel describes reflection only.
+    pub fn new(
+        k: T,
+        surface: &Frame<T>,
+        to_source: Vector3<T>,
+        exit: Vector3<T>,
+    ) -> Result<Self, Error> {
+        let s = unit(to_source, "direction to the source")?;
+        let r = unit(exit, "exit direction")?;
+        let n = surface.k();
+        let (cos_i, cos_o) = (s.dot(&n), r.dot(&n));
+        if !(cos_i > T::zero()) {
+            return Err(Error::OutOfRange {
+                what: "cos θ_i (source below the surface)",
+                value: cos_i.to_f64(),
+                expected: "> 0",
+            });
+        }
+        if !(cos_o > T::zero()) {
+            return Err(Error::OutOfRange {
+                what: "cos θ_o (exit direction below the surface)",
+                value: cos_o.to_f64(),
+                expected: "> 0",
+            });
+        }
+        let h = (r + s) * k;
+        let h_t = Vector2::new(h.dot(&surface.x()), h.dot(&surface.y()));
+        let incident_sp = Frame::sp(-s, n)?;
+        let exit_sp = Frame::sp(r, n)?;
+        Ok(Self {
+            k,
+            surface: *surface,
+            to_source: s,
+            exit: r,
+            cos_i,
+            cos_o,
+            h_t,
+            incident_sp,
+            exit_sp,
+        })
+    }
+
+    /// The wavelength `λ = 2π/k`.
+    #[inline]
+    #[must_use]
+    pub fn wavelength(&self) -> T {
+        T::two_pi() / self.k
+    }
+
+    /// `sin θ_i` (≥ 0).
+    #[inline]
+    #[must_use]
+    pub fn sin_i(&self) -> T {
+        (T::one() - self.cos_i * self.cos_i).max(T::zero()).sqrt()
+    }
+
+    /// `sin θ_o` (≥ 0).
+    #[inline]
+    #[must_use]
+    pub fn sin_o(&self) -> T {
+        (T::one() - self.cos_o * self.cos_o).max(T::zero()).sqrt()
+    }
+
+    /// `(cos φ, sin φ)` of the exit azimuth φ measured from the forward half of the plane of
+    /// incidence (φ = 0 at the specular direction), positive toward `n̂ × û`, where
+    /// `û = n̂ × ŝ_in` is the forward tangent and `ŝ_in` the incident beam's s vector.
+    ///
+    /// Computed from the exit beam's s vector, `ŝ_out = (sin φ) û − (cos φ) v̂` with
+    /// `v̂ = n̂ × û`, so it stays defined — and consistent with [`Geometry::exit_sp`] — at normal
+    /// incidence and normal exitance, where the azimuth of r̂ itself is not.
+    #[must_use]
+    pub fn exit_azimuth(&self) -> (T, T) {
+        let n = self.surface.k();
+        let u = n.cross(&self.incident_sp.x());
+        let v = n.cross(&u);
+        let s_out = self.exit_sp.x();
+        (-s_out.dot(&v), s_out.dot(&u))
+    }
+}
+
+fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
+    crate::error::ensure_finite(what, v.iter().copied())?;
+    let n = v.norm();
+    if !(n > T::zero()) || !n.is_finite() {
+        return Err(Error::InvalidBasis {
+            reason: "zero direction vector",
+        });
+    }
+    Ok(v / n)
+}

@@ -1,0 +1,228 @@
+//! Polarimetric BSDFs (S2.19): the classical Mueller matrix `M` of the interaction, from the
+//! incident beam's s/p frame to the exit beam's s/p frame.
+
+use nalgebra::Matrix2;
+use num_complex::Complex;
+
+use super::geometry::Geometry;
+use crate::error::Error;
+use crate::fresnel::{self, principal_sqrt};
+use crate::jones::JonesMatrix;
+use crate::mueller::Mueller;
+use crate::real::Real;
+
+/// A pBSDF: the Mueller matrix `M(ŝ → r̂)` of S2.19, from the incident s/p frame
+/// ([`Geometry::incident_sp`]) to the exit s/p frame ([`Geometry::exit_sp`]).
+///
+/// `M` is dimensionless here: the kernel supplies the `cos θ_o / λ²` of S2.20.
+pub trait Pbsdf<T: Real> {
+    /// The Mueller matrix for this geometry.
+    #[must_use]
+    fn mueller(&self, g: &Geometry<T>) -> Mueller<T>;
+
+    /// `M₀₀` alone (what the scalar model level needs); override when cheaper than
+    /// [`Pbsdf::mueller`].
+    #[inline]
+    #[must_use]
+    fn m00(&self, g: &Geometry<T>) -> T {
+        self.mueller(g).0[(0, 0)]
+    }
+}
+
+/// A constant Mueller matrix, the same for every geometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConstantMueller<T: Real>(pub Mueller<T>);
+
+impl<T: Real> Pbsdf<T> for ConstantMueller<T> {
+    #[inline]
+    fn mueller(&self, _g: &Geometry<T>) -> Mueller<T> {
+        self.0
+    }
+}
+
+/// Specular reflection by a planar interface of relative index `η = n + iκ` (dielectric or
+/// conductor): the Mueller matrix of [`fresnel::reflection`] at `cos θ_i`, in s/p frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FresnelReflection<T: Real> {
+    eta: Complex<T>,
+}
+
+impl<T: Real> FresnelReflection<T> {
+    /// A Fresnel reflector.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] or [`Error::OutOfRange`] unless `Re η > 0`, `Im η ≥ 0`, finite.
+    pub fn new(eta: Complex<T>) -> Result<Self, Error> {
+        validate_eta(eta)?;
+        Ok(Self { eta })
+    }
+}
+
+impl<T: Real> Pbsdf<T> for FresnelReflection<T> {
+    #[inline]
+    fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
+        Mueller::from_jones(&fresnel::reflection(g.cos_i, self.eta))
+    }
+    #[inline]
+    fn m00(&self, g: &Geometry<T>) -> T {
+        let c = fresnel::coefficients(g.cos_i, self.eta);
+        (c.reflectance_s() + c.reflectance_p()) * T::lit(0.5)
+    }
+}
+
+/// First-order perturbation (Rayleigh–Rice) scattering by a rough interface of relative
+/// permittivity `ε = η²`, as SCATMECH's `Microroughness_BRDF_Model` (Germer, Appl. Opt. 36,
+/// 8798, 1997) defines its polarization factors.
+///
+/// # Formula
+/// ```text
+/// q_i = √(ε − sin²θ_i),   q_o = √(ε − sin²θ_o)           (principal branch)
+/// ss =  (ε−1) cos φ / [(cos θ_i + q_i)(cos θ_o + q_o)]
+/// pp =  (ε−1)(ε sin θ_i sin θ_o − q_o q_i cos φ) / [(ε cos θ_i + q_i)(ε cos θ_o + q_o)]
+/// ps = −(ε−1) q_i sin φ / [(ε cos θ_i + q_i)(cos θ_o + q_o)]      (p in → s out)
+/// sp = −(ε−1) q_o sin φ / [(cos θ_i + q_i)(ε cos θ_o + q_o)]      (s in → p out)
+/// J  = 2k cos θ_i [[ss, ps], [sp, pp]],      M = A_mül (J* ⊗ J) A_mül⁻¹   (S1.7)
+/// ```
+/// φ is the exit azimuth from the forward plane of incidence ([`Geometry::exit_azimuth`]).
+/// The factor `2k cos θ_i` makes the kernel's plane-wave limit `cos θ_o/λ² · M · 2π p(h_t)`
+/// equal the Rayleigh–Rice BRDF `16π²/λ⁴ cos θ_i cos θ_o Q S(f)` times `cos θ_i`
+/// (`p = S/(2π)` converts SCATMECH's PSD to ours): the kernel returns radiance per unit
+/// incident irradiance *across the beam*, the BRDF is per unit irradiance *on the surface*.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RayleighRice<T: Real> {
+    epsilon: Complex<T>,
+}
+
+impl<T: Real> RayleighRice<T> {
+    /// A Rayleigh–Rice scatterer with substrate index `η = n + iκ` (relative permittivity η²).
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] or [`Error::OutOfRange`] unless `Re η > 0`, `Im η ≥ 0`, finite.
+    pub fn new(eta: Complex<T>) -> Result<Self, Error> {
+        validate_eta(eta)?;
+        Ok(Self {
+            epsilon: eta * eta,
+        })
+    }
+
+    /// The polarization factors `[[ss, ps], [sp, pp]]` (without `2k cos θ_i`).
+    #[must_use]
+    pub fn factors(&self, g: &Geometry<T>) -> Matrix2<Complex<T>> {
+        let e = self.epsilon;
+        let one = Complex::new(T::one(), T::zero());
+        let (si, so) = (g.sin_i(), g.sin_o());
+        let (ci, co) = (g.cos_i, g.cos_o);
+        let (cphi, sphi) = g.exit_azimuth();
+        let qi = principal_sqrt(e - one * (si * si));
+        let qo = principal_sqrt(e - one * (so * so));
+        let em1 = e - one;
+        let ss = em1 * cphi / ((qi + ci) * (qo + co));
+        let pp = em1 * (e * (si * so) - qo * qi * cphi) / ((e * ci + qi) * (e * co + qo));
+        let ps = -em1 * qi * sphi / ((e * ci + qi) * (qo + co));
+        let sp = -em1 * qo * sphi / ((qi + ci) * (e * co + qo));
+        Matrix2::new(ss, ps, sp, pp)
+    }
+
+    /// The Jones matrix `2k cos θ_i [[ss, ps], [sp, pp]]`.
+    #[must_use]
+    pub fn jones(&self, g: &Geometry<T>) -> JonesMatrix<T> {
+        JonesMatrix(self.factors(g) * Complex::new(T::lit(2.0) * g.k * g.cos_i, T::zero()))
+    }
+}
+
+impl<T: Real> Pbsdf<T> for RayleighRice<T> {
+    #[inline]
+    fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
+        Mueller::from_jones(&self.jones(g))
+    }
+}
+
+/// A scalar phase-screen (Kirchhoff) scatterer: a height field `z(x)` on a reflector of
+/// amplitude reflectance `r` imprints the phase `v z(x)`, `v = k (cos θ_i + cos θ_o)`, so the
+/// first-order scattered field is `i v z(x) r` times the incident field and
+/// ```text
+/// M = |r|² v² I₄          (polarization-preserving)
+/// ```
+/// This is the model of the reference scalar tracer; with the kernel's roughness attenuation it
+/// is the first term of the Beckmann–Kirchhoff series.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseScreen<T: Real> {
+    reflectance: T,
+}
+
+impl<T: Real> PhaseScreen<T> {
+    /// A phase screen on a reflector of power reflectance `|r|²` in `[0, 1]`.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless `0 ≤ |r|² ≤ 1`.
+    pub fn new(reflectance: T) -> Result<Self, Error> {
+        if !(reflectance >= T::zero() && reflectance <= T::one()) {
+            return Err(Error::OutOfRange {
+                what: "power reflectance",
+                value: reflectance.to_f64(),
+                expected: "[0, 1]",
+            });
+        }
+        Ok(Self { reflectance })
+    }
+}
+
+impl<T: Real> Pbsdf<T> for PhaseScreen<T> {
+    #[inline]
+    fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
+        Mueller(nalgebra::Matrix4::identity() * self.m00(g))
+    }
+    #[inline]
+    fn m00(&self, g: &Geometry<T>) -> T {
+        let v = g.k * (g.cos_i + g.cos_o);
+        self.reflectance * v * v
+    }
+}
+
+/// An ideal depolarizer of albedo `a`: `M = a · diag(1, 0, 0, 0)` — every output unpolarized.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IdealDiffuse<T: Real> {
+    albedo: T,
+}
+
+impl<T: Real> IdealDiffuse<T> {
+    /// An ideal depolarizer.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless `albedo ≥ 0` and finite.
+    pub fn new(albedo: T) -> Result<Self, Error> {
+        if !(albedo >= T::zero() && albedo.is_finite()) {
+            return Err(Error::OutOfRange {
+                what: "albedo",
+                value: albedo.to_f64(),
+                expected: "finite and ≥ 0",
+            });
+        }
+        Ok(Self { albedo })
+    }
+}
+
+impl<T: Real> Pbsdf<T> for IdealDiffuse<T> {
+    #[inline]
+    fn mueller(&self, _g: &Geometry<T>) -> Mueller<T> {
+        let mut m = nalgebra::Matrix4::zeros();
+        m[(0, 0)] = self.albedo;
+        Mueller(m)
+    }
+    #[inline]
+    fn m00(&self, _g: &Geometry<T>) -> T {
+        self.albedo
+    }
+}
+
+fn validate_eta<T: Real>(eta: Complex<T>) -> Result<(), Error> {
+    crate::error::ensure_finite("refractive index", [eta.re, eta.im])?;
+    if !(eta.re > T::zero() && eta.im >= T::zero()) {
+        return Err(Error::OutOfRange {
+            what: "refractive index η = n + iκ",
+            value: eta.re.to_f64(),
+            expected: "Re η > 0 and Im η ≥ 0",
+        });
+    }
+    Ok(())
+}
