@@ -186,6 +186,28 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
         }
         Ok((GaussianMixturePsd::new(comps)?, err))
     }
+
+    /// The first `m` of 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256, 400 whose fit ([`KCorrelation::mixture_fit`]) has measured
+    /// uniform error `sup|p − p_m|/p(0) ≤ tol`; returns the fit, `m` and the error.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] if no `m ≤ 400` reaches `tol` (in f64 the fit stalls near 1e-14).
+    pub fn mixture_fit_to(
+        &self,
+        tol: f64,
+    ) -> Result<(GaussianMixturePsd<T, N>, usize, f64), Error> {
+        for m in [4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256, 400] {
+            let (fit, err) = self.mixture_fit(m)?;
+            if err <= tol {
+                return Ok((fit, m, err));
+            }
+        }
+        Err(Error::OutOfRange {
+            what: "mixture-fit tolerance",
+            value: tol,
+            expected: "reachable with ≤ 400 components",
+        })
+    }
 }
 
 impl<T: Real> KCorrelation<T, 2> {
