@@ -34,9 +34,10 @@ use crate::real::Real;
 /// ```
 /// use gmueller::gaussian::Gaussian;
 /// use nalgebra::{Matrix2, Vector2};
-/// let g = Gaussian::new(Matrix2::new(2.0, 0.5, 0.5, 1.0)).unwrap();
+/// let g = Gaussian::new(Matrix2::new(2.0_f64, 0.5, 0.5, 1.0)).unwrap();
 /// let x = Vector2::new(0.3, -0.4);
-/// let direct = (-0.5 * (x.transpose() * Matrix2::new(2.0, 0.5, 0.5, 1.0).try_inverse().unwrap() * x)[0]).exp();
+/// let inv = Matrix2::new(2.0_f64, 0.5, 0.5, 1.0).try_inverse().unwrap();
+/// let direct = (-0.5 * (x.transpose() * inv * x)[0]).exp();
 /// assert!((g.value(&x) - direct).abs() < 1e-14);
 /// assert!((g.log_det() - 1.75_f64.ln()).abs() < 1e-14);
 /// ```
@@ -439,7 +440,7 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     /// ```
     /// use gmueller::gaussian::Gaussian;
     /// use nalgebra::{Matrix2, Vector2};
-    /// let g = Gaussian::new(Matrix2::new(1.0, 0.2, 0.2, 0.5)).unwrap();
+    /// let g = Gaussian::new(Matrix2::new(1.0_f64, 0.2, 0.2, 0.5)).unwrap();
     /// let b = Matrix2::new(1.0, 2.0, 0.0, 1.0);
     /// let q = Vector2::new(0.3, 0.7);
     /// // Same thing as the transform of the composed Gaussian g^{B⁻¹ΣB⁻ᵀ}:

@@ -24,8 +24,8 @@ use crate::real::Real;
 /// use gmueller::psd::{GaussianPsd, Psd};
 /// use nalgebra::Vector2;
 /// let p = GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap();
-/// let f = Vector2::new(0.1, 0.05); // cycles/µm
-/// let (sigma, l) = (0.01, 2.0 * 2f64.sqrt()); // SCATMECH's 1/e length L = √2 ℓ
+/// let f = Vector2::new(0.1_f64, 0.05); // cycles/µm
+/// let (sigma, l) = (0.01_f64, 2.0 * 2f64.sqrt()); // SCATMECH's 1/e length L = √2 ℓ
 /// let scatmech = std::f64::consts::PI * sigma * sigma * l * l
 ///     * (-(std::f64::consts::PI * l).powi(2) * f.norm_squared()).exp();
 /// assert!((p.value_cycles(&f) - scatmech).abs() < 1e-14 * scatmech);

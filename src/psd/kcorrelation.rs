@@ -25,9 +25,9 @@ use crate::real::Real;
 /// ```
 /// use gmueller::psd::{KCorrelation, Psd};
 /// use nalgebra::Vector2;
-/// let (a, b, c) = (1e-4, 50.0, 3.0); // SCATMECH ABC: µm⁴, µm, dimensionless
+/// let (a, b, c) = (1e-4_f64, 50.0_f64, 3.0_f64); // SCATMECH ABC: µm⁴, µm, dimensionless
 /// let p = KCorrelation::<f64, 2>::from_abc(a, b, c).unwrap();
-/// let f = Vector2::new(0.02, 0.01);
+/// let f = Vector2::new(0.02_f64, 0.01);
 /// let s = a / (1.0 + b * b * f.norm_squared()).powf(c / 2.0);
 /// assert!((p.value_cycles(&f) - s).abs() < 1e-13 * s);
 /// ```

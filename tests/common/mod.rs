@@ -2,7 +2,10 @@
 //!
 //! Every comparison states an absolute *and* a relative tolerance: `|a − b| ≤ abs + rel·max(|a|, |b|)`.
 //! Strategies produce inputs that are valid by construction and bounded.
-#![allow(dead_code, reason = "each test file uses a different subset of the helpers")]
+#![allow(
+    dead_code,
+    reason = "each test file uses a different subset of the helpers"
+)]
 
 use nalgebra::{Matrix2, Matrix4, Vector3, Vector4};
 use num_complex::Complex;
@@ -86,7 +89,9 @@ pub fn assert_complex_close(
 
 /// `Matrix4<f64>` entries, row-major, for comparisons.
 pub fn entries4(m: &Matrix4<f64>) -> Vec<f64> {
-    (0..4).flat_map(|r| (0..4).map(move |c| m[(r, c)])).collect()
+    (0..4)
+        .flat_map(|r| (0..4).map(move |c| m[(r, c)]))
+        .collect()
 }
 
 /// A 4×4 matrix from nested rows (as in the reference JSON).
