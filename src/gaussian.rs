@@ -1,1 +1,543 @@
-//! Anisotropic Gaussians, their products, convolutions and Fourier transforms (Lemma S2.1, Corollary S2.2).
+//! Anisotropic Gaussians, their products, convolutions and Fourier transforms (Lemma S2.1,
+//! Corollary S2.2).
+//!
+//! # Conventions
+//! ```text
+//! g^Σ(x) = exp(−½ xᵀ Σ⁻¹ x)                      unnormalised, Σ symmetric positive definite
+//! F{f}(q) = (2π)^{−n/2} ∫ f(x) e^{−i q·x} dⁿx      unitary Fourier transform
+//! (f * h)(x) = (2π)^{−n/2} ∫ f(y) h(x − y) dⁿy    convolution, so that F{f·h} = F{f} * F{h}
+//! ```
+//! The dimension `N` is a const generic: `N = 2` for surfaces (tangent plane), `N = 3` for volumes.
+//!
+//! Everything is evaluated through the Cholesky factor `Σ = L Lᵀ` (computed once, at
+//! construction): `xᵀΣ⁻¹x = |L⁻¹x|²` by a triangular solve, `ln|Σ| = 2 Σᵢ ln Lᵢᵢ`. Neither the
+//! inverse nor the determinant is formed by cofactors, so eigenvalues from 10⁻¹² to 10¹² and
+//! anisotropy to 10⁶ stay finite; values that underflow return `0` while [`Gaussian::log_value`]
+//! stays accurate.
+
+use nalgebra::{Rotation, SMatrix, SVector};
+use num_complex::Complex;
+
+use crate::error::{Error, ensure_finite};
+use crate::real::Real;
+
+/// An anisotropic, centred Gaussian `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)` in `N` dimensions.
+///
+/// # Formula
+/// ```text
+/// g^Σ(x) = exp(−½ xᵀ Σ⁻¹ x) = exp(−½ |L⁻¹ x|²),   Σ = L Lᵀ (Cholesky)
+/// ```
+/// Σ is validated once (finite, symmetric, positive definite); afterwards every operation is
+/// infallible and allocation-free.
+///
+/// # Examples
+/// ```
+/// use gmueller::gaussian::Gaussian;
+/// use nalgebra::{Matrix2, Vector2};
+/// let g = Gaussian::new(Matrix2::new(2.0_f64, 0.5, 0.5, 1.0)).unwrap();
+/// let x = Vector2::new(0.3, -0.4);
+/// let inv = Matrix2::new(2.0_f64, 0.5, 0.5, 1.0).try_inverse().unwrap();
+/// let direct = (-0.5 * (x.transpose() * inv * x)[0]).exp();
+/// assert!((g.value(&x) - direct).abs() < 1e-14);
+/// assert!((g.log_det() - 1.75_f64.ln()).abs() < 1e-14);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gaussian<T: Real, const N: usize> {
+    cov: SMatrix<T, N, N>,
+    chol: SMatrix<T, N, N>,
+    log_det: T,
+}
+
+/// A Gaussian times a positive constant: `e^{log_scale} · g^Σ(x)`.
+///
+/// Returned by the closed forms whose result carries a constant (convolution, Fourier transform,
+/// marginalisation). The constant is kept as a logarithm so it cannot overflow.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScaledGaussian<T: Real, const N: usize> {
+    /// Natural logarithm of the constant factor.
+    pub log_scale: T,
+    /// The Gaussian shape.
+    pub gaussian: Gaussian<T, N>,
+}
+
+impl<T: Real, const N: usize> ScaledGaussian<T, N> {
+    /// `e^{log_scale} g^Σ(x)`; `0` where it underflows, never NaN for finite `x`.
+    #[inline]
+    #[must_use]
+    pub fn value(&self, x: &SVector<T, N>) -> T {
+        (self.log_scale + self.gaussian.log_value(x)).exp()
+    }
+
+    /// `log_scale + ln g^Σ(x)`, accurate where [`Self::value`] underflows.
+    #[inline]
+    #[must_use]
+    pub fn log_value(&self, x: &SVector<T, N>) -> T {
+        self.log_scale + self.gaussian.log_value(x)
+    }
+
+    /// The constant factor `e^{log_scale}`.
+    #[inline]
+    #[must_use]
+    pub fn scale(&self) -> T {
+        self.log_scale.exp()
+    }
+}
+
+/// Cholesky factorisation of a symmetric matrix; `Err(pivot)` with the first non-positive pivot.
+pub(crate) fn cholesky<T: Real, const N: usize>(
+    a: &SMatrix<T, N, N>,
+) -> Result<SMatrix<T, N, N>, T> {
+    let mut l = SMatrix::<T, N, N>::zeros();
+    for j in 0..N {
+        let mut d = a[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > T::zero() && d.is_finite()) {
+            return Err(d);
+        }
+        let djj = d.sqrt();
+        l[(j, j)] = djj;
+        for i in (j + 1)..N {
+            let mut s = a[(i, j)];
+            for k in 0..j {
+                s -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = s / djj;
+        }
+    }
+    Ok(l)
+}
+
+/// Solves `L y = x` for lower-triangular `L` (forward substitution).
+#[inline]
+pub(crate) fn solve_lower<T: Real, const N: usize>(
+    l: &SMatrix<T, N, N>,
+    x: &SVector<T, N>,
+) -> SVector<T, N> {
+    let mut y = *x;
+    for i in 0..N {
+        let mut s = y[i];
+        for k in 0..i {
+            s -= l[(i, k)] * y[k];
+        }
+        y[i] = s / l[(i, i)];
+    }
+    y
+}
+
+/// `L⁻¹` of a lower-triangular `L`, column by column.
+fn lower_inverse<T: Real, const N: usize>(l: &SMatrix<T, N, N>) -> SMatrix<T, N, N> {
+    let mut inv = SMatrix::<T, N, N>::zeros();
+    for j in 0..N {
+        let mut e = SVector::<T, N>::zeros();
+        e[j] = T::one();
+        inv.set_column(j, &solve_lower(l, &e));
+    }
+    inv
+}
+
+/// `|det B|` by Gaussian elimination with partial pivoting (no cofactors).
+fn abs_det<T: Real, const N: usize>(b: &SMatrix<T, N, N>) -> T {
+    let mut a = *b;
+    let mut det = T::one();
+    for j in 0..N {
+        let mut piv = j;
+        for i in (j + 1)..N {
+            if a[(i, j)].abs() > a[(piv, j)].abs() {
+                piv = i;
+            }
+        }
+        a.swap_rows(j, piv);
+        let d = a[(j, j)];
+        det *= d.abs();
+        if d == T::zero() {
+            return T::zero();
+        }
+        for i in (j + 1)..N {
+            let f = a[(i, j)] / d;
+            for k in j..N {
+                let v = a[(j, k)];
+                a[(i, k)] -= f * v;
+            }
+        }
+    }
+    det
+}
+
+/// `ln (2π)`.
+fn ln_two_pi<T: Real>() -> T {
+    T::lit(core::f64::consts::TAU.ln())
+}
+
+impl<T: Real, const N: usize> Gaussian<T, N> {
+    /// Builds `g^Σ` from its covariance (shape) matrix Σ.
+    ///
+    /// Σ is symmetrised as `(Σ + Σᵀ)/2` after checking that the asymmetry is at most
+    /// `√ε · max|Σᵢⱼ|` (round-off from a product such as `Q Θ Qᵀ`).
+    ///
+    /// # Errors
+    /// - [`Error::NonFinite`] if an entry is NaN or infinite;
+    /// - [`Error::NotHermitian`] if Σ is not symmetric to that tolerance;
+    /// - [`Error::NotPositiveDefinite`] if the Cholesky factorisation meets a non-positive pivot
+    ///   (reported as `min_eigenvalue`).
+    pub fn new(cov: SMatrix<T, N, N>) -> Result<Self, Error> {
+        ensure_finite("Gaussian covariance", cov.iter().copied())?;
+        let scale = cov.amax();
+        let asym = (cov - cov.transpose()).amax();
+        if asym > T::EPSILON.sqrt() * scale {
+            return Err(Error::NotHermitian {
+                what: "Gaussian covariance",
+                asymmetry: asym.to_f64(),
+            });
+        }
+        let cov = (cov + cov.transpose()) * T::lit(0.5);
+        let chol = cholesky(&cov).map_err(|pivot| Error::NotPositiveDefinite {
+            what: "Gaussian covariance",
+            min_eigenvalue: pivot.to_f64(),
+        })?;
+        let mut log_det = T::zero();
+        for i in 0..N {
+            log_det += chol[(i, i)].ln();
+        }
+        log_det *= T::lit(2.0);
+        Ok(Self { cov, chol, log_det })
+    }
+
+    /// The isotropic Gaussian `g^{s² I}` of standard deviation `s`.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless `s` is finite and positive.
+    pub fn isotropic(s: T) -> Result<Self, Error> {
+        if !(s > T::zero() && s.is_finite()) {
+            return Err(Error::OutOfRange {
+                what: "Gaussian standard deviation",
+                value: s.to_f64(),
+                expected: "(0, ∞)",
+            });
+        }
+        Self::new(SMatrix::<T, N, N>::identity() * (s * s))
+    }
+
+    /// The covariance (shape) matrix Σ.
+    #[inline]
+    #[must_use]
+    pub fn covariance(&self) -> &SMatrix<T, N, N> {
+        &self.cov
+    }
+
+    /// The lower-triangular Cholesky factor `L`, `Σ = L Lᵀ`.
+    #[inline]
+    #[must_use]
+    pub fn cholesky_factor(&self) -> &SMatrix<T, N, N> {
+        &self.chol
+    }
+
+    /// `ln |Σ| = 2 Σᵢ ln Lᵢᵢ`.
+    #[inline]
+    #[must_use]
+    pub fn log_det(&self) -> T {
+        self.log_det
+    }
+
+    /// `|Σ|`, through the log-determinant (may overflow to ∞ or underflow to 0 at extreme scales;
+    /// prefer [`Self::log_det`]).
+    #[inline]
+    #[must_use]
+    pub fn det(&self) -> T {
+        self.log_det.exp()
+    }
+
+    /// The precision matrix `Σ⁻¹ = L⁻ᵀ L⁻¹`, from the triangular inverse.
+    #[must_use]
+    pub fn precision(&self) -> SMatrix<T, N, N> {
+        let li = lower_inverse(&self.chol);
+        li.transpose() * li
+    }
+
+    /// The squared Mahalanobis distance `xᵀ Σ⁻¹ x = |L⁻¹x|²`.
+    #[inline]
+    #[must_use]
+    pub fn mahalanobis_sq(&self, x: &SVector<T, N>) -> T {
+        solve_lower(&self.chol, x).norm_squared()
+    }
+
+    /// `ln g^Σ(x) = −½ xᵀΣ⁻¹x`, accurate where [`Self::value`] underflows.
+    #[inline]
+    #[must_use]
+    pub fn log_value(&self, x: &SVector<T, N>) -> T {
+        -T::lit(0.5) * self.mahalanobis_sq(x)
+    }
+
+    /// The unnormalised value `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)` (DESIGN §1); `0` on underflow.
+    #[inline]
+    #[must_use]
+    pub fn value(&self, x: &SVector<T, N>) -> T {
+        self.log_value(x).exp()
+    }
+
+    /// `ln` of the normalised density `(2π)^{−N/2} |Σ|^{−1/2} g^Σ(x)`.
+    #[inline]
+    #[must_use]
+    pub fn log_density(&self, x: &SVector<T, N>) -> T {
+        self.log_value(x) - T::lit(0.5) * (T::lit(N as f64) * ln_two_pi::<T>() + self.log_det)
+    }
+
+    /// The normalised density `(2π)^{−N/2} |Σ|^{−1/2} g^Σ(x)`, integrating to 1 over `ℝᴺ`.
+    #[inline]
+    #[must_use]
+    pub fn density(&self, x: &SVector<T, N>) -> T {
+        self.log_density(x).exp()
+    }
+
+    /// `ln ∫ g^Σ dᴺx = (N/2) ln 2π + ½ ln|Σ|`.
+    #[inline]
+    #[must_use]
+    pub fn log_integral(&self) -> T {
+        T::lit(0.5) * (T::lit(N as f64) * ln_two_pi::<T>() + self.log_det)
+    }
+
+    /// `g^{Σ⁻¹}(q) = exp(−½ qᵀ Σ q) = exp(−½ |Lᵀq|²)` in log form, without inverting anything.
+    #[inline]
+    #[must_use]
+    pub fn log_value_of_inverse(&self, q: &SVector<T, N>) -> T {
+        -T::lit(0.5) * (self.chol.transpose() * q).norm_squared()
+    }
+
+    /// The Gaussian with inverse covariance, `g^{Σ⁻¹}`.
+    ///
+    /// # Errors
+    /// [`Error::NotPositiveDefinite`] if Σ⁻¹ is not representable (extreme scales in f32).
+    pub fn inverse(&self) -> Result<Self, Error> {
+        Self::new(self.precision())
+    }
+
+    /// The Gaussian in rotated coordinates: `g^Σ(Rᵀx) = g^{R Σ Rᵀ}(x)`.
+    ///
+    /// With `R` mapping local to world coordinates (`x_world = R x_local`), this turns a shape
+    /// given in local coordinates into world coordinates.
+    ///
+    /// # Errors
+    /// Only if round-off makes `R Σ Rᵀ` fail validation (practically never).
+    pub fn rotated(&self, r: &Rotation<T, N>) -> Result<Self, Error> {
+        let m = r.matrix();
+        Self::new(m * self.cov * m.transpose())
+    }
+
+    /// Composition with a linear map: `g^Σ(B x) = g^{B⁻¹ Σ B⁻ᵀ}(x)`.
+    ///
+    /// # Errors
+    /// [`Error::Singular`] if `B` is not invertible; otherwise as [`Gaussian::new`].
+    pub fn compose_linear(&self, b: &SMatrix<T, N, N>) -> Result<Self, Error> {
+        ensure_finite("linear map B", b.iter().copied())?;
+        let binv = b.try_inverse().ok_or(Error::Singular {
+            what: "linear map B",
+        })?;
+        // B⁻¹ L (B⁻¹ L)ᵀ keeps the product symmetric positive by construction.
+        let f = binv * self.chol;
+        Self::new(f * f.transpose())
+    }
+
+    /// Product of two centred Gaussians: `g^A(x) g^B(x) = g^C(x)`, `C = (A⁻¹ + B⁻¹)⁻¹`.
+    ///
+    /// # Formula
+    /// ```text
+    /// g^A g^B = g^{(A⁻¹ + B⁻¹)⁻¹}          (no constant factor)
+    /// ```
+    /// Computed from the precisions (a sum of positive matrices, no cancellation).
+    ///
+    /// # Errors
+    /// Only if the result is not representable (extreme scales in f32).
+    pub fn product(&self, other: &Self) -> Result<Self, Error> {
+        let prec = self.precision() + other.precision();
+        let pl = cholesky(&((prec + prec.transpose()) * T::lit(0.5))).map_err(|p| {
+            Error::NotPositiveDefinite {
+                what: "product precision",
+                min_eigenvalue: p.to_f64(),
+            }
+        })?;
+        let li = lower_inverse(&pl);
+        Self::new(li.transpose() * li)
+    }
+
+    /// Product of two shifted Gaussians:
+    /// `g^A(x − a) g^B(x − b) = e^{log_scale} g^C(x − c)`; returns `(scaled g^C, c)`.
+    ///
+    /// # Formula
+    /// ```text
+    /// C = (A⁻¹ + B⁻¹)⁻¹,  c = C (A⁻¹ a + B⁻¹ b),  log_scale = −½ (a − b)ᵀ (A + B)⁻¹ (a − b)
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Gaussian::product`].
+    pub fn product_shifted(
+        &self,
+        a: &SVector<T, N>,
+        other: &Self,
+        b: &SVector<T, N>,
+    ) -> Result<(ScaledGaussian<T, N>, SVector<T, N>), Error> {
+        let c = self.product(other)?;
+        let centre = c.cov * (self.precision() * a + other.precision() * b);
+        let sum = Self::new(self.cov + other.cov)?;
+        Ok((
+            ScaledGaussian {
+                log_scale: sum.log_value(&(a - b)),
+                gaussian: c,
+            },
+            centre,
+        ))
+    }
+
+    /// Convolution with the crate's convention: `g^A * g^B = (|A||B|/|A+B|)^{1/2} g^{A+B}`.
+    ///
+    /// # Formula
+    /// ```text
+    /// (g^A * g^B)(x) = (2π)^{−n/2} ∫ g^A(y) g^B(x − y) dⁿy = (|A| |B| / |A + B|)^{1/2} g^{A+B}(x)
+    /// ```
+    ///
+    /// # Errors
+    /// Only if `A + B` is not representable.
+    pub fn convolve(&self, other: &Self) -> Result<ScaledGaussian<T, N>, Error> {
+        let sum = Self::new(self.cov + other.cov)?;
+        Ok(ScaledGaussian {
+            log_scale: T::lit(0.5) * (self.log_det + other.log_det - sum.log_det),
+            gaussian: sum,
+        })
+    }
+
+    /// The unitary Fourier transform `F{g^Σ} = |Σ|^{1/2} g^{Σ⁻¹}`.
+    ///
+    /// # Errors
+    /// Only if Σ⁻¹ is not representable. For evaluation use [`Self::log_fourier_at`], which
+    /// never inverts.
+    pub fn fourier(&self) -> Result<ScaledGaussian<T, N>, Error> {
+        Ok(ScaledGaussian {
+            log_scale: T::lit(0.5) * self.log_det,
+            gaussian: self.inverse()?,
+        })
+    }
+
+    /// `ln F{g^Σ}(q) = ½ ln|Σ| − ½ qᵀΣq`.
+    #[inline]
+    #[must_use]
+    pub fn log_fourier_at(&self, q: &SVector<T, N>) -> T {
+        T::lit(0.5) * self.log_det + self.log_value_of_inverse(q)
+    }
+
+    /// Lemma S2.1 (corrected): the unitary Fourier transform of `ξ ↦ g^Σ(B ξ)`, evaluated at `q`.
+    ///
+    /// # Formula
+    /// ```text
+    /// F{g^Σ(B ·)}(q) = |Σ|^{1/2} / |det B| · g^{Σ⁻¹}(B⁻ᵀ q)          (S2.1, corrected)
+    /// ```
+    /// The printed lemma has `B⁻¹ q` and `|B|`: the argument must be `B⁻ᵀ q` (the two agree only
+    /// for symmetric `B`), and `|B|` is `|det B|` (test `lemma_s2_1_printed_form_fails`).
+    ///
+    /// # Errors
+    /// [`Error::Singular`] if `B` is singular.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::gaussian::Gaussian;
+    /// use nalgebra::{Matrix2, Vector2};
+    /// let g = Gaussian::new(Matrix2::new(1.0_f64, 0.2, 0.2, 0.5)).unwrap();
+    /// let b = Matrix2::new(1.0, 2.0, 0.0, 1.0);
+    /// let q = Vector2::new(0.3, 0.7);
+    /// // Same thing as the transform of the composed Gaussian g^{B⁻¹ΣB⁻ᵀ}:
+    /// let composed = g.compose_linear(&b).unwrap();
+    /// let lemma = g.lemma_s2_1(&b, &q).unwrap();
+    /// assert!((lemma - composed.log_fourier_at(&q).exp()).abs() < 1e-14);
+    /// ```
+    pub fn lemma_s2_1(&self, b: &SMatrix<T, N, N>, q: &SVector<T, N>) -> Result<T, Error> {
+        let bt_inv = b.transpose().try_inverse().ok_or(Error::Singular {
+            what: "linear map B",
+        })?;
+        let det_b = abs_det(b);
+        Ok((self.log_fourier_at(&(bt_inv * q)) - det_b.ln()).exp())
+    }
+
+    /// Corollary S2.2: the Fourier transform of one packet term `e^{−i k ŝ·ξ} g^Θ(Qᵀ ξ)`.
+    ///
+    /// `self` is `g^Θ` in the packet's **local** coordinates; `q_local_to_world` is `Q`, with
+    /// `ξ_world = Q ξ_local` (so `Ξ = Q Θ⁻¹ Qᵀ`, S2.18); `k_s` is the vector `k ŝ`, with ŝ pointing
+    /// from the surface toward the source (the packet travels along −ŝ, hence the phase
+    /// `e^{−i k ŝ·ξ}`).
+    ///
+    /// # Formula
+    /// ```text
+    /// F{e^{−ik ŝ·ξ} g^Θ(Qᵀξ)}(q) = |Θ|^{1/2} g^{Θ⁻¹}(Qᵀ(q + k ŝ)) = |Θ|^{1/2} g^{Q Θ⁻¹ Qᵀ}(q + k ŝ)   (S2.2)
+    /// ```
+    /// The seed's sign `q + kŝ` holds for this phase under the transform kernel `e^{−iq·x}`
+    /// (test `corollary_s2_2_matches_quadrature_*`).
+    #[must_use]
+    pub fn corollary_s2_2(
+        &self,
+        q_local_to_world: &Rotation<T, N>,
+        k_s: &SVector<T, N>,
+        q: &SVector<T, N>,
+    ) -> T {
+        let arg = q_local_to_world.matrix().transpose() * (q + k_s);
+        self.log_fourier_at(&arg).exp()
+    }
+
+    /// Fourier transform of a shifted, modulated Gaussian `g^Σ(x − a) e^{i k·x}`, at `q`.
+    ///
+    /// # Formula
+    /// ```text
+    /// F{g^Σ(· − a) e^{i k·}}(q) = e^{−i (q − k)·a} |Σ|^{1/2} g^{Σ⁻¹}(q − k)
+    /// ```
+    #[must_use]
+    pub fn fourier_shifted_modulated(
+        &self,
+        a: &SVector<T, N>,
+        k: &SVector<T, N>,
+        q: &SVector<T, N>,
+    ) -> Complex<T> {
+        let d = q - k;
+        let m = self.log_fourier_at(&d).exp();
+        let (s, c) = (-d.dot(a)).sin_cos();
+        Complex::new(m * c, m * s)
+    }
+}
+
+impl<T: Real> Gaussian<T, 3> {
+    /// The **marginal** in the `(x, y)` plane: `∫ g^Σ(x, y, z) dz = √(2π |Σ|/|Σ₂|) g^{Σ₂}(x, y)`,
+    /// with `Σ₂` the upper-left 2×2 block of Σ.
+    ///
+    /// Use it when the third coordinate is *integrated out* — e.g. the transform of the
+    /// marginal is the restriction of the 3-D transform to `q_z = 0`. Rotate first
+    /// ([`Self::rotated`]) to marginalise onto another plane.
+    ///
+    /// # Errors
+    /// Only on non-representable results.
+    pub fn marginal_xy(&self) -> Result<ScaledGaussian<T, 2>, Error> {
+        let block = self.cov.fixed_view::<2, 2>(0, 0).into_owned();
+        let g = Gaussian::new(block)?;
+        Ok(ScaledGaussian {
+            log_scale: T::lit(0.5) * (ln_two_pi::<T>() + self.log_det - g.log_det),
+            gaussian: g,
+        })
+    }
+
+    /// The **section** (conditional, slice) in the plane `z = 0`: `g^Σ(x, y, 0) = g^{S}(x, y)`
+    /// with `S = Σ₂ − Σ₂₃ Σ₃₃⁻¹ Σ₃₂` the Schur complement — the inverse of the `(x, y)` block of Σ⁻¹.
+    ///
+    /// Use it when the function is *evaluated on* the plane (a surface sees the packet's coherence
+    /// only on its tangent plane); for oblique incidence it differs from
+    /// [`Self::marginal_xy`]. No constant factor: `g^Σ(x, y, 0) = g^S(x, y)` exactly.
+    ///
+    /// # Errors
+    /// Only on non-representable results.
+    pub fn section_xy(&self) -> Result<Gaussian<T, 2>, Error> {
+        // Reorder to (z, x, y): the trailing 2×2 block of the Cholesky factor is the Schur
+        // complement's factor, computed without subtraction of large terms.
+        let p = [2usize, 0, 1];
+        let perm = SMatrix::<T, 3, 3>::from_fn(|i, j| self.cov[(p[i], p[j])]);
+        let l = cholesky(&perm).map_err(|piv| Error::NotPositiveDefinite {
+            what: "Gaussian covariance",
+            min_eigenvalue: piv.to_f64(),
+        })?;
+        let l2 = l.fixed_view::<2, 2>(1, 1).into_owned();
+        Gaussian::new(l2 * l2.transpose())
+    }
+}

@@ -1,0 +1,270 @@
+//! Gaussian and Gaussian-mixture PSDs, and the smooth (Dirac) surface; closed-form blurs.
+
+use nalgebra::{SMatrix, SVector};
+
+use super::{BlurMethod, ClosedForm, Psd};
+use crate::error::Error;
+use crate::gaussian::{Gaussian, cholesky, solve_lower};
+use crate::real::Real;
+
+/// The PSD of a Gaussian-correlated random field: `R(x) = σ² g^Λ(x)`, `p(ζ) = σ² |Λ|^{1/2} g^{Λ⁻¹}(ζ)`.
+///
+/// # Formula
+/// ```text
+/// R(x) = σ² exp(−½ xᵀΛ⁻¹x)   ⇒   p(ζ) = σ² |Λ|^{1/2} exp(−½ ζᵀΛζ)
+/// isotropic, Λ = ℓ² I:  p(ζ) = σ² ℓⁿ exp(−½ ℓ² |ζ|²)          (n = 2: FORMALISM's q² ℓ² e^{−½ℓ²|ζ|²})
+/// blur:  (p * g^Σ)(h) = σ² |Λ|^{1/2} (|Λ⁻¹| |Σ| / |Λ⁻¹ + Σ|)^{1/2} g^{Λ⁻¹ + Σ}(h)
+/// ```
+/// Parameters: rms height σ, correlation length ℓ in the `exp(−r²/(2ℓ²))` sense. SCATMECH's
+/// `C(r) = σ² exp(−r²/L²)` (L the 1/e length) is `ℓ = L/√2` ([`GaussianPsd::from_scatmech`]),
+/// and its `S(f) = π σ² L² exp(−(π L f)²)` equals `2π p(2πf)` for n = 2.
+///
+/// # Examples
+/// ```
+/// use gmueller::psd::{GaussianPsd, Psd};
+/// use nalgebra::Vector2;
+/// let p = GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap();
+/// let f = Vector2::new(0.1_f64, 0.05); // cycles/µm
+/// let (sigma, l) = (0.01_f64, 2.0 * 2f64.sqrt()); // SCATMECH's 1/e length L = √2 ℓ
+/// let scatmech = std::f64::consts::PI * sigma * sigma * l * l
+///     * (-(std::f64::consts::PI * l).powi(2) * f.norm_squared()).exp();
+/// assert!((p.value_cycles(&f) - scatmech).abs() < 1e-14 * scatmech);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaussianPsd<T: Real, const N: usize> {
+    variance: T,
+    /// `g^{Λ⁻¹}`: the spectral shape (covariance in ζ).
+    spectral: Gaussian<T, N>,
+    /// `ln(σ² |Λ|^{1/2}) = ln σ² − ½ ln|Λ⁻¹|`.
+    log_amplitude: T,
+}
+
+fn check_positive<T: Real>(what: &'static str, v: T) -> Result<(), Error> {
+    if v.is_finite() && v > T::zero() {
+        Ok(())
+    } else if !v.is_finite() {
+        Err(Error::NonFinite { what })
+    } else {
+        Err(Error::OutOfRange {
+            what,
+            value: v.to_f64(),
+            expected: "(0, ∞)",
+        })
+    }
+}
+
+fn check_nonnegative<T: Real>(what: &'static str, v: T) -> Result<(), Error> {
+    if v.is_finite() && v >= T::zero() {
+        Ok(())
+    } else if !v.is_finite() {
+        Err(Error::NonFinite { what })
+    } else {
+        Err(Error::OutOfRange {
+            what,
+            value: v.to_f64(),
+            expected: "[0, ∞)",
+        })
+    }
+}
+
+impl<T: Real, const N: usize> GaussianPsd<T, N> {
+    /// From the autocorrelation `R(x) = σ² g^Λ(x)`: variance `σ²` and correlation shape `Λ`.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] for a negative or non-finite variance;
+    /// validation errors of `Λ⁻¹`.
+    pub fn from_autocorrelation(variance: T, correlation: &Gaussian<T, N>) -> Result<Self, Error> {
+        check_nonnegative("variance", variance)?;
+        let spectral = correlation.inverse()?;
+        Ok(Self::from_spectrum_parts(variance, spectral))
+    }
+
+    /// From the spectral shape: `p(ζ) = σ² |Λ|^{1/2} g^{P}(ζ)` with `P = Λ⁻¹` given directly.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] for a negative or non-finite variance.
+    pub fn from_spectral_shape(variance: T, spectral: Gaussian<T, N>) -> Result<Self, Error> {
+        check_nonnegative("variance", variance)?;
+        Ok(Self::from_spectrum_parts(variance, spectral))
+    }
+
+    fn from_spectrum_parts(variance: T, spectral: Gaussian<T, N>) -> Self {
+        Self {
+            variance,
+            spectral,
+            log_amplitude: variance.ln() - T::lit(0.5) * spectral.log_det(),
+        }
+    }
+
+    /// Isotropic: rms height `σ`, correlation length `ℓ` with `R(r) = σ² exp(−r²/(2ℓ²))`.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless `σ ≥ 0` and `ℓ > 0`, finite.
+    pub fn isotropic(rms_height: T, correlation_length: T) -> Result<Self, Error> {
+        check_nonnegative("rms height", rms_height)?;
+        check_positive("correlation length", correlation_length)?;
+        let spectral = Gaussian::isotropic(T::one() / correlation_length)?;
+        Ok(Self::from_spectrum_parts(rms_height * rms_height, spectral))
+    }
+
+    /// SCATMECH's parameters: `C(r) = σ² exp(−r²/L²)`, L the 1/e correlation length (`ℓ = L/√2`).
+    ///
+    /// # Errors
+    /// As [`GaussianPsd::isotropic`].
+    pub fn from_scatmech(rms_height: T, one_over_e_length: T) -> Result<Self, Error> {
+        Self::isotropic(rms_height, one_over_e_length / T::lit(2.0).sqrt())
+    }
+
+    /// The spectral shape `g^{Λ⁻¹}` (covariance in frequency space).
+    #[must_use]
+    pub fn spectral_shape(&self) -> &Gaussian<T, N> {
+        &self.spectral
+    }
+
+    /// `ln p(ζ)`, accurate where [`Psd::value`] underflows.
+    #[inline]
+    #[must_use]
+    pub fn log_value(&self, zeta: &SVector<T, N>) -> T {
+        self.log_amplitude + self.spectral.log_value(zeta)
+    }
+
+    /// `ln (p * g^Σ)(h)` in closed form (see the type's formula).
+    #[inline]
+    #[must_use]
+    pub fn log_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
+        let Ok(l) = cholesky(&sum) else {
+            // Only reachable by overflow of the sum at extreme scales.
+            return T::min_value().unwrap_or(T::zero());
+        };
+        let mut log_det_sum = T::zero();
+        for i in 0..N {
+            log_det_sum += l[(i, i)].ln();
+        }
+        log_det_sum *= T::lit(2.0);
+        let m = solve_lower(&l, h).norm_squared();
+        self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() + cov.log_det() - log_det_sum)
+            - T::lit(0.5) * m
+    }
+}
+
+impl<T: Real, const N: usize> Psd<T, N> for GaussianPsd<T, N> {
+    #[inline]
+    fn value(&self, zeta: &SVector<T, N>) -> T {
+        self.log_value(zeta).exp()
+    }
+    #[inline]
+    fn variance(&self) -> T {
+        self.variance
+    }
+}
+
+impl<T: Real, const N: usize> BlurMethod<T, N, GaussianPsd<T, N>> for ClosedForm {
+    #[inline]
+    fn blur(&self, psd: &GaussianPsd<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.log_blur(cov, h).exp()
+    }
+}
+
+/// A sum of Gaussian PSDs, `p = Σⱼ pⱼ`, each `pⱼ` a [`GaussianPsd`]; closed-form blur.
+///
+/// Allocates its component list once, at construction; evaluation and blur allocate nothing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GaussianMixturePsd<T: Real, const N: usize> {
+    components: Vec<GaussianPsd<T, N>>,
+    variance: T,
+}
+
+impl<T: Real, const N: usize> GaussianMixturePsd<T, N> {
+    /// From its components.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] for an empty list.
+    pub fn new(components: Vec<GaussianPsd<T, N>>) -> Result<Self, Error> {
+        if components.is_empty() {
+            return Err(Error::OutOfRange {
+                what: "number of mixture components",
+                value: 0.0,
+                expected: "≥ 1",
+            });
+        }
+        let variance = components
+            .iter()
+            .fold(T::zero(), |acc, c| acc + c.variance());
+        Ok(Self {
+            components,
+            variance,
+        })
+    }
+
+    /// The components.
+    #[must_use]
+    pub fn components(&self) -> &[GaussianPsd<T, N>] {
+        &self.components
+    }
+}
+
+impl<T: Real, const N: usize> Psd<T, N> for GaussianMixturePsd<T, N> {
+    #[inline]
+    fn value(&self, zeta: &SVector<T, N>) -> T {
+        self.components
+            .iter()
+            .fold(T::zero(), |acc, c| acc + c.value(zeta))
+    }
+    #[inline]
+    fn variance(&self) -> T {
+        self.variance
+    }
+}
+
+impl<T: Real, const N: usize> BlurMethod<T, N, GaussianMixturePsd<T, N>> for ClosedForm {
+    #[inline]
+    fn blur(&self, psd: &GaussianMixturePsd<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.components
+            .iter()
+            .fold(T::zero(), |acc, c| acc + ClosedForm.blur(c, cov, h))
+    }
+}
+
+/// A smooth (non-random) surface: `p = (2π)^{n/2} w δ(ζ)`, all power in the specular order.
+///
+/// # Formula
+/// ```text
+/// R(x) = w (constant)  ⇒  p(ζ) = (2π)^{n/2} w δ(ζ),   (p * g^Σ)(h) = w g^Σ(h)
+/// ```
+/// Semantics: the correlation of a perfectly smooth interface's reflection function is constant,
+/// so the blur is the specular lobe, widened only by the light's coherence. `w = 1` is a mirror
+/// (a grating of zero depth); `w = 0` scatters nothing. [`Psd::value`] (the continuous part) is 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Smooth<T: Real> {
+    weight: T,
+}
+
+impl<T: Real> Smooth<T> {
+    /// A smooth surface carrying `weight` (`R(0)`) in its specular order.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] unless `weight ≥ 0`, finite.
+    pub fn new(weight: T) -> Result<Self, Error> {
+        check_nonnegative("specular weight", weight)?;
+        Ok(Self { weight })
+    }
+}
+
+impl<T: Real, const N: usize> Psd<T, N> for Smooth<T> {
+    #[inline]
+    fn value(&self, _zeta: &SVector<T, N>) -> T {
+        T::zero()
+    }
+    #[inline]
+    fn variance(&self) -> T {
+        self.weight
+    }
+}
+
+impl<T: Real, const N: usize> BlurMethod<T, N, Smooth<T>> for ClosedForm {
+    #[inline]
+    fn blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.weight * cov.value(h)
+    }
+}

@@ -1,0 +1,119 @@
+//! Power spectral densities of random matter, and their blur by Gaussians (S2.14–S2.17).
+//!
+//! # Conventions
+//! ```text
+//! p(ζ) = F{R}(ζ) = (2π)^{−n/2} ∫ R(x) e^{−i ζ·x} dⁿx        unitary transform, ζ in rad/length
+//! ∫ p(ζ) dⁿζ = (2π)^{n/2} R(0) = (2π)^{n/2} σ²               (Fourier inversion at x = 0)
+//! (p * g^Σ)(h) = (2π)^{−n/2} ∫ p(ζ) g^Σ(h − ζ) dⁿζ           the blur; g^Σ UNNORMALISED
+//! ```
+//! `R` is the stationary autocorrelation, `σ² = R(0)` its variance (for a height field, the
+//! squared rms height). The blur is the quantity S2.17 needs: the kernel term is
+//! `(2π)^{n/2} |Θ|^{1/2} (p * g^Ξ)(h)` with `Ξ = Q Θ⁻¹ Qᵀ` (S2.18) and — see the errata —
+//! the constant `(2π)^{n/2}`, not the printed `8π³`.
+//!
+//! Converting from the "cycles per length" PSD of SCATMECH and most optics texts,
+//! `S(f) = ∫ R(x) e^{−2πi f·x} dⁿx` (so `∫ S dⁿf = σ²`): `S(f) = (2π)^{n/2} p(2π f)`
+//! ([`Psd::value_cycles`]).
+//!
+//! # Blur methods
+//! A blur method is a type implementing [`BlurMethod`]; the choice is monomorphised:
+//! - [`ClosedForm`]: exact, for [`GaussianPsd`], [`GaussianMixturePsd`], [`Grating`], [`Smooth`];
+//! - mixture fit: [`KCorrelation::mixture_fit`] builds a [`GaussianMixturePsd`] once, then
+//!   [`ClosedForm`] applies;
+//! - [`GaussHermite`]: tensor Gauss–Hermite quadrature of a fixed order, any PSD;
+//! - [`Adaptive`]: nested adaptive Gauss–Kronrod to a relative tolerance — the reference.
+
+mod gaussian_psd;
+mod grating;
+mod kcorrelation;
+mod quadrature;
+pub(crate) mod special;
+
+pub use gaussian_psd::{GaussianMixturePsd, GaussianPsd, Smooth};
+pub use grating::{Grating, OrderCutoff, bessel_j};
+pub use kcorrelation::KCorrelation;
+pub use quadrature::{Adaptive, GaussHermite};
+
+use nalgebra::SVector;
+
+use crate::gaussian::Gaussian;
+use crate::real::Real;
+
+/// `(2π)^{n/2}` as `T`.
+#[inline]
+#[must_use]
+pub fn two_pi_pow_half_n<T: Real>(n: usize) -> T {
+    T::lit(core::f64::consts::TAU.powf(0.5 * n as f64))
+}
+
+/// A stationary power spectral density `p = F{R}` on `ℝᴺ` (`N = 2` surfaces, `N = 3` volumes).
+///
+/// # Formula
+/// ```text
+/// p(ζ) = (2π)^{−n/2} ∫ R(x) e^{−iζ·x} dⁿx,     ∫ p dⁿζ = (2π)^{n/2} R(0)
+/// ```
+/// Singular (Dirac) parts — grating orders, the smooth surface — are not visible to
+/// [`Psd::value`]; they enter only through [`Psd::integral`] and the closed-form blur.
+pub trait Psd<T: Real, const N: usize> {
+    /// The absolutely continuous part of `p(ζ)`, ζ in rad/length (0 for pure Dirac PSDs).
+    #[must_use]
+    fn value(&self, zeta: &SVector<T, N>) -> T;
+
+    /// The variance `σ² = R(0)` (squared rms height for a height field).
+    #[must_use]
+    fn variance(&self) -> T;
+
+    /// `∫ p dⁿζ = (2π)^{n/2} R(0)` under the unitary transform (Dirac parts included).
+    #[inline]
+    #[must_use]
+    fn integral(&self) -> T {
+        two_pi_pow_half_n::<T>(N) * self.variance()
+    }
+
+    /// The PSD in cycles per length, `S(f) = (2π)^{n/2} p(2π f)`, normalised as `∫ S dⁿf = σ²`
+    /// (SCATMECH's convention).
+    #[inline]
+    #[must_use]
+    fn value_cycles(&self, f: &SVector<T, N>) -> T {
+        two_pi_pow_half_n::<T>(N) * self.value(&(f * T::two_pi()))
+    }
+
+    /// Where `p` peaks (a breakpoint hint for quadrature); the origin by default.
+    #[inline]
+    #[must_use]
+    fn peak(&self) -> SVector<T, N> {
+        SVector::zeros()
+    }
+
+    /// `(p * g^Σ)(h)` with the method `method` (see [`BlurMethod`]).
+    #[inline]
+    #[must_use]
+    fn blur_with<M: BlurMethod<T, N, Self>>(
+        &self,
+        method: &M,
+        cov: &Gaussian<T, N>,
+        h: &SVector<T, N>,
+    ) -> T
+    where
+        Self: Sized,
+    {
+        method.blur(self, cov, h)
+    }
+}
+
+/// A way to compute the blur `(p * g^Σ)(h)` of a PSD `P`.
+///
+/// # Formula
+/// ```text
+/// (p * g^Σ)(h) = (2π)^{−n/2} ∫ p(ζ) g^Σ(h − ζ) dⁿζ = |Σ|^{1/2} E_{u∼𝒩(0,I)}[ p(h − L u) ]
+/// ```
+/// with `g^Σ` unnormalised and `Σ = L Lᵀ`. Implementations allocate nothing per call.
+pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
+    /// `(p * g^Σ)(h)`; finite for finite input, `0` on underflow.
+    #[must_use]
+    fn blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T;
+}
+
+/// The exact, closed-form blur (Gaussian, Gaussian-mixture, grating and smooth PSDs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ClosedForm;

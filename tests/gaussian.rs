@@ -1,0 +1,456 @@
+//! Verifies `gmueller::gaussian`: evaluation against the literal formula, Lemma S2.1 (corrected, and
+//! the printed form failing) and Corollary S2.2 against direct numerical Fourier quadrature in 2-D
+//! and 3-D, product/convolution closed forms and Parseval against quadrature, marginal vs section,
+//! and stability at extreme scales.
+
+mod common;
+
+use common::{F64, Tol, assert_close};
+use gmueller::Error;
+use gmueller::gaussian::Gaussian;
+use nalgebra::{
+    DMatrix, Matrix2, Matrix3, Rotation2, Rotation3, SMatrix, SVector, Vector2, Vector3,
+};
+use num_complex::Complex;
+use proptest::prelude::*;
+
+const TAU: f64 = std::f64::consts::TAU;
+
+/// The literal `exp(−½ xᵀΣ⁻¹x)` with nalgebra's general inverse (the oracle).
+fn literal<const N: usize>(cov: &SMatrix<f64, N, N>, x: &SVector<f64, N>) -> f64 {
+    let inv = cov.try_inverse().expect("invertible");
+    (-0.5 * (x.transpose() * inv * x)[0]).exp()
+}
+
+/// Trapezoid rule over the cube `[−half, half]ᴺ` with `n` points per axis (spectrally accurate for
+/// Gaussians decayed at the boundary), including the unitary prefactor `(2π)^{−N/2}` and the kernel
+/// `e^{−i q·x}`: an independent numerical Fourier transform.
+fn fourier_quad<const N: usize>(
+    f: impl Fn(&SVector<f64, N>) -> Complex<f64>,
+    q: &SVector<f64, N>,
+    half: f64,
+    n: usize,
+) -> Complex<f64> {
+    let step = 2.0 * half / (n - 1) as f64;
+    let mut idx = [0usize; N];
+    let mut sum = Complex::new(0.0, 0.0);
+    loop {
+        let x = SVector::<f64, N>::from_fn(|d, _| -half + step * idx[d] as f64);
+        sum += f(&x) * Complex::from_polar(1.0, -q.dot(&x));
+        let mut d = 0;
+        loop {
+            if d == N {
+                return sum * step.powi(N as i32) / TAU.powf(N as f64 / 2.0);
+            }
+            idx[d] += 1;
+            if idx[d] < n {
+                break;
+            }
+            idx[d] = 0;
+            d += 1;
+        }
+    }
+}
+
+/// `∫ f dᴺx` by the same trapezoid rule (no prefactor).
+fn integral_quad<const N: usize>(f: impl Fn(&SVector<f64, N>) -> f64, half: f64, n: usize) -> f64 {
+    let z = SVector::<f64, N>::zeros();
+    fourier_quad(|x| Complex::new(f(x), 0.0), &z, half, n).re * TAU.powf(N as f64 / 2.0)
+}
+
+fn sym2(a: f64, b: f64, c: f64) -> Matrix2<f64> {
+    Matrix2::new(a, b, b, c)
+}
+
+fn sym3() -> Matrix3<f64> {
+    Matrix3::new(1.0, 0.3, -0.2, 0.3, 0.7, 0.15, -0.2, 0.15, 0.5)
+}
+
+/// Quadrature tolerance: the trapezoid sums below are converged to ~1e-12.
+const QUAD: Tol = Tol::new(1e-10, 1e-9);
+
+#[test]
+fn rejects_invalid_covariances() {
+    assert!(matches!(
+        Gaussian::new(sym2(1.0, f64::NAN, 1.0)),
+        Err(Error::NonFinite { .. })
+    ));
+    assert!(matches!(
+        Gaussian::new(sym2(1.0, 2.0, 1.0)),
+        Err(Error::NotPositiveDefinite { .. })
+    ));
+    assert!(matches!(
+        Gaussian::new(Matrix2::new(1.0, 0.5, 0.0, 1.0)),
+        Err(Error::NotHermitian { .. })
+    ));
+    assert!(matches!(
+        Gaussian::<f64, 2>::isotropic(0.0),
+        Err(Error::OutOfRange { .. })
+    ));
+}
+
+proptest! {
+    #[test]
+    fn value_logdet_precision_match_literal(cov in common::spd2(), x in common::real(3.0), y in common::real(3.0)) {
+        let g = Gaussian::new(cov).unwrap();
+        let v = Vector2::new(x, y);
+        let lit = literal(&cov, &v);
+        prop_assert!(F64.accepts(g.value(&v), lit), "{} vs {}", g.value(&v), lit);
+        prop_assert!(F64.accepts(g.log_det(), cov.determinant().ln()));
+        let inv = cov.try_inverse().unwrap();
+        for (a, b) in g.precision().iter().zip(inv.iter()) {
+            prop_assert!(Tol::new(1e-10, 1e-10).accepts(*a, *b));
+        }
+        let dens = lit / (TAU * cov.determinant().sqrt());
+        prop_assert!(F64.accepts(g.density(&v), dens));
+    }
+
+    /// Closed-form product: g^A g^B = g^{(A⁻¹+B⁻¹)⁻¹} pointwise.
+    #[test]
+    fn product_is_pointwise(a in common::spd2(), b in common::spd2(), x in common::real(2.0), y in common::real(2.0)) {
+        let (ga, gb) = (Gaussian::new(a).unwrap(), Gaussian::new(b).unwrap());
+        let v = Vector2::new(x, y);
+        let p = ga.product(&gb).unwrap();
+        prop_assert!(F64.accepts(p.value(&v), literal(&a, &v) * literal(&b, &v)));
+        // Shifted product.
+        let (sa, sb) = (Vector2::new(0.3, -0.2), Vector2::new(-0.5, 0.4));
+        let (sg, c) = ga.product_shifted(&sa, &gb, &sb).unwrap();
+        let lhs = literal(&a, &(v - sa)) * literal(&b, &(v - sb));
+        prop_assert!(Tol::new(1e-12, 1e-10).accepts(sg.value(&(v - c)), lhs));
+    }
+}
+
+#[test]
+fn density_integrates_to_one() {
+    let g = Gaussian::new(sym2(0.8, 0.3, 0.4)).unwrap();
+    let i = integral_quad(|x: &Vector2<f64>| g.density(x), 8.0, 201);
+    assert_close("∫ density (2-D)", i, 1.0, QUAD);
+    let g3 = Gaussian::new(sym3()).unwrap();
+    let i3 = integral_quad(|x: &Vector3<f64>| g3.density(x), 7.0, 81);
+    assert_close("∫ density (3-D)", i3, 1.0, QUAD);
+    assert_close(
+        "log_integral",
+        g3.log_integral(),
+        i3.ln() - g3.density(&Vector3::zeros()).ln(),
+        QUAD,
+    );
+}
+
+/// Printed Lemma S2.1: `|Σ|^{1/2}/|B| · g^{Σ⁻¹}(B⁻¹ q)` with `|B| = det B`.
+fn lemma_printed<const N: usize>(
+    cov: &SMatrix<f64, N, N>,
+    b: &SMatrix<f64, N, N>,
+    q: &SVector<f64, N>,
+) -> f64 {
+    let arg = b.try_inverse().unwrap() * q;
+    let det =
+        |m: &SMatrix<f64, N, N>| DMatrix::from_iterator(N, N, m.iter().copied()).determinant();
+    det(cov).sqrt() / det(b) * (-0.5 * (arg.transpose() * cov * arg)[0]).exp()
+}
+
+/// Half-width covering the composed Gaussian `g^Σ(B·)` to e^{−40}.
+fn half_width<const N: usize>(cov: &SMatrix<f64, N, N>, b: &SMatrix<f64, N, N>) -> f64 {
+    let bi = b.try_inverse().unwrap();
+    let c = bi * cov * bi.transpose();
+    let max_var = (0..N).map(|i| c[(i, i)]).fold(0.0, f64::max);
+    9.0 * max_var.sqrt()
+}
+
+#[test]
+fn lemma_s2_1_matches_quadrature_2d() {
+    let cov = sym2(1.0, 0.3, 0.5);
+    let b = Matrix2::new(1.0, 0.8, 1.3, -0.2); // non-symmetric, det < 0
+    let g = Gaussian::new(cov).unwrap();
+    for q in [
+        Vector2::new(0.9, -0.6),
+        Vector2::new(-1.5, 2.0),
+        Vector2::new(0.0, 1.1),
+    ] {
+        let quad = fourier_quad(
+            |x| Complex::new(literal(&cov, &(b * x)), 0.0),
+            &q,
+            half_width(&cov, &b),
+            301,
+        );
+        let lemma = g.lemma_s2_1(&b, &q).unwrap();
+        assert_close("Lemma S2.1 (corrected) re", lemma, quad.re, QUAD);
+        assert_close("Lemma S2.1 im", quad.im, 0.0, QUAD);
+    }
+}
+
+#[test]
+fn lemma_s2_1_matches_quadrature_3d() {
+    let cov = sym3();
+    let b = Matrix3::new(1.0, 0.4, 0.0, -0.3, 0.9, 0.5, 0.2, 0.0, 1.2);
+    let g = Gaussian::new(cov).unwrap();
+    let q = Vector3::new(0.8, -0.5, 1.1);
+    let quad = fourier_quad(
+        |x| Complex::new(literal(&cov, &(b * x)), 0.0),
+        &q,
+        half_width(&cov, &b),
+        91,
+    );
+    assert_close(
+        "Lemma S2.1 (corrected, 3-D)",
+        g.lemma_s2_1(&b, &q).unwrap(),
+        quad.re,
+        QUAD,
+    );
+}
+
+/// Errata: the printed `B⁻¹ q` and signed `|B|` disagree with quadrature for a non-symmetric B.
+#[test]
+fn lemma_s2_1_printed_form_fails() {
+    let cov = sym2(1.0, 0.3, 0.5);
+    let b = Matrix2::new(1.0, 0.8, 1.3, -0.2);
+    let q = Vector2::new(0.9, -0.6);
+    let quad = fourier_quad(
+        |x| Complex::new(literal(&cov, &(b * x)), 0.0),
+        &q,
+        half_width(&cov, &b),
+        301,
+    )
+    .re;
+    let printed = lemma_printed(&cov, &b, &q);
+    assert!(
+        (printed - quad).abs() > 0.05 * quad.abs(),
+        "printed {printed} vs quadrature {quad}"
+    );
+    // Even with |det B|, the argument B⁻¹q is wrong for non-symmetric B:
+    assert!(
+        (printed.abs() - quad).abs() > 0.05 * quad.abs(),
+        "|printed| {} vs {quad}",
+        printed.abs()
+    );
+    // 3-D, positive det: only the argument differs.
+    let cov3 = sym3();
+    let b3 = Matrix3::new(1.0, 0.4, 0.0, -0.3, 0.9, 0.5, 0.2, 0.0, 1.2);
+    assert!(b3.determinant() > 0.0);
+    let q3 = Vector3::new(0.8, -0.5, 1.1);
+    let quad3 = fourier_quad(
+        |x| Complex::new(literal(&cov3, &(b3 * x)), 0.0),
+        &q3,
+        half_width(&cov3, &b3),
+        71,
+    )
+    .re;
+    let printed3 = lemma_printed(&cov3, &b3, &q3);
+    assert!(
+        (printed3 - quad3).abs() > 0.05 * quad3.abs(),
+        "printed {printed3} vs {quad3}"
+    );
+    // For a symmetric B the two forms agree (the printed lemma is right there).
+    let bs = sym2(1.2, 0.4, 0.9);
+    assert_close(
+        "printed = corrected for symmetric B",
+        lemma_printed(&cov, &bs, &q),
+        Gaussian::new(cov).unwrap().lemma_s2_1(&bs, &q).unwrap(),
+        F64,
+    );
+}
+
+/// Corollary S2.2: F{e^{−ikŝ·ξ} g^Θ(Qᵀξ)}(q) = |Θ|^{1/2} g^{Θ⁻¹}(Qᵀ(q + kŝ)), Q local → world.
+#[test]
+fn corollary_s2_2_matches_quadrature_2d() {
+    let theta = sym2(1.5, 0.4, 0.3); // anisotropic, local coordinates
+    let rot = Rotation2::new(0.7);
+    let ks = Vector2::new(1.2, -0.7);
+    let g = Gaussian::new(theta).unwrap();
+    let qm = *rot.matrix();
+    let f = |x: &Vector2<f64>| {
+        literal(&theta, &(qm.transpose() * x)) * Complex::from_polar(1.0, -ks.dot(x))
+    };
+    for q in [
+        Vector2::new(-1.0, 0.5),
+        Vector2::new(-0.6, 1.0),
+        Vector2::new(0.3, 0.2),
+    ] {
+        let quad = fourier_quad(f, &q, 12.0, 301);
+        let cor = g.corollary_s2_2(&rot, &ks, &q);
+        assert_close("Corollary S2.2 re", cor, quad.re, QUAD);
+        assert_close("Corollary S2.2 im", quad.im, 0.0, QUAD);
+        // Ξ = Q Θ⁻¹ Qᵀ (S2.18): the same value from the world-frame Gaussian g^Ξ.
+        let xi = g.inverse().unwrap().rotated(&rot).unwrap();
+        assert_close(
+            "Ξ = QΘ⁻¹Qᵀ",
+            g.det().sqrt() * xi.value(&(q + ks)),
+            quad.re,
+            QUAD,
+        );
+    }
+    // The opposite shift (q − kŝ) and the opposite direction of Q both fail.
+    let q = Vector2::new(-0.6, 1.0);
+    let quad = fourier_quad(f, &q, 12.0, 301).re;
+    let wrong_shift = g.corollary_s2_2(&rot, &(-ks), &q);
+    let wrong_q = g.corollary_s2_2(&rot.inverse(), &ks, &q);
+    assert!(
+        (wrong_shift - quad).abs() > 0.05 * quad,
+        "{wrong_shift} vs {quad}"
+    );
+    assert!((wrong_q - quad).abs() > 0.05 * quad, "{wrong_q} vs {quad}");
+}
+
+#[test]
+fn corollary_s2_2_matches_quadrature_3d() {
+    let theta = Matrix3::new(1.2, 0.2, 0.0, 0.2, 0.4, 0.0, 0.0, 0.0, 0.8);
+    let rot = Rotation3::from_euler_angles(0.3, -0.5, 0.9);
+    let ks = Vector3::new(0.4, -0.3, 0.9);
+    let g = Gaussian::new(theta).unwrap();
+    let qm = *rot.matrix();
+    let f = |x: &Vector3<f64>| {
+        literal(&theta, &(qm.transpose() * x)) * Complex::from_polar(1.0, -ks.dot(x))
+    };
+    let q = Vector3::new(-0.2, 0.5, -0.4);
+    let quad = fourier_quad(f, &q, 10.0, 81);
+    assert_close(
+        "Corollary S2.2 (3-D) re",
+        g.corollary_s2_2(&rot, &ks, &q),
+        quad.re,
+        QUAD,
+    );
+    assert_close("Corollary S2.2 (3-D) im", quad.im, 0.0, QUAD);
+}
+
+#[test]
+fn shift_and_modulation_match_quadrature() {
+    let cov = sym2(0.6, -0.2, 0.9);
+    let g = Gaussian::new(cov).unwrap();
+    let (a, k) = (Vector2::new(0.7, -0.3), Vector2::new(0.5, 1.0));
+    let f = |x: &Vector2<f64>| literal(&cov, &(x - a)) * Complex::from_polar(1.0, k.dot(x));
+    let q = Vector2::new(0.2, -0.4);
+    let quad = fourier_quad(f, &q, 12.0, 301);
+    let cf = g.fourier_shifted_modulated(&a, &k, &q);
+    assert_close("shift/modulation re", cf.re, quad.re, QUAD);
+    assert_close("shift/modulation im", cf.im, quad.im, QUAD);
+}
+
+/// g^A * g^B = (|A||B|/|A+B|)^{1/2} g^{A+B} with (2π)^{−n/2}∫.
+#[test]
+fn convolution_matches_quadrature() {
+    let (a, b) = (sym2(0.8, 0.3, 0.5), sym2(0.4, -0.1, 1.1));
+    let (ga, gb) = (Gaussian::new(a).unwrap(), Gaussian::new(b).unwrap());
+    let conv = ga.convolve(&gb).unwrap();
+    for x in [
+        Vector2::new(0.0, 0.0),
+        Vector2::new(0.8, -1.2),
+        Vector2::new(2.0, 1.0),
+    ] {
+        let quad = integral_quad(|y| literal(&a, y) * literal(&b, &(x - y)), 10.0, 241) / TAU;
+        assert_close("convolution", conv.value(&x), quad, QUAD);
+    }
+    let expected_scale = (a.determinant() * b.determinant() / (a + b).determinant()).sqrt();
+    assert_close("convolution constant", conv.scale(), expected_scale, F64);
+}
+
+/// Parseval: ∫|g|² dx = ∫|F{g}|² dq, both sides by quadrature (F{g} from `fourier`).
+#[test]
+fn parseval() {
+    let cov = sym2(0.7, 0.25, 0.4);
+    let g = Gaussian::new(cov).unwrap();
+    let fg = g.fourier().unwrap();
+    let lhs = integral_quad(|x| g.value(x).powi(2), 8.0, 201);
+    let rhs = integral_quad(|q| fg.value(q).powi(2), 14.0, 301);
+    assert_close("Parseval", lhs, rhs, QUAD);
+    // And F{g} itself against quadrature.
+    let q = Vector2::new(0.5, -1.0);
+    assert_close(
+        "F{g}",
+        fg.value(&q),
+        fourier_quad(|x| Complex::new(g.value(x), 0.0), &q, 8.0, 201).re,
+        QUAD,
+    );
+}
+
+/// Marginal (∫ dz) and section (z = 0) of a 3-D Gaussian, and that they differ when oblique.
+#[test]
+fn marginal_and_section() {
+    let cov = sym3();
+    let g = Gaussian::new(cov).unwrap();
+    let marg = g.marginal_xy().unwrap();
+    let sect = g.section_xy().unwrap();
+    for v in [
+        Vector2::new(0.0, 0.0),
+        Vector2::new(0.5, -0.4),
+        Vector2::new(-1.0, 0.7),
+    ] {
+        // Marginal: ∫ g(x, y, z) dz by the trapezoid rule.
+        let n = 2001;
+        let step = 16.0 / (n - 1) as f64;
+        let m: f64 = (0..n)
+            .map(|i| literal(&cov, &Vector3::new(v.x, v.y, -8.0 + step * i as f64)))
+            .sum::<f64>()
+            * step;
+        assert_close("marginal", marg.value(&v), m, QUAD);
+        assert_close(
+            "section",
+            sect.value(&v),
+            literal(&cov, &Vector3::new(v.x, v.y, 0.0)),
+            F64,
+        );
+    }
+    // Schur complement vs the inverse of the precision block.
+    let inv = cov.try_inverse().unwrap();
+    let block = inv
+        .fixed_view::<2, 2>(0, 0)
+        .into_owned()
+        .try_inverse()
+        .unwrap();
+    for (a, b) in sect.covariance().iter().zip(block.iter()) {
+        assert_close("section covariance", *a, *b, F64);
+    }
+    // Oblique (non-zero Σ_xz, Σ_yz): the marginal block and the Schur complement differ.
+    let diff = (marg.gaussian.covariance() - sect.covariance()).amax();
+    assert!(
+        diff > 0.05,
+        "marginal vs section covariance differ by only {diff}"
+    );
+}
+
+/// Eigenvalues 1e-12…1e12, anisotropy up to 1e6: finite, log-values accurate, underflow → 0.
+#[test]
+fn stability_extreme_scales() {
+    for &scale in &[1e-12, 1e-6, 1.0, 1e6, 1e12] {
+        for &aniso in &[1.0, 1e3, 1e6] {
+            for &angle in &[0.0, 0.4, 1.3] {
+                let (l1, l2) = (scale, scale / aniso);
+                let r = Rotation2::new(angle);
+                let v1 = r * Vector2::new(1.0, 0.0);
+                let v2 = r * Vector2::new(0.0, 1.0);
+                let cov = v1 * v1.transpose() * l1 + v2 * v2.transpose() * l2;
+                let cov = (cov + cov.transpose()) * 0.5;
+                let g = Gaussian::new(cov).unwrap();
+                assert_close(
+                    "log det",
+                    g.log_det(),
+                    l1.ln() + l2.ln(),
+                    Tol::new(1e-9, 1e-9),
+                );
+                for &xs in &[0.0, 1e-7, 1.0, 1e7] {
+                    let x = Vector2::new(0.6, -0.8) * xs * scale.sqrt();
+                    let exact = -0.5 * (v1.dot(&x).powi(2) / l1 + v2.dot(&x).powi(2) / l2);
+                    let lv = g.log_value(&x);
+                    assert!(lv.is_finite());
+                    assert_close("log value", lv, exact, Tol::new(1e-9, 1e-7));
+                    let v = g.value(&x);
+                    assert!(v.is_finite() && v >= 0.0);
+                    if exact < -800.0 {
+                        assert_eq!(v, 0.0, "underflow must give 0");
+                    }
+                    // f32: finite, never NaN.
+                    let g32 = Gaussian::new(cov.cast::<f32>()).unwrap();
+                    let v32 = g32.value(&x.cast::<f32>());
+                    assert!(v32.is_finite() && v32 >= 0.0);
+                    assert!(g32.log_value(&x.cast::<f32>()).is_finite() || exact < -1e37);
+                    if exact.abs() < 50.0 {
+                        assert_close(
+                            "f32 log value",
+                            f64::from(g32.log_value(&x.cast::<f32>())),
+                            exact,
+                            Tol::new(1e-3, 1e-2),
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,589 @@
+//! Verifies `gmueller::psd`: normalisation `∫p = (2π)^{n/2} R(0)` of every model by independent
+//! quadrature, the unitary-transform definition of the Gaussian PSD, SCATMECH's Gaussian and ABC
+//! PSDs after the change of variables, the S2.17 constant (numerically, against the direct
+//! integral S2.15), Bessel efficiencies against Abramowitz & Stegun, and an accuracy sweep of every
+//! blur method against the adaptive reference.
+
+mod common;
+
+use common::{Tol, assert_close};
+use gmueller::gaussian::Gaussian;
+use gmueller::psd::{
+    Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, Grating,
+    KCorrelation, OrderCutoff, Psd, Smooth, bessel_j,
+};
+use nalgebra::{Matrix2, Matrix3, Rotation2, Rotation3, SMatrix, SVector, Vector2, Vector3};
+use num_complex::Complex;
+
+const TAU: f64 = std::f64::consts::TAU;
+const PI: f64 = std::f64::consts::PI;
+
+/// `∫ f(|ζ|) dⁿζ` for a radial function, by the trapezoid rule in `t = ln r` over `[−30, 60]`
+/// (exponentially convergent for the decays used here; independent of the crate).
+fn radial_integral(n: usize, f: impl Fn(f64) -> f64) -> f64 {
+    let surface = if n == 2 { TAU } else { 2.0 * TAU };
+    let (a, b, m) = (-30.0_f64, 60.0_f64, 60_000);
+    let dt = (b - a) / m as f64;
+    let s: f64 = (0..=m)
+        .map(|i| {
+            let r = (a + dt * i as f64).exp();
+            let w = if i == 0 || i == m { 0.5 } else { 1.0 };
+            w * f(r) * r.powi(n as i32)
+        })
+        .sum();
+    surface * s * dt
+}
+
+/// Trapezoid rule over `[−half, half]ᴺ` with `n` points per axis, of a complex integrand.
+fn cube_quad<const N: usize>(
+    f: impl Fn(&SVector<f64, N>) -> Complex<f64>,
+    half: f64,
+    n: usize,
+) -> Complex<f64> {
+    let step = 2.0 * half / (n - 1) as f64;
+    let mut idx = [0usize; N];
+    let mut sum = Complex::new(0.0, 0.0);
+    loop {
+        let x = SVector::<f64, N>::from_fn(|d, _| -half + step * idx[d] as f64);
+        sum += f(&x);
+        let mut d = 0;
+        loop {
+            if d == N {
+                return sum * step.powi(N as i32);
+            }
+            idx[d] += 1;
+            if idx[d] < n {
+                break;
+            }
+            idx[d] = 0;
+            d += 1;
+        }
+    }
+}
+
+fn literal_gauss<const N: usize>(cov: &SMatrix<f64, N, N>, x: &SVector<f64, N>) -> f64 {
+    (-0.5 * (x.transpose() * cov.try_inverse().unwrap() * x)[0]).exp()
+}
+
+const QUAD: Tol = Tol::new(1e-11, 1e-9);
+
+// ------------------------------------------------------------------ normalisation
+
+#[test]
+fn normalisation_gaussian_and_kcorrelation() {
+    let (sigma, ell) = (0.3, 1.7);
+    let g2 = GaussianPsd::<f64, 2>::isotropic(sigma, ell).unwrap();
+    let i2 = radial_integral(2, |r| g2.value(&Vector2::new(r, 0.0)));
+    assert_close("∫p Gaussian 2-D", i2, TAU * sigma * sigma, QUAD);
+    assert_close("integral() Gaussian 2-D", g2.integral(), i2, QUAD);
+    let g3 = GaussianPsd::<f64, 3>::isotropic(sigma, ell).unwrap();
+    let i3 = radial_integral(3, |r| g3.value(&Vector3::new(0.0, r, 0.0)));
+    assert_close("∫p Gaussian 3-D", i3, TAU.powf(1.5) * sigma * sigma, QUAD);
+
+    for &(t, gamma) in &[(4.0_f64, 1.5_f64), (0.3, 2.0), (25.0, 3.7)] {
+        let k = KCorrelation::<f64, 2>::new(0.02, t, gamma).unwrap();
+        let i = radial_integral(2, |r| k.value(&Vector2::new(r, 0.0)));
+        assert_close("∫p K-correlation 2-D", i, TAU * 0.02, Tol::new(1e-12, 1e-8));
+        // FORMALISM: p per unit variance and unit integral is (γ−1)T/(2π)(1+T|ζ|²)^{−(γ+1)/2}.
+        let z = Vector2::<f64>::new(0.37, -0.2);
+        let formalism =
+            (gamma - 1.0) * t / TAU * (1.0 + t * z.norm_squared()).powf(-(gamma + 1.0) / 2.0);
+        assert_close(
+            "K-correlation vs FORMALISM",
+            k.value(&z) / k.integral(),
+            formalism,
+            Tol::new(1e-14, 1e-12),
+        );
+    }
+    let k3 = KCorrelation::<f64, 3>::new(0.5, 2.0, 3.5).unwrap();
+    let i = radial_integral(3, |r| k3.value(&Vector3::new(r, 0.0, 0.0)));
+    assert_close(
+        "∫p K-correlation 3-D",
+        i,
+        TAU.powf(1.5) * 0.5,
+        Tol::new(1e-12, 1e-8),
+    );
+    assert!(
+        KCorrelation::<f64, 3>::new(0.5, 2.0, 1.9).is_err(),
+        "γ ≤ n − 1 has no finite variance"
+    );
+}
+
+/// Dirac models: ∫ (p * g^Σ)(h) dⁿh = σ² (2π)^{n/2} |Σ|^{1/2} iff ∫p = (2π)^{n/2} σ².
+#[test]
+fn normalisation_dirac_models_through_the_blur() {
+    let cov = Gaussian::new(Matrix2::new(0.5_f64, 0.1, 0.1, 0.3)).unwrap();
+    let expected = |var: f64| var * TAU * cov.det().sqrt();
+    let cut = OrderCutoff {
+        max_frequency: 12.0,
+        tail: 1e-14,
+    };
+    let grating = Grating::sinusoidal(2.0, &Vector2::new(1.0, 0.5), 1.3, cut).unwrap();
+    let total = cube_quad(
+        |h: &Vector2<f64>| Complex::new(ClosedForm.blur(&grating, &cov, h), 0.0),
+        20.0,
+        801,
+    )
+    .re;
+    assert_close(
+        "∫ blur, sinusoidal grating",
+        total,
+        expected(grating.variance()),
+        QUAD,
+    );
+    let smooth = Smooth::new(0.8).unwrap();
+    let total = cube_quad(
+        |h: &Vector2<f64>| Complex::new(ClosedForm.blur(&smooth, &cov, h), 0.0),
+        10.0,
+        401,
+    )
+    .re;
+    assert_close("∫ blur, smooth", total, expected(0.8), QUAD);
+    assert_close(
+        "integral() smooth",
+        Psd::<f64, 2>::integral(&smooth),
+        TAU * 0.8,
+        Tol::new(0.0, 1e-15),
+    );
+}
+
+/// p = F{R} under the unitary transform: direct quadrature of R(x) = σ² g^Λ(x).
+#[test]
+fn gaussian_psd_is_unitary_transform_of_r() {
+    let lambda = Matrix2::new(1.2, 0.3, 0.3, 0.6);
+    let var = 0.04;
+    let p = GaussianPsd::from_autocorrelation(var, &Gaussian::new(lambda).unwrap()).unwrap();
+    for z in [
+        Vector2::new(0.0, 0.0),
+        Vector2::new(0.8, -0.5),
+        Vector2::new(-1.5, 2.0),
+    ] {
+        let ft = cube_quad(
+            |x| Complex::from_polar(var * literal_gauss(&lambda, x), -z.dot(x)),
+            10.0,
+            301,
+        ) / TAU;
+        assert_close("p = F{R}", p.value(&z), ft.re, QUAD);
+    }
+}
+
+// ------------------------------------------------------------------ SCATMECH conversions
+
+/// SCATMECH: S(f) = π σ² L² exp(−(π L f)²), C(r) = σ² exp(−r²/L²), f in cycles/µm;
+/// ours: S(f) = 2π p(2πf), ℓ = L/√2.
+#[test]
+fn gaussian_psd_matches_scatmech() {
+    let (sigma, l) = (0.005_f64, 0.8_f64);
+    let p = GaussianPsd::<f64, 2>::from_scatmech(sigma, l).unwrap();
+    for f in [
+        Vector2::<f64>::new(0.0, 0.0),
+        Vector2::new(0.3, 0.1),
+        Vector2::new(-0.7, 0.9),
+    ] {
+        let s = PI * sigma * sigma * l * l * (-(PI * l).powi(2) * f.norm_squared()).exp();
+        assert_close("SCATMECH S(f)", p.value_cycles(&f), s, Tol::new(0.0, 1e-13));
+        assert_close(
+            "S(f) = 2π p(2πf)",
+            p.value_cycles(&f),
+            TAU * p.value(&(f * TAU)),
+            Tol::new(0.0, 1e-14),
+        );
+    }
+    // ∫ S d²f = σ² (SCATMECH's normalisation) vs ∫ p d²ζ = 2π σ² (ours).
+    let is = radial_integral(2, |r| p.value_cycles(&Vector2::new(r, 0.0)));
+    assert_close("∫S d²f = σ²", is, sigma * sigma, QUAD);
+}
+
+/// SCATMECH ABC: S(f) = A/(1 + (Bf)²)^{C/2}; T = B²/4π², γ = C − 1, σ² = 2πA/((C−2)B²).
+#[test]
+fn kcorrelation_matches_scatmech_abc() {
+    let (a, b, c) = (3e-5_f64, 120.0_f64, 2.6_f64);
+    let k = KCorrelation::<f64, 2>::from_abc(a, b, c).unwrap();
+    for f in [
+        Vector2::<f64>::new(0.0, 0.0),
+        Vector2::new(0.01, 0.02),
+        Vector2::new(1.0, -0.5),
+    ] {
+        let s = a / (1.0 + (b * b) * f.norm_squared()).powf(c / 2.0);
+        assert_close("ABC S(f)", k.value_cycles(&f), s, Tol::new(0.0, 1e-13));
+    }
+    let is = radial_integral(2, |r| k.value_cycles(&Vector2::new(r, 0.0)));
+    assert_close("σ² = ∫S d²f", k.variance(), is, Tol::new(1e-16, 1e-8));
+    let (a2, b2, c2) = k.abc();
+    assert_close("A round trip", a2, a, Tol::new(0.0, 1e-14));
+    assert_close("B round trip", b2, b, Tol::new(0.0, 1e-14));
+    assert_close("C round trip", c2, c, Tol::new(0.0, 1e-14));
+}
+
+// ------------------------------------------------------------------ S2.17 constant
+
+/// S2.15 directly: f = ∫ e^{−ik r̂·ξ} R(ξ) e^{−ikŝ·ξ} g^Θ(Qᵀξ) dⁿξ, by quadrature; S2.17 says
+/// `f = C_n |Θ|^{1/2} (p * g^Ξ)(h)`, `h = k(r̂ + ŝ)`, `Ξ = QΘ⁻¹Qᵀ`. Decides `C_n = (2π)^{n/2}`, not `8π³`.
+#[test]
+fn s2_17_constant_2d() {
+    let var = 0.01;
+    let lambda = Matrix2::new(0.9, 0.2, 0.2, 0.5);
+    let psd = GaussianPsd::from_autocorrelation(var, &Gaussian::new(lambda).unwrap()).unwrap();
+    let theta = Matrix2::new(2.0, 0.5, 0.5, 0.7);
+    let rot = Rotation2::new(0.6);
+    let gt = Gaussian::new(theta).unwrap();
+    let xi = gt.inverse().unwrap().rotated(&rot).unwrap(); // Ξ = QΘ⁻¹Qᵀ
+    let (k_r, k_s) = (Vector2::new(0.3, 0.4), Vector2::new(-0.8, 0.1));
+    let q = rot.matrix().transpose();
+    let direct = cube_quad(
+        |x| {
+            let r = var * literal_gauss(&lambda, x);
+            Complex::from_polar(r * literal_gauss(&theta, &(q * x)), -(k_r + k_s).dot(x))
+        },
+        12.0,
+        401,
+    );
+    let h = k_r + k_s;
+    let blur = gt.det().sqrt() * ClosedForm.blur(&psd, &xi, &h);
+    assert_close("S2.17 with (2π)^{n/2}", direct.re, TAU * blur, QUAD);
+    assert_close("S2.15 is real", direct.im, 0.0, QUAD);
+    assert!(
+        (direct.re - 8.0 * PI.powi(3) * blur).abs() > 0.5 * direct.re,
+        "printed 8π³ must fail"
+    );
+}
+
+#[test]
+fn s2_17_constant_3d() {
+    let var = 0.02;
+    let lambda = Matrix3::new(0.8, 0.1, 0.0, 0.1, 0.6, 0.1, 0.0, 0.1, 0.9);
+    let psd = GaussianPsd::from_autocorrelation(var, &Gaussian::new(lambda).unwrap()).unwrap();
+    let theta = Matrix3::new(1.5, 0.3, 0.0, 0.3, 0.8, 0.0, 0.0, 0.0, 1.1);
+    let rot = Rotation3::from_euler_angles(0.2, 0.7, -0.4);
+    let gt = Gaussian::new(theta).unwrap();
+    let xi = gt.inverse().unwrap().rotated(&rot).unwrap();
+    let (k_r, k_s) = (Vector3::new(0.3, -0.2, 0.5), Vector3::new(-0.1, 0.4, -0.9));
+    let q = rot.matrix().transpose();
+    let direct = cube_quad(
+        |x| {
+            let r = var * literal_gauss(&lambda, x);
+            Complex::from_polar(r * literal_gauss(&theta, &(q * x)), -(k_r + k_s).dot(x))
+        },
+        8.0,
+        81,
+    );
+    let blur = gt.det().sqrt() * ClosedForm.blur(&psd, &xi, &(k_r + k_s));
+    assert_close(
+        "S2.17 (3-D) with (2π)^{3/2}",
+        direct.re,
+        TAU.powf(1.5) * blur,
+        QUAD,
+    );
+    assert!(
+        (direct.re - 8.0 * PI.powi(3) * blur).abs() > 0.5 * direct.re,
+        "printed 8π³ must fail"
+    );
+}
+
+// ------------------------------------------------------------------ closed-form blurs
+
+/// Closed-form Gaussian and mixture blurs against direct quadrature of (2π)^{−1}∫p(ζ)g(h−ζ)dζ.
+#[test]
+fn closed_form_blur_matches_quadrature() {
+    let psd = GaussianPsd::<f64, 2>::isotropic(0.1, 0.8).unwrap();
+    let aniso = GaussianPsd::from_autocorrelation(
+        0.05,
+        &Gaussian::new(Matrix2::new(3.0, 1.0, 1.0, 0.7)).unwrap(),
+    )
+    .unwrap();
+    let mix = GaussianMixturePsd::new(vec![psd, aniso]).unwrap();
+    let covm = Matrix2::new(0.3, -0.1, -0.1, 0.5);
+    let cov = Gaussian::new(covm).unwrap();
+    for h in [
+        Vector2::new(0.0, 0.0),
+        Vector2::new(1.0, -0.5),
+        Vector2::new(3.0, 2.0),
+    ] {
+        let quad = |p: &dyn Fn(&Vector2<f64>) -> f64| {
+            cube_quad(
+                |z| Complex::new(p(z) * literal_gauss(&covm, &(h - z)), 0.0),
+                14.0,
+                401,
+            )
+            .re / TAU
+        };
+        assert_close(
+            "Gaussian blur",
+            ClosedForm.blur(&psd, &cov, &h),
+            quad(&|z| psd.value(z)),
+            QUAD,
+        );
+        assert_close(
+            "mixture blur",
+            ClosedForm.blur(&mix, &cov, &h),
+            quad(&|z| mix.value(z)),
+            QUAD,
+        );
+        let r = Adaptive::new(1e-12).unwrap().blur(&mix, &cov, &h);
+        assert_close(
+            "adaptive vs closed form",
+            r,
+            ClosedForm.blur(&mix, &cov, &h),
+            Tol::new(1e-16, 1e-11),
+        );
+    }
+}
+
+#[test]
+fn adaptive_3d_matches_closed_form() {
+    let psd = GaussianPsd::from_autocorrelation(
+        0.02,
+        &Gaussian::new(Matrix3::new(1.0, 0.2, 0.0, 0.2, 0.5, 0.1, 0.0, 0.1, 2.0)).unwrap(),
+    )
+    .unwrap();
+    let cov = Gaussian::new(Matrix3::new(0.4, 0.1, 0.0, 0.1, 0.3, 0.0, 0.0, 0.0, 0.6)).unwrap();
+    let h = Vector3::new(0.5, -0.3, 0.8);
+    let r = Adaptive::new(1e-8).unwrap().blur(&psd, &cov, &h);
+    assert_close(
+        "adaptive 3-D",
+        r,
+        ClosedForm.blur(&psd, &cov, &h),
+        Tol::new(1e-16, 1e-8),
+    );
+}
+
+// ------------------------------------------------------------------ gratings
+
+/// Abramowitz & Stegun, Table 9.1 (J0, J1, J2 at x = 1; J0, J1 at x = 10) and Table 9.5 (zeros).
+#[test]
+fn bessel_against_tables() {
+    let j1 = bessel_j(2, 1.0);
+    assert_close("J0(1)", j1[0], 0.7651976865579666, Tol::new(1e-15, 0.0));
+    assert_close("J1(1)", j1[1], 0.4400505857449335, Tol::new(1e-15, 0.0));
+    assert_close("J2(1)", j1[2], 0.1149034849319005, Tol::new(1e-15, 0.0));
+    let j10 = bessel_j(1, 10.0);
+    assert_close("J0(10)", j10[0], -0.2459357644513483, Tol::new(1e-14, 0.0));
+    assert_close("J1(10)", j10[1], 0.04347274616886144, Tol::new(1e-14, 0.0));
+    assert_close(
+        "J0(j01)",
+        bessel_j(0, 2.404825557695773)[0],
+        0.0,
+        Tol::new(1e-15, 0.0),
+    );
+    assert_close(
+        "J1(j11)",
+        bessel_j(1, 3.831705970207512)[1],
+        0.0,
+        Tol::new(1e-15, 0.0),
+    );
+    // Power series J_m(x) = Σ_k (−1)^k (x/2)^{2k+m} / (k! (k+m)!) as an independent oracle.
+    for &x in &[0.3, 2.4, 7.0] {
+        let j = bessel_j(6, x);
+        for (m, &jm) in j.iter().enumerate() {
+            let mut term = (0.5 * x).powi(m as i32) / (1..=m).map(|v| v as f64).product::<f64>();
+            let mut s = 0.0;
+            for k in 0..60 {
+                s += term;
+                term *= -(0.25 * x * x) / ((k + 1) as f64 * (k + 1 + m) as f64);
+            }
+            assert_close("J_m series", jm, s, Tol::new(1e-14, 1e-12));
+        }
+        // Σ_m J_m² = J0² + 2 Σ_{m≥1} J_m² = 1.
+        let all = bessel_j(80, x);
+        let sum = all[0] * all[0] + 2.0 * all[1..].iter().map(|v| v * v).sum::<f64>();
+        assert_close("Σ J_m² = 1", sum, 1.0, Tol::new(1e-14, 0.0));
+    }
+    assert_close(
+        "J1(−1) = −J1(1)",
+        bessel_j(1, -1.0)[1],
+        -0.4400505857449335,
+        Tol::new(1e-15, 0.0),
+    );
+}
+
+#[test]
+fn grating_orders_and_cutoff() {
+    let cut = OrderCutoff {
+        max_frequency: 100.0,
+        tail: 1e-12,
+    };
+    let g = Grating::<f64, 2>::sinusoidal(1.0, &Vector2::new(1.0, 0.0), 2.0, cut).unwrap();
+    assert!(g.dropped_efficiency() <= 1e-12);
+    for (z, e) in g.orders() {
+        let m = (z.x / TAU).round() as i64;
+        let jm = bessel_j(m.unsigned_abs() as usize, 2.0)[m.unsigned_abs() as usize];
+        assert_close("η_m = J_m(a)²", *e, jm * jm, Tol::new(1e-15, 1e-12));
+    }
+    // Frequency cut: only |m| 2π/Λ ≤ max_frequency.
+    let narrow = Grating::<f64, 2>::sinusoidal(
+        1.0,
+        &Vector2::new(0.0, 1.0),
+        2.0,
+        OrderCutoff {
+            max_frequency: 13.0,
+            tail: 0.0,
+        },
+    )
+    .unwrap();
+    assert_eq!(narrow.orders().len(), 5, "orders 0, ±1, ±2");
+    assert!(narrow.orders().iter().all(|(z, _)| z.norm() <= 13.0));
+    // Binary grating: π depth, duty ½ suppresses the zeroth order; Σ η = 1.
+    let bin = Grating::<f64, 2>::rectangular(
+        2.0,
+        &Vector2::new(1.0, 0.0),
+        PI,
+        0.5,
+        OrderCutoff {
+            max_frequency: 1e4,
+            tail: 0.0,
+        },
+    )
+    .unwrap();
+    assert!(
+        bin.orders().iter().all(|(z, _)| z.norm() > 0.0),
+        "zeroth order vanishes"
+    );
+    assert_close(
+        "binary ±1 = 4/π²",
+        bin.orders()[0].1,
+        4.0 / (PI * PI),
+        Tol::new(1e-15, 1e-12),
+    );
+    assert!(1.0 - bin.variance() < 1e-3 && bin.variance() <= 1.0 + 1e-12);
+    // Crossed: product efficiencies, total 1.
+    let gx = Grating::<f64, 2>::sinusoidal(1.0, &Vector2::new(1.0, 0.0), 1.0, cut).unwrap();
+    let gy = Grating::<f64, 2>::sinusoidal(1.5, &Vector2::new(0.0, 1.0), 0.5, cut).unwrap();
+    let xg = Grating::crossed(&gx, &gy, 0.0);
+    assert_close("crossed Σ η", xg.variance(), 1.0, Tol::new(1e-12, 0.0));
+    // Blur = Σ η_m g(h − ζ_m).
+    let cov = Gaussian::new(Matrix2::new(0.2, 0.0, 0.0, 0.2)).unwrap();
+    let h = Vector2::new(TAU, 0.1);
+    let direct: f64 = gx
+        .orders()
+        .iter()
+        .map(|(z, e)| e * literal_gauss(&Matrix2::new(0.2, 0.0, 0.0, 0.2), &(h - z)))
+        .sum();
+    assert_close(
+        "grating blur",
+        ClosedForm.blur(&gx, &cov, &h),
+        direct,
+        Tol::new(1e-15, 1e-13),
+    );
+}
+
+// ------------------------------------------------------------------ accuracy sweep
+
+struct Case {
+    cov: Gaussian<f64, 2>,
+    h: Vector2<f64>,
+}
+
+fn sweep_cases() -> Vec<Case> {
+    // Narrow (coherent), comparable and wide (incoherent) blurs relative to the K-correlation scale
+    // 1/√T = 0.5, anisotropic, at the peak and in the tail.
+    let mk = |a: f64, b: f64, c: f64| Gaussian::new(Matrix2::new(a, b, b, c)).unwrap();
+    vec![
+        Case {
+            cov: mk(0.01, 0.002, 0.004),
+            h: Vector2::new(0.3, -0.2),
+        },
+        Case {
+            cov: mk(0.2, 0.05, 0.1),
+            h: Vector2::new(0.0, 0.0),
+        },
+        Case {
+            cov: mk(0.2, 0.05, 0.1),
+            h: Vector2::new(2.0, 1.0),
+        },
+        Case {
+            cov: mk(4.0, 1.0, 1.5),
+            h: Vector2::new(1.0, -3.0),
+        },
+    ]
+}
+
+/// Every blur method against the adaptive reference at tol 1e-13, over tolerances 1e-2 … 1e-10.
+#[test]
+fn accuracy_sweep_kcorrelation() {
+    let k = KCorrelation::<f64, 2>::new(0.01, 4.0, 2.2).unwrap();
+    let cases = sweep_cases();
+    let reference: Vec<f64> = cases
+        .iter()
+        .map(|c| Adaptive::new(1e-13).unwrap().blur(&k, &c.cov, &c.h))
+        .collect();
+    for tol in [1e-2, 1e-4, 1e-6, 1e-8, 1e-10] {
+        // Adaptive: relative error ≤ tol.
+        let ad = Adaptive::new(tol).unwrap();
+        for (c, r) in cases.iter().zip(&reference) {
+            let v = ad.blur(&k, &c.cov, &c.h);
+            assert!(
+                ((v - r) / r).abs() <= tol,
+                "adaptive tol {tol}: rel err {:e}",
+                ((v - r) / r).abs()
+            );
+        }
+        // Mixture fit: |error| ≤ sup|p − p_m| |Σ|^{1/2} with the measured sup error ≤ tol·p(0).
+        let (mix, m, err) = k.mixture_fit_to(tol).unwrap();
+        assert!(err <= tol);
+        for (c, r) in cases.iter().zip(&reference) {
+            let v = ClosedForm.blur(&mix, &c.cov, &c.h);
+            let bound = err * k.peak_value() * c.cov.det().sqrt();
+            eprintln!(
+                "mixture m={m} tol {tol:e}: rel err {:e}, abs err {:e} ≤ bound {bound:e}",
+                ((v - r) / r).abs(),
+                (v - r).abs()
+            );
+            assert!(
+                (v - r).abs() <= bound * (1.0 + 1e-6) + 1e-16,
+                "mixture bound violated"
+            );
+        }
+    }
+    // Gauss–Hermite: measured (no a-priori tolerance); converges for the narrow blur.
+    let mut prev = f64::INFINITY;
+    for order in [2, 4, 8, 16, 32, 64] {
+        let gh = GaussHermite::new(order).unwrap();
+        let errs: Vec<f64> = cases
+            .iter()
+            .zip(&reference)
+            .map(|(c, r)| ((gh.blur(&k, &c.cov, &c.h) - r) / r).abs())
+            .collect();
+        eprintln!("Gauss–Hermite order {order}: rel errs {errs:?}");
+        assert!(
+            errs[0] <= prev.max(1e-14),
+            "GH must converge on the narrow case"
+        );
+        prev = errs[0];
+    }
+    assert!(prev < 1e-10, "GH order 64, narrow blur: {prev:e}");
+}
+
+#[test]
+fn gauss_hermite_integrates_polynomials_exactly() {
+    let gh = GaussHermite::<f64>::new(5).unwrap();
+    let (x, w) = gh.nodes_weights();
+    // E[u^{2k}] = (2k − 1)!! for the standard normal.
+    for (k, expect) in [(0, 1.0), (1, 1.0), (2, 3.0), (3, 15.0), (4, 105.0)] {
+        let s: f64 = x.iter().zip(w).map(|(u, w)| w * u.powi(2 * k)).sum();
+        assert_close("GH moment", s, expect, Tol::new(1e-12, 1e-12));
+    }
+}
+
+/// Extremes: blur of Gaussian PSD with eigenvalues 1e-12…1e12 is finite, ≥ 0, 0 on underflow.
+#[test]
+fn blur_stability() {
+    for &s in &[1e-12_f64, 1e-6, 1.0, 1e6, 1e12] {
+        for &a in &[1.0_f64, 1e6] {
+            let cov = Gaussian::new(Matrix2::new(s, 0.0, 0.0, s / a)).unwrap();
+            let psd = GaussianPsd::<f64, 2>::isotropic(0.01, 1.0 / s.sqrt()).unwrap();
+            for &hs in &[0.0, 1.0, 1e3, 1e9] {
+                let h = Vector2::new(hs, -hs);
+                let v = ClosedForm.blur(&psd, &cov, &h);
+                assert!(v.is_finite() && v >= 0.0, "blur {v} at s {s} a {a} h {hs}");
+                let l = psd.log_blur(&cov, &h);
+                assert!(l.is_finite() || l == f64::NEG_INFINITY);
+                let v32 = ClosedForm.blur(
+                    &GaussianPsd::<f32, 2>::isotropic(0.01, (1.0 / s.sqrt()) as f32).unwrap(),
+                    &Gaussian::new(Matrix2::new(s as f32, 0.0, 0.0, (s / a) as f32)).unwrap(),
+                    &h.cast::<f32>(),
+                );
+                assert!(v32.is_finite() && v32 >= 0.0);
+            }
+        }
+    }
+}
