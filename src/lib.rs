@@ -7,6 +7,7 @@
 //! ## Module map (one module per concept)
 //! - [`real`]: the scalar trait [`Real`] (`f32`, `f64`).
 //! - [`error`]: the [`Error`] returned by validated constructors.
+//! - [`interaction`]: the S2.20 kernel, pBSDFs, model levels.
 //! - [`jones`]: Jones vectors and matrices, standard polarization elements.
 //! - [`fresnel`]: Fresnel coefficients of dielectric and conducting interfaces as Jones matrices.
 //! - [`stack`]: the stack operator and Kronecker product, Lemma S1.1.
@@ -27,6 +28,7 @@ pub mod error;
 pub mod frame;
 pub mod fresnel;
 pub mod gaussian;
+pub mod interaction;
 pub mod jones;
 pub mod mueller;
 pub mod packet;

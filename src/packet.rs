@@ -260,8 +260,12 @@ impl<T: Real> WavePacket<T> {
                 });
             }
         }
-        let mut p =
-            Self::from_distant_disk_source(stokes, area / (distance * distance), frame, wavelength)?;
+        let mut p = Self::from_distant_disk_source(
+            stokes,
+            area / (distance * distance),
+            frame,
+            wavelength,
+        )?;
         p.distance = Some(distance);
         Ok(p)
     }

@@ -57,14 +57,14 @@ impl<T: Real> Geometry<T> {
         let r = unit(exit, "exit direction")?;
         let n = surface.k();
         let (cos_i, cos_o) = (s.dot(&n), r.dot(&n));
-        if !(cos_i > T::zero()) {
+        if cos_i <= T::zero() {
             return Err(Error::OutOfRange {
                 what: "cos θ_i (source below the surface)",
                 value: cos_i.to_f64(),
                 expected: "> 0",
             });
         }
-        if !(cos_o > T::zero()) {
+        if cos_o <= T::zero() {
             return Err(Error::OutOfRange {
                 what: "cos θ_o (exit direction below the surface)",
                 value: cos_o.to_f64(),
@@ -129,7 +129,7 @@ impl<T: Real> Geometry<T> {
 fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
     crate::error::ensure_finite(what, v.iter().copied())?;
     let n = v.norm();
-    if !(n > T::zero()) || !n.is_finite() {
+    if n == T::zero() || !n.is_finite() {
         return Err(Error::InvalidBasis {
             reason: "zero direction vector",
         });

@@ -100,9 +100,7 @@ impl<T: Real> RayleighRice<T> {
     /// [`Error::NonFinite`] or [`Error::OutOfRange`] unless `Re η > 0`, `Im η ≥ 0`, finite.
     pub fn new(eta: Complex<T>) -> Result<Self, Error> {
         validate_eta(eta)?;
-        Ok(Self {
-            epsilon: eta * eta,
-        })
+        Ok(Self { epsilon: eta * eta })
     }
 
     /// The polarization factors `[[ss, ps], [sp, pp]]` (without `2k cos θ_i`).

@@ -1,0 +1,474 @@
+//! The light–matter interaction kernel of S2.20: a wave packet meets rough matter.
+//!
+//! # Formula (surface form, n = 2, constants decided by the tests; see the crate Errata)
+//! ```text
+//! L_o = (cos θ_o / λ²) · α · [ M_spec T Σ_α K^spec_α S_α  +  M_scat T Σ_α K_α S_α ]
+//!
+//! K_α      = |Σ_α|^{1/2} ∫ p(q) g^{Ξ_α}(h_t − q) d²q  = 2π |Σ_α|^{1/2} (p * g^{Ξ_α})(h_t)
+//! K^spec_α = 2π |Σ_α|^{1/2} g^{Ξ_α}(h_t)               (the same with p = 2π δ: a smooth mean surface)
+//! Ξ_α      = T_tᵀ Q Θ_α⁻¹ Qᵀ T_t,  Σ_α = Ξ_α⁻¹            (S2.18 restricted to the tangent plane)
+//! α        = exp(−(k σ (cos θ_i + cos θ_o))²)             (Debye–Waller roughness attenuation)
+//! S_x = S_x (1, 1, 0, 0),  S_y = S_y (1, −1, 0, 0),  S_½ = (0, 0, S2, S3)          (S2.16)
+//! ```
+//! with `h = k(r̂ + ŝ)` (ŝ toward the source) and `h_t` its tangential part, `Q = [x̂ ŷ k̂]` the
+//! packet frame (packet → world), `T_t = [t̂₁ t̂₂]` the surface tangents, `p` the PSD of the
+//! height field (unitary transform, [`crate::psd`]) and `σ² = R(0)` its variance, `T` the
+//! rotation (S2.4) from the packet frame to the incident s/p frame, `M` the pBSDFs (S2.19) from
+//! the incident to the exit s/p frame. The output is a classical Stokes radiance in the exit
+//! s/p frame ([`Geometry::exit_sp`]) per unit incident irradiance measured across the beam.
+//!
+//! `Ξ_α` is the 2-D *section* of the 3-D inverse coherence (the packet's coherence function
+//! evaluated at separations that lie in the surface), not the marginal: the kernel needs the
+//! two-point field at pairs of points *on* the surface. For oblique incidence it stretches
+//! the coherence footprint by `1/cos θ_i` in the plane of incidence.
+//!
+//! # Limits
+//! - **Plane wave** (coherence area → ∞): `|Σ|^{1/2} g^{Ξ} → 2π δ`, so `K → 2π p(h_t)` and
+//!   the specular lobe becomes a Dirac delta; with [`RayleighRice`] this is the classical
+//!   Rayleigh–Rice BRDF — what a renderer without coherence computes.
+//! - **Incoherent** (coherence width ≪ correlation length): the Gaussian is much wider than `p`,
+//!   `K → |Σ|^{1/2} g^{Ξ}(h_t) ∫p`: the lobe is set by the coherence alone.
+//!
+//! # Model levels (types, monomorphised)
+//! - Polarization: [`Scalar`] (S0 only, `M₀₀`) · [`OneShape`] (Stokes, `Θ_½` for every
+//!   channel) · [`Full`] (`Θ_x`, `Θ_y`, `Θ_½`).
+//! - Coherence: [`PlaneWave`] · [`Partial`] · [`Incoherent`].
+//! - Blur: any [`BlurMethod`] for the PSD (closed form, mixture fit, Gauss–Hermite, adaptive).
+//! - Precision: `T = f32` or `f64`.
+
+pub mod geometry;
+pub mod pbsdf;
+
+use core::marker::PhantomData;
+
+use nalgebra::{Matrix2, Vector2, Vector3, Vector4};
+
+pub use geometry::Geometry;
+pub use pbsdf::{
+    ConstantMueller, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen, RayleighRice,
+};
+
+use crate::error::Error;
+use crate::frame::{Frame, frame_change_mueller};
+use crate::gaussian::Gaussian;
+use crate::packet::{Channel, WavePacket, inverse2};
+use crate::psd::{BlurMethod, Psd};
+use crate::real::Real;
+use crate::stokes::Stokes;
+
+mod sealed {
+    pub trait Sealed {}
+}
+
+/// How much of the polarization a kernel keeps (a model level).
+pub trait PolarizationModel: sealed::Sealed + Copy + Default {
+    /// Which level.
+    const LEVEL: PolarizationLevel;
+}
+
+/// The polarization levels, as values (for reports).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PolarizationLevel {
+    /// S0 only.
+    Scalar,
+    /// Full Stokes, one shape matrix (`Θ_½`) for every channel.
+    OneShape,
+    /// Full S2.20: `Θ_x`, `Θ_y`, `Θ_½`.
+    Full,
+}
+
+/// Intensity only: `L₀ = (cos θ_o/λ²) α M₀₀ K S0` with `K` from `Θ_½`. No frames, no 4×4 products.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Scalar;
+/// Stokes vectors with one coherence shape, `Θ_½`, for all channels: `L = … M T K S`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OneShape;
+/// The full S2.20 with a shape matrix per channel.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Full;
+
+impl sealed::Sealed for Scalar {}
+impl sealed::Sealed for OneShape {}
+impl sealed::Sealed for Full {}
+impl PolarizationModel for Scalar {
+    const LEVEL: PolarizationLevel = PolarizationLevel::Scalar;
+}
+impl PolarizationModel for OneShape {
+    const LEVEL: PolarizationLevel = PolarizationLevel::OneShape;
+}
+impl PolarizationModel for Full {
+    const LEVEL: PolarizationLevel = PolarizationLevel::Full;
+}
+
+/// How the kernel treats spatial coherence (a model level).
+pub trait CoherenceModel: sealed::Sealed + Copy + Default {
+    /// Whether the packet's shape matrices enter at all.
+    const USES_SHAPE: bool;
+
+    /// The scattered-channel weight `K` (see the module formula).
+    #[must_use]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        blur: &B,
+        xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T;
+
+    /// The specular-channel weight `K^spec` (0 for a plane wave, whose lobe is a delta).
+    #[must_use]
+    fn specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T;
+}
+
+/// The fully coherent (plane-wave) limit: `K = 2π p(h_t)`; the classical BRDF.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PlaneWave;
+/// Partial coherence, S2.20: `K = 2π |Σ|^{1/2} (p * g^Ξ)(h_t)`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Partial;
+/// The incoherent limit: `K = |Σ|^{1/2} g^Ξ(h_t) ∫p`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Incoherent;
+
+impl sealed::Sealed for PlaneWave {}
+impl sealed::Sealed for Partial {}
+impl sealed::Sealed for Incoherent {}
+
+/// `2π |Σ|^{1/2} g^Ξ(h) = 2π g^Ξ(h)/√|Ξ|`, in log space.
+#[inline]
+fn smooth_lobe<T: Real>(xi: &Gaussian<T, 2>, h_t: &Vector2<T>) -> T {
+    (T::two_pi().ln() + xi.log_value(h_t) - T::lit(0.5) * xi.log_det()).exp()
+}
+
+impl CoherenceModel for PlaneWave {
+    const USES_SHAPE: bool = false;
+    #[inline]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        _blur: &B,
+        _xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T {
+        T::two_pi() * psd.value(h_t)
+    }
+    #[inline]
+    fn specular_weight<T: Real>(_xi: Option<&Gaussian<T, 2>>, _h_t: &Vector2<T>) -> T {
+        T::zero()
+    }
+}
+
+impl CoherenceModel for Partial {
+    const USES_SHAPE: bool = true;
+    #[inline]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        blur: &B,
+        xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T {
+        match xi {
+            // K = 2π |Σ|^{1/2} (p * g^Ξ)(h) with |Σ| = 1/|Ξ|.
+            Some(xi) => {
+                blur.blur(psd, xi, h_t) * (T::two_pi() * (T::lit(-0.5) * xi.log_det()).exp())
+            }
+            None => T::two_pi() * psd.value(h_t),
+        }
+    }
+    #[inline]
+    fn specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
+        xi.map_or(T::zero(), |xi| smooth_lobe(xi, h_t))
+    }
+}
+
+impl CoherenceModel for Incoherent {
+    const USES_SHAPE: bool = true;
+    #[inline]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        _blur: &B,
+        xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T {
+        match xi {
+            Some(xi) => smooth_lobe(xi, h_t) * psd.integral() / T::two_pi(),
+            None => T::two_pi() * psd.value(h_t),
+        }
+    }
+    #[inline]
+    fn specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
+        xi.map_or(T::zero(), |xi| smooth_lobe(xi, h_t))
+    }
+}
+
+/// A rough surface: the PSD of its height field, the pBSDF of its mean (specular) interface
+/// and the pBSDF of its first-order scattering — the material `(p, M)` of the paper.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RoughSurface<P, Sp, Sc> {
+    /// The height PSD `p` (unitary transform; `R(0) = σ²` the squared rms height).
+    pub psd: P,
+    /// The specular pBSDF (e.g. [`FresnelReflection`]).
+    pub specular: Sp,
+    /// The scattering pBSDF (e.g. [`RayleighRice`], [`PhaseScreen`]).
+    pub scatter: Sc,
+}
+
+/// The kernel's answer for one exit direction: Stokes radiances in the exit s/p frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Response<T: Real> {
+    /// The coherent specular (direct) lobe, attenuation included.
+    pub specular: Stokes<T>,
+    /// The scattered (diffuse) part, attenuation included.
+    pub scattered: Stokes<T>,
+    /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
+    pub attenuation: T,
+}
+
+impl<T: Real> Response<T> {
+    /// `specular + scattered`.
+    #[must_use]
+    pub fn total(&self) -> Stokes<T> {
+        Stokes(self.specular.0 + self.scattered.0)
+    }
+}
+
+/// The S2.20 kernel at a chosen model level (`Pol`, `Coh`) with blur method `B`.
+///
+/// # Examples
+/// ```
+/// use gmueller::frame::Frame;
+/// use gmueller::interaction::{Full, Geometry, Kernel, Partial, FresnelReflection, RayleighRice, RoughSurface};
+/// use gmueller::packet::{CoherenceShape, WavePacket};
+/// use gmueller::psd::{ClosedForm, GaussianPsd};
+/// use gmueller::stokes::Stokes;
+/// use nalgebra::Vector3;
+/// use num_complex::Complex;
+///
+/// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+/// let travel = Vector3::new(0.5_f64, 0.0, -(0.75_f64).sqrt()); // 30° incidence
+/// let frame = Frame::sp(travel, Vector3::z()).unwrap();
+/// let packet = WavePacket::from_stokes(
+///     Stokes::unpolarized(1.0).unwrap(),
+///     CoherenceShape::isotropic(10.0).unwrap(), frame, 0.5).unwrap();
+/// let glass = Complex::new(1.5, 0.0);
+/// let material = RoughSurface {
+///     psd: GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap(), // σ = 10 nm, ℓ = 2 µm
+///     specular: FresnelReflection::new(glass).unwrap(),
+///     scatter: RayleighRice::new(glass).unwrap(),
+/// };
+/// let kernel = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm);
+/// let exit = Vector3::new(0.6, 0.1, 0.79);
+/// let g = Geometry::new(packet.wavenumber(), &surface, -travel, exit).unwrap();
+/// let r = kernel.evaluate(&material, &packet, &g);
+/// assert!(r.scattered.s0() > 0.0 && r.scattered.s0().is_finite());
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Kernel<Pol, Coh, B> {
+    blur: B,
+    _levels: PhantomData<(Pol, Coh)>,
+}
+
+impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
+    /// A kernel that blurs non-Gaussian PSDs with `blur`.
+    #[must_use]
+    pub fn new(blur: B) -> Self {
+        Self {
+            blur,
+            _levels: PhantomData,
+        }
+    }
+
+    /// The blur method.
+    #[must_use]
+    pub fn blur_method(&self) -> &B {
+        &self.blur
+    }
+
+    /// Evaluates S2.20 for `packet` leaving along `g.exit` (see the module formula).
+    ///
+    /// `g` must have been built for this packet: `g.k` its wavenumber and `g.to_source` its
+    /// reversed propagation direction (e.g. by [`Geometry::for_packet`]).
+    #[must_use]
+    pub fn evaluate<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        packet: &WavePacket<T>,
+        g: &Geometry<T>,
+    ) -> Response<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        B: BlurMethod<T, 2, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        let lambda = g.wavelength();
+        let attenuation = roughness_attenuation(&material.psd, g);
+        let front = g.cos_o / (lambda * lambda) * attenuation;
+        let psd = &material.psd;
+        let weights = |channel: Channel| {
+            let xi = if Coh::USES_SHAPE {
+                surface_inverse_coherence(packet, channel, &g.surface)
+            } else {
+                None
+            };
+            (
+                Coh::specular_weight(xi.as_ref(), &g.h_t),
+                Coh::scatter_weight(psd, &self.blur, xi.as_ref(), &g.h_t),
+            )
+        };
+        let s = packet.stokes().0;
+        match Pol::LEVEL {
+            PolarizationLevel::Scalar => {
+                let (ks, kd) = weights(Channel::Half);
+                let spec = front * ks * material.specular.m00(g) * s[0];
+                let scat = front * kd * material.scatter.m00(g) * s[0];
+                Response {
+                    specular: Stokes(Vector4::new(spec, T::zero(), T::zero(), T::zero())),
+                    scattered: Stokes(Vector4::new(scat, T::zero(), T::zero(), T::zero())),
+                    attenuation,
+                }
+            }
+            PolarizationLevel::OneShape => {
+                let (ks, kd) = weights(Channel::Half);
+                let t = frame_change_mueller(packet.frame(), &g.incident_sp).0 * s;
+                self.finish(material, g, t * (front * ks), t * (front * kd), attenuation)
+            }
+            PolarizationLevel::Full => {
+                let (xs, xd) = weights(Channel::X);
+                let (ys, yd) = weights(Channel::Y);
+                let (hs, hd) = weights(Channel::Half);
+                let (sx, sy) = (packet.sx(), packet.sy());
+                let eff = |kx: T, ky: T, kh: T| {
+                    Vector4::new(kx * sx + ky * sy, kx * sx - ky * sy, kh * s[2], kh * s[3])
+                };
+                let t = frame_change_mueller(packet.frame(), &g.incident_sp).0;
+                self.finish(
+                    material,
+                    g,
+                    t * eff(xs, ys, hs) * front,
+                    t * eff(xd, yd, hd) * front,
+                    attenuation,
+                )
+            }
+        }
+    }
+
+    fn finish<T: Real, P, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        g: &Geometry<T>,
+        spec_in: Vector4<T>,
+        scat_in: Vector4<T>,
+        attenuation: T,
+    ) -> Response<T> {
+        let specular = if Coh::USES_SHAPE {
+            material.specular.mueller(g).0 * spec_in
+        } else {
+            Vector4::zeros()
+        };
+        Response {
+            specular: Stokes(specular),
+            scattered: Stokes(material.scatter.mueller(g).0 * scat_in),
+            attenuation,
+        }
+    }
+}
+
+impl<T: Real> Geometry<T> {
+    /// The geometry of `packet` (its wavenumber, ŝ = −k̂) leaving along `exit`.
+    ///
+    /// # Errors
+    /// As [`Geometry::new`].
+    pub fn for_packet(
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+        exit: Vector3<T>,
+    ) -> Result<Self, Error> {
+        Self::new(packet.wavenumber(), surface, -packet.direction(), exit)
+    }
+}
+
+/// The Debye–Waller roughness attenuation `α = exp(−(k σ (cos θ_i + cos θ_o))²)`, `σ² = R(0)`.
+///
+/// For a height field `z` the phase imprinted on reflection is `v z` with
+/// `v = k (cos θ_i + cos θ_o)`, and for Gaussian heights `⟨e^{iv(z₁ − z₂)}⟩ = α e^{v² R(ξ)}`:
+/// `α` is the coherent (specular) fraction; its first-order companion `α v² R(ξ)` is the
+/// scattered part, so both carry `α` and their sum `α (1 + v²σ²) ≤ 1` conserves energy.
+#[must_use]
+pub fn roughness_attenuation<T: Real, P: Psd<T, 2>>(psd: &P, g: &Geometry<T>) -> T {
+    let v = g.k * (g.cos_i + g.cos_o);
+    (-(v * v) * psd.variance()).exp()
+}
+
+/// The 2-D inverse coherence `Ξ_α` of a packet channel on a surface (a covariance in `h_t`
+/// space, rad²/length²): the section of `Q Θ_α⁻¹ Qᵀ` by the tangent plane (S2.18).
+///
+/// # Formula
+/// ```text
+/// Ξ_α = Aᵀ Θ⊥_α⁻¹ A + σ_zz⁻² b bᵀ,   A_ij = e_i · t̂_j (e = x̂, ŷ),   b_j = k̂ · t̂_j
+/// ```
+/// `None` when the section is not numerically positive definite (only at extreme anisotropy
+/// or grazing incidence), in which case the kernel falls back to the plane-wave limit.
+#[must_use]
+pub fn surface_inverse_coherence<T: Real>(
+    packet: &WavePacket<T>,
+    channel: Channel,
+    surface: &Frame<T>,
+) -> Option<Gaussian<T, 2>> {
+    let f = packet.frame();
+    let (t1, t2) = (surface.x(), surface.y());
+    let a = Matrix2::new(
+        f.x().dot(&t1),
+        f.x().dot(&t2),
+        f.y().dot(&t1),
+        f.y().dot(&t2),
+    );
+    let b = Vector2::new(f.k().dot(&t1), f.k().dot(&t2));
+    let p = inverse2(&packet.shape(channel));
+    let xi = a.transpose() * p * a + b * b.transpose() * packet.inverse_longitudinal_variance();
+    Gaussian::new(xi).ok()
+}
+
+/// The surface coherence term of S2.17 for one packet channel, partially coherent:
+/// `K_α = 2π |Σ_α|^{1/2} (p * g^{Ξ_α})(h_t) = |Σ_α|^{1/2} ∫ p(q) g^{Ξ_α}(h_t − q) d²q`.
+///
+/// This is the double-integral factor `∫ e^{−i h·ξ} R(ξ) g^{Θ_α}(Qᵀξ) d²ξ` of S2.15 for
+/// separations ξ in the surface; the kernel multiplies it by `cos θ_o/λ²`, α and the pBSDF.
+/// Falls back to the plane-wave value `2π p(h_t)` where [`surface_inverse_coherence`] is `None`.
+#[must_use]
+pub fn surface_coherence_term<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+    psd: &P,
+    blur: &B,
+    packet: &WavePacket<T>,
+    channel: Channel,
+    surface: &Frame<T>,
+    h_t: &Vector2<T>,
+) -> T {
+    let xi = surface_inverse_coherence(packet, channel, surface);
+    Partial::scatter_weight(psd, blur, xi.as_ref(), h_t)
+}
+
+/// The volumetric coherence term of S2.17 (corrected constant) for one packet channel:
+/// `K³_α = (2π)^{3/2} |Θ_α|^{1/2} (p * g^{Ξ_α})(h) = |Θ_α|^{1/2} ∫ p(q) g^{Ξ_α}(h − q) d³q`,
+/// `Ξ_α = Q Θ_α⁻¹ Qᵀ` (S2.18) with `Q = [x̂ ŷ k̂]` mapping packet to world coordinates and `h`
+/// the full 3-D `k(r̂ + ŝ)`.
+///
+/// # Errors
+/// [`Error::Singular`] when the packet has unbounded longitudinal coherence (`Θ_α` is then not
+/// a 3-D covariance: set σ_zz with [`WavePacket::with_longitudinal_coherence`]).
+pub fn volume_coherence_term<T: Real, P: Psd<T, 3>, B: BlurMethod<T, 3, P>>(
+    psd: &P,
+    blur: &B,
+    packet: &WavePacket<T>,
+    channel: Channel,
+    h: &Vector3<T>,
+) -> Result<T, Error> {
+    if packet.inverse_longitudinal_variance() == T::zero() {
+        return Err(Error::Singular {
+            what: "3-D shape matrix with unbounded longitudinal coherence",
+        });
+    }
+    let xi = Gaussian::new(packet.world_precision(channel))?;
+    // (2π)^{3/2} |Θ|^{1/2} with |Θ| = 1/|Ξ|.
+    let front = (T::lit(1.5) * T::two_pi().ln() - T::lit(0.5) * xi.log_det()).exp();
+    Ok(blur.blur(psd, &xi, h) * front)
+}
