@@ -454,7 +454,7 @@ pub fn surface_coherence_term<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
 ///
 /// # Errors
 /// [`Error::Singular`] when the packet has unbounded longitudinal coherence (`Θ_α` is then not
-/// a 3-D covariance: set σ_zz with [`WavePacket::with_longitudinal_coherence`]).
+/// a 3-D covariance: set `σ_zz` with [`WavePacket::with_longitudinal_coherence`]).
 pub fn volume_coherence_term<T: Real, P: Psd<T, 3>, B: BlurMethod<T, 3, P>>(
     psd: &P,
     blur: &B,
