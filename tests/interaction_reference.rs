@@ -44,7 +44,7 @@ fn f(c: &Value, key: &str) -> f64 {
 
 /// The kernel's Mueller BRDF for one SCATMECH case: columns from the responses to the Stokes
 /// basis (1,0,0,0), (1,1,0,0), (1,0,1,0), (1,0,0,1), with the packet frame equal to the incident
-/// s/p frame (so that T = I), divided by the attenuation and by cos θ_i.
+/// s/p frame (so that T = I), divided by the attenuation and by `cos θ_i`.
 fn kernel_mueller_brdf<Pol: PolarizationModel, Coh: CoherenceModel>(
     c: &Value,
     width: f64,
