@@ -36,6 +36,7 @@
 //! - Blur: any [`BlurMethod`] for the PSD (closed form, mixture fit, Gauss–Hermite, adaptive).
 //! - Precision: `T = f32` or `f64`.
 
+pub mod exitant;
 pub mod geometry;
 pub mod pbsdf;
 
@@ -43,6 +44,7 @@ use core::marker::PhantomData;
 
 use nalgebra::{Matrix2, Vector2, Vector3, Vector4};
 
+pub use exitant::{exitant_packet, exitant_shape};
 pub use geometry::Geometry;
 pub use pbsdf::{
     ConstantMueller, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen, RayleighRice,

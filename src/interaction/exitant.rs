@@ -1,0 +1,72 @@
+//! The exitant packet: the light leaving an interaction as a new canonical wave packet.
+//!
+//! # The shape-matrix update (the rule implemented, and where it is an approximation)
+//! The incident coherence of channel α, restricted to the surface, has the covariance
+//! `Σ_α = Ξ_α⁻¹` in tangent coordinates ([`super::surface_inverse_coherence`]). Seen from the
+//! exit direction r̂, a surface separation ξ appears as its projection on the exit transverse
+//! plane, `ξ⊥ = P ξ` with `P_ij = e_i · t̂_j` (e = the exit s/p frame's x̂, ŷ), so the geometric
+//! image of the footprint is
+//! ```text
+//! Θ_geo = P Σ_α Pᵀ,        |Θ_geo| = cos²θ_o |Σ_α|
+//! Θ′_α  = U Θ_α Uᵀ  with det U = 1:   Θ′_α = Θ_geo · (|Θ_α| / |Θ_geo|)^{1/2}
+//! ```
+//! i.e. the coherence **area is conserved** (the paper's rule) and only the eccentricity and
+//! orientation are taken from the projection. In the specular direction of a packet with
+//! unbounded longitudinal coherence the projection itself conserves the area and the rule is
+//! exact (a mirror image of the incident shape); off-specular the pure projection would scale
+//! the area by `cos θ_o / cos θ_i`, and the rule is an approximation — the kernel does not
+//! predict the scattered light's coherence (S2.20 discards it, see the seed's last paragraph).
+//!
+//! The exitant packet carries **one** shape matrix, the image of `Θ_½`: a pBSDF mixes the x
+//! and y channels, and the per-channel shapes of the result are sums of Gaussians that the
+//! canonical packet cannot hold. One shape keeps the result realizable for every Stokes vector.
+
+use nalgebra::Matrix2;
+
+use super::{Geometry, surface_inverse_coherence};
+use crate::error::Error;
+use crate::packet::{Channel, CoherenceShape, WavePacket};
+use crate::real::Real;
+use crate::stokes::Stokes;
+
+/// The updated shape `Θ′ = U Θ_½ Uᵀ` (det U = 1) of the light leaving along `g.exit`, in the exit
+/// s/p frame (module docs).
+///
+/// # Errors
+/// [`Error::NotPositiveDefinite`] (or another shape error) when the section of the incident
+/// coherence by the surface is numerically singular (extreme anisotropy or grazing angles).
+pub fn exitant_shape<T: Real>(
+    packet: &WavePacket<T>,
+    g: &Geometry<T>,
+) -> Result<CoherenceShape<T>, Error> {
+    let xi = surface_inverse_coherence(packet, Channel::Half, &g.surface).ok_or(
+        Error::NotPositiveDefinite {
+            what: "section of the incident coherence by the surface",
+            min_eigenvalue: 0.0,
+        },
+    )?;
+    let sigma = xi.inverse()?;
+    let (ex, ey) = (g.exit_sp.x(), g.exit_sp.y());
+    let (t1, t2) = (g.surface.x(), g.surface.y());
+    let p = Matrix2::new(ex.dot(&t1), ex.dot(&t2), ey.dot(&t1), ey.dot(&t2));
+    let geo = p * sigma.covariance() * p.transpose();
+    let det_geo = geo[(0, 0)] * geo[(1, 1)] - geo[(0, 1)] * geo[(1, 0)];
+    let theta = packet.shape(Channel::Half);
+    let det_in = theta[(0, 0)] * theta[(1, 1)] - theta[(0, 1)] * theta[(1, 0)];
+    CoherenceShape::new(geo * (det_in / det_geo).sqrt())
+}
+
+/// The exitant packet carrying `stokes` (e.g. a kernel [`super::Response`]'s total, a Stokes
+/// radiance in the exit s/p frame) along `g.exit`, with the shape of [`exitant_shape`], the exit
+/// s/p frame, the incident wavelength and longitudinal coherence unbounded.
+///
+/// # Errors
+/// As [`exitant_shape`].
+pub fn exitant_packet<T: Real>(
+    packet: &WavePacket<T>,
+    g: &Geometry<T>,
+    stokes: Stokes<T>,
+) -> Result<WavePacket<T>, Error> {
+    let shape = exitant_shape(packet, g)?;
+    WavePacket::from_stokes(stokes, shape, g.exit_sp, packet.wavelength())
+}

@@ -1,0 +1,99 @@
+//! Verifies the exitant-packet shape update (`interaction::exitant_shape`): the coherence area is
+//! conserved (det U = 1) in every direction, and in the specular direction the result equals the
+//! incident shape carried by the geometric map "project along the incident direction onto the
+//! surface, then onto the exit transverse plane", computed here independently from dot products.
+
+mod common;
+
+use common::{Tol, assert_all_close, assert_close};
+use gmueller::frame::Frame;
+use gmueller::interaction::{Geometry, exitant_packet, exitant_shape};
+use gmueller::packet::{CoherenceShape, WavePacket};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Vector3};
+use proptest::prelude::*;
+
+fn det(m: &Matrix2<f64>) -> f64 {
+    m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)]
+}
+
+fn setup(theta_i: f64, azimuth: f64, shape: Matrix2<f64>) -> (Frame<f64>, WavePacket<f64>) {
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let travel = Vector3::new(
+        theta_i.sin() * azimuth.cos(),
+        theta_i.sin() * azimuth.sin(),
+        -theta_i.cos(),
+    );
+    let frame = Frame::sp(travel, Vector3::z()).unwrap();
+    let packet = WavePacket::from_stokes(
+        Stokes::new(1.0, 0.2, -0.3, 0.1).unwrap(),
+        CoherenceShape::new(shape).unwrap(),
+        frame,
+        0.55,
+    )
+    .unwrap();
+    (surface, packet)
+}
+
+fn shape() -> impl Strategy<Value = Matrix2<f64>> {
+    (1.0..100.0f64, 1.0..100.0f64, -1.5..1.5f64).prop_map(|(a, b, rot)| {
+        let (s, c) = rot.sin_cos();
+        let r = Matrix2::new(c, -s, s, c);
+        r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
+    })
+}
+
+proptest! {
+    #[test]
+    fn coherence_area_is_conserved(
+        theta_i in 0.0..1.4f64, az in -3.0..3.0f64, theta_o in 0.0..1.4f64, phi_o in -3.1..3.1f64,
+        m in shape(),
+    ) {
+        let (surface, packet) = setup(theta_i, az, m);
+        let exit = Vector3::new(theta_o.sin() * phi_o.cos(), theta_o.sin() * phi_o.sin(), theta_o.cos());
+        let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+        let out = exitant_shape(&packet, &g).unwrap().matrix();
+        assert_close("det Θ′ = det Θ", det(&out), det(&m), Tol::new(0.0, 1e-9));
+        // Symmetric positive definite.
+        prop_assert!(out[(0, 0)] > 0.0 && det(&out) > 0.0);
+        assert_close("symmetric", out[(0, 1)], out[(1, 0)], Tol::new(1e-12 * out.amax(), 0.0));
+    }
+
+    #[test]
+    fn specular_shape_is_the_geometric_image(
+        theta_i in 0.0..1.4f64, az in -3.0..3.0f64, m in shape(),
+    ) {
+        let (surface, packet) = setup(theta_i, az, m);
+        let d = packet.direction();
+        let n = Vector3::z();
+        let exit = d - n * (2.0 * d.dot(&n));
+        let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+        let out = exitant_shape(&packet, &g).unwrap().matrix();
+        // Independent map: incident transverse (a, b) → world ξ = a x̂ + b ŷ → along d onto the
+        // surface → components on the exit s/p frame.
+        let (x, y) = (packet.frame().x(), packet.frame().y());
+        let exit_frame = Frame::sp(exit, n).unwrap();
+        let map = |v: Vector3<f64>| {
+            let on_surface = v - d * (n.dot(&v) / n.dot(&d));
+            (exit_frame.x().dot(&on_surface), exit_frame.y().dot(&on_surface))
+        };
+        let (c1, c2) = (map(x), map(y));
+        let l = Matrix2::new(c1.0, c2.0, c1.1, c2.1);
+        let expected = l * m * l.transpose();
+        assert_all_close("Θ′ at specular", out.iter().copied(), expected.iter().copied(),
+            Tol::new(1e-9 * m.amax(), 1e-9));
+    }
+}
+
+#[test]
+fn exitant_packet_carries_the_stokes_vector_in_the_exit_frame() {
+    let (surface, packet) = setup(0.6, 0.3, Matrix2::new(400.0, 50.0, 50.0, 100.0));
+    let exit = Vector3::new(0.3, -0.2, 0.93);
+    let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+    let s = Stokes::new(0.5, 0.1, 0.2, -0.1).unwrap();
+    let out = exitant_packet(&packet, &g, s).unwrap();
+    assert_eq!(out.stokes(), s);
+    assert_eq!(out.frame(), &g.exit_sp);
+    assert!(out.has_single_shape());
+    assert_close("wavelength", out.wavelength(), 0.55, Tol::new(0.0, 1e-14));
+}
