@@ -39,3 +39,8 @@ pub mod stokes;
 
 pub use error::Error;
 pub use real::Real;
+
+/// The README's Rust examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
