@@ -261,4 +261,9 @@ impl<T: Real, const N: usize> Psd<T, N> for KCorrelation<T, N> {
     fn variance(&self) -> T {
         self.variance
     }
+    /// `1/√T`, the scale of the spectral core.
+    #[inline]
+    fn feature_width(&self) -> T {
+        T::one() / self.t.sqrt()
+    }
 }
