@@ -107,6 +107,19 @@ fn normalisation_gaussian_and_kcorrelation() {
         KCorrelation::<f64, 3>::new(0.5, 2.0, 1.9).is_err(),
         "γ ≤ n − 1 has no finite variance"
     );
+    // Gaussian mixture (here the K-correlation fit): ∫p = 2π Σ variances.
+    let (mix, _) = KCorrelation::<f64, 2>::new(0.02, 4.0, 2.5)
+        .unwrap()
+        .mixture_fit(12)
+        .unwrap();
+    let i = radial_integral(2, |r| mix.value(&Vector2::new(r, 0.0)));
+    assert_close("∫p mixture 2-D", i, mix.integral(), QUAD);
+    assert_close(
+        "mixture integral()",
+        mix.integral(),
+        TAU * mix.variance(),
+        Tol::new(0.0, 1e-15),
+    );
 }
 
 /// Dirac models: ∫ (p * g^Σ)(h) dⁿh = σ² (2π)^{n/2} |Σ|^{1/2} iff ∫p = (2π)^{n/2} σ².
