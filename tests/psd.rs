@@ -107,6 +107,19 @@ fn normalisation_gaussian_and_kcorrelation() {
         KCorrelation::<f64, 3>::new(0.5, 2.0, 1.9).is_err(),
         "γ ≤ n − 1 has no finite variance"
     );
+    // Gaussian mixture (here the K-correlation fit): ∫p = 2π Σ variances.
+    let (mix, _) = KCorrelation::<f64, 2>::new(0.02, 4.0, 2.5)
+        .unwrap()
+        .mixture_fit(12)
+        .unwrap();
+    let i = radial_integral(2, |r| mix.value(&Vector2::new(r, 0.0)));
+    assert_close("∫p mixture 2-D", i, mix.integral(), QUAD);
+    assert_close(
+        "mixture integral()",
+        mix.integral(),
+        TAU * mix.variance(),
+        Tol::new(0.0, 1e-15),
+    );
 }
 
 /// Dirac models: ∫ (p * g^Σ)(h) dⁿh = σ² (2π)^{n/2} |Σ|^{1/2} iff ∫p = (2π)^{n/2} σ².
@@ -584,6 +597,115 @@ fn blur_stability() {
                 );
                 assert!(v32.is_finite() && v32 >= 0.0);
             }
+        }
+    }
+}
+
+/// 3-D: the K-correlation mixture fit and Gauss–Hermite against the adaptive reference.
+#[test]
+fn kcorrelation_3d_methods() {
+    let k = KCorrelation::<f64, 3>::new(0.02, 1.0, 3.5).unwrap();
+    let cov = Gaussian::new(Matrix3::new(
+        0.05, 0.01, 0.0, 0.01, 0.04, 0.0, 0.0, 0.0, 0.03,
+    ))
+    .unwrap();
+    let h = Vector3::new(0.4, -0.2, 0.3);
+    let reference = Adaptive::new(1e-9).unwrap().blur(&k, &cov, &h);
+    let (mix, _, err) = k.mixture_fit_to(1e-6).unwrap();
+    let v = ClosedForm.blur(&mix, &cov, &h);
+    assert!(
+        (v - reference).abs()
+            <= err * k.peak_value() * cov.det().sqrt() * 1.001 + 1e-15 * reference
+    );
+    let gh = GaussHermite::new(16).unwrap().blur(&k, &cov, &h);
+    assert_close("GH 3-D, narrow blur", gh, reference, Tol::new(1e-16, 1e-8));
+}
+
+/// f32 evaluation agrees with f64 (well-conditioned inputs), for every method.
+#[test]
+fn f32_agrees_with_f64() {
+    let k64 = KCorrelation::<f64, 2>::new(0.01, 4.0, 2.2).unwrap();
+    let k32 = KCorrelation::<f32, 2>::new(0.01, 4.0, 2.2).unwrap();
+    let c64 = Gaussian::new(Matrix2::new(0.2, 0.05, 0.05, 0.1)).unwrap();
+    let c32 = Gaussian::new(Matrix2::new(0.2_f32, 0.05, 0.05, 0.1)).unwrap();
+    let tol = Tol::new(1e-9, 2e-5);
+    for h in [Vector2::new(0.0, 0.0), Vector2::new(0.7, -1.1)] {
+        let h32 = h.cast::<f32>();
+        let (m64, _) = k64.mixture_fit(24).unwrap();
+        let (m32, _) = k32.mixture_fit(24).unwrap();
+        assert_close(
+            "mixture f32",
+            f64::from(ClosedForm.blur(&m32, &c32, &h32)),
+            ClosedForm.blur(&m64, &c64, &h),
+            tol,
+        );
+        let (g64, g32) = (
+            GaussHermite::<f64>::new(16).unwrap(),
+            GaussHermite::<f32>::new(16).unwrap(),
+        );
+        assert_close(
+            "GH f32",
+            f64::from(g32.blur(&k32, &c32, &h32)),
+            g64.blur(&k64, &c64, &h),
+            tol,
+        );
+        let a32 = Adaptive::new(1e-5_f32).unwrap().blur(&k32, &c32, &h32);
+        assert_close(
+            "adaptive f32",
+            f64::from(a32),
+            Adaptive::new(1e-10).unwrap().blur(&k64, &c64, &h),
+            Tol::new(1e-9, 5e-5),
+        );
+        let p64 = GaussianPsd::<f64, 2>::isotropic(0.1, 0.7).unwrap();
+        let p32 = GaussianPsd::<f32, 2>::isotropic(0.1, 0.7).unwrap();
+        assert_close(
+            "Gaussian PSD f32",
+            f64::from(ClosedForm.blur(&p32, &c32, &h32)),
+            ClosedForm.blur(&p64, &c64, &h),
+            tol,
+        );
+    }
+}
+
+/// Every method stays finite and non-negative for blur eigenvalues 1e-12…1e12, anisotropy 1e6.
+#[test]
+fn all_methods_finite_at_extremes() {
+    let k = KCorrelation::<f64, 2>::new(0.01, 4.0, 2.2).unwrap();
+    let (mix, _) = k.mixture_fit(16).unwrap();
+    let gh = GaussHermite::<f64>::new(8).unwrap();
+    let ad = Adaptive::new(1e-4).unwrap();
+    for &s in &[1e-12_f64, 1.0, 1e12] {
+        for &a in &[1.0_f64, 1e6] {
+            let cov = Gaussian::new(Matrix2::new(s, 0.0, 0.0, s / a)).unwrap();
+            for &hs in &[0.0_f64, 1.0, 1e6] {
+                let h = Vector2::new(hs, 0.5 * hs);
+                for v in [
+                    ClosedForm.blur(&mix, &cov, &h),
+                    gh.blur(&k, &cov, &h),
+                    ad.blur(&k, &cov, &h),
+                ] {
+                    assert!(v.is_finite() && v >= 0.0, "blur {v} at s {s} a {a} h {hs}");
+                }
+            }
+        }
+    }
+}
+
+/// Regression: a PSD peak 10⁷ times narrower than the blur, off-centre, must not be missed by the
+/// adaptive reference (its first estimate samples only the peak's tails).
+#[test]
+fn adaptive_finds_sharp_off_centre_peak() {
+    let psd = GaussianPsd::<f64, 2>::isotropic(0.1, 1e3).unwrap(); // spectral width 1e-3
+    let cov = Gaussian::new(Matrix2::new(1e8, 2e7, 2e7, 5e7)).unwrap(); // width ~1e4
+    for h in [
+        Vector2::new(1e4, 5e3),
+        Vector2::new(-3e3, 2e3),
+        Vector2::new(0.0, 0.0),
+    ] {
+        let exact = ClosedForm.blur(&psd, &cov, &h);
+        for tol in [1e-4, 1e-8] {
+            let v = Adaptive::new(tol).unwrap().blur(&psd, &cov, &h);
+            assert_close("adaptive, sharp peak", v, exact, Tol::new(1e-300, tol));
         }
     }
 }

@@ -157,6 +157,12 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianPsd<T, N> {
     fn variance(&self) -> T {
         self.variance
     }
+    /// The smallest diagonal entry of the spectral Cholesky factor.
+    #[inline]
+    fn feature_width(&self) -> T {
+        let l = self.spectral.cholesky_factor();
+        (0..N).fold(T::max_value().unwrap_or(T::one()), |m, i| m.min(l[(i, i)]))
+    }
 }
 
 impl<T: Real, const N: usize> BlurMethod<T, N, GaussianPsd<T, N>> for ClosedForm {
@@ -214,6 +220,15 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianMixturePsd<T, N> {
     #[inline]
     fn variance(&self) -> T {
         self.variance
+    }
+    /// The narrowest component's width.
+    #[inline]
+    fn feature_width(&self) -> T {
+        self.components
+            .iter()
+            .fold(T::max_value().unwrap_or(T::one()), |m, c| {
+                m.min(c.feature_width())
+            })
     }
 }
 

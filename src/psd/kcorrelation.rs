@@ -111,7 +111,7 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
     /// `exp(−2π d/h)`; `h` and the truncation `[t_min, t_max]` are balanced for the given `m` at a
     /// design error `ε(h) = exp(−2.4π/h)`. The achieved uniform error
     /// `sup_ζ |p − p_m| / p(0)` is then measured at construction on a log-spaced radial grid
-    /// (1000 points over `T|ζ|² ∈ [0, 10¹²]`) and returned with the fit.
+    /// (4000 points: 0 and `T|ζ|² ∈ [10⁻⁸, 10¹²]`, 200 per decade) and returned with the fit.
     ///
     /// # Error bound of the blur
     /// As the blur is a positive average of `p`, `|(p − p_m) * g^Σ|(h) ≤ sup|p − p_m| · |Σ|^{1/2}
@@ -174,11 +174,11 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
         }
         // A-posteriori uniform error, relative to p(0).
         let mut err = 0.0_f64;
-        for i in 0..1000 {
+        for i in 0..4000 {
             let x = if i == 0 {
                 0.0
             } else {
-                10f64.powf(-8.0 + 20.0 * (i as f64) / 999.0)
+                10f64.powf(-8.0 + 20.0 * (i as f64) / 3999.0)
             };
             let exact = (1.0 + x).powf(-nu);
             let approx: f64 = fit.iter().map(|&(w, s)| w * (-s * x).exp()).sum();
@@ -260,5 +260,10 @@ impl<T: Real, const N: usize> Psd<T, N> for KCorrelation<T, N> {
     #[inline]
     fn variance(&self) -> T {
         self.variance
+    }
+    /// `1/√T`, the scale of the spectral core.
+    #[inline]
+    fn feature_width(&self) -> T {
+        T::one() / self.t.sqrt()
     }
 }

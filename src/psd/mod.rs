@@ -85,6 +85,14 @@ pub trait Psd<T: Real, const N: usize> {
         SVector::zeros()
     }
 
+    /// The width of `p`'s narrowest feature around [`Psd::peak`] (rad/length), a grading hint for
+    /// [`Adaptive`]; `0` (no hint) by default.
+    #[inline]
+    #[must_use]
+    fn feature_width(&self) -> T {
+        T::zero()
+    }
+
     /// `(p * g^Σ)(h)` with the method `method` (see [`BlurMethod`]).
     #[inline]
     #[must_use]
