@@ -24,6 +24,8 @@
 //! ## Errata of the seed derivation
 #![doc = include_str!("../docs/errata.md")]
 
+#![forbid(unsafe_code)]
+
 pub mod error;
 pub mod frame;
 pub mod fresnel;
