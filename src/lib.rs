@@ -23,7 +23,6 @@
 //!
 //! ## Errata of the seed derivation
 #![doc = include_str!("../docs/errata.md")]
-
 #![forbid(unsafe_code)]
 
 pub mod error;
