@@ -402,9 +402,13 @@ impl<T: Real> WavePacket<T> {
     }
 
     fn check_realizable(&self) -> Result<(), Error> {
-        let dx = det2(&self.shape_x);
-        let dy = det2(&self.shape_y);
-        let dh = det2(&((self.shape_x + self.shape_y) * T::lit(0.5)));
+        // The bound is scale-invariant: normalize first, since |Θ| over- or underflows f32 for
+        // entries beyond ~1e19 or below ~1e-19 (length²) while the ratio is harmless.
+        let scale = self.shape_x.amax().max(self.shape_y.amax());
+        let (nx, ny) = (self.shape_x / scale, self.shape_y / scale);
+        let dx = det2(&nx);
+        let dy = det2(&ny);
+        let dh = det2(&((nx + ny) * T::lit(0.5)));
         // |μ|² ≤ √(|Θx||Θy|)/|Θ½|  ⇔  (S2² + S3²)/4 ≤ SxSy √(|Θx||Θy|)/|Θ½|.
         // The slack is absolute, relative to S0²: SxSy = (S0² − S1²)/4 loses all its digits for
         // nearly fully polarized light (S1 → ±S0), and a Stokes vector that `Stokes::new`
@@ -412,7 +416,7 @@ impl<T: Real> WavePacket<T> {
         // when Θx = Θy. A relative slack on SxSy alone rejected (1, cos t, sin t, 0) for t ≲ 1e-8.
         let s = self.stokes.vector();
         let lhs = (s[2] * s[2] + s[3] * s[3]) * T::lit(0.25);
-        let bound = (dx.sqrt() * dy.sqrt()) / dh;
+        let bound = (dx / dh).sqrt() * (dy / dh).sqrt();
         let rhs = self.sx() * self.sy() * bound;
         let tol = T::lit(Self::REALIZABILITY_SLACK_ULPS) * T::EPSILON * s[0] * s[0];
         if lhs > rhs + tol {
@@ -705,8 +709,13 @@ fn det2<T: Real>(m: &Matrix2<T>) -> T {
 }
 
 /// Inverse of a 2×2 matrix by its adjugate (the callers pass SPD matrices).
+///
+/// Normalized by the largest entry first: `|Θ|` over- or underflows f32 for entries beyond
+/// ~1e19 or below ~1e-19 (length², e.g. an area source far away), while the inverse does not.
 #[inline]
 pub(crate) fn inverse2<T: Real>(m: &Matrix2<T>) -> Matrix2<T> {
-    let d = det2(m);
-    Matrix2::new(m[(1, 1)], -m[(0, 1)], -m[(1, 0)], m[(0, 0)]) / d
+    let s = m.amax();
+    let n = m / s;
+    let d = det2(&n);
+    Matrix2::new(n[(1, 1)], -n[(0, 1)], -n[(1, 0)], n[(0, 0)]) / (d * s)
 }

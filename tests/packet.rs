@@ -998,6 +998,26 @@ fn main_relations<T: Real>(tol: Tol) {
         let r = WavePacket::new(st, tx, ty, f, l(0.5));
         assert_eq!(r.is_ok(), ok, "m = {m}");
     }
+    // The same at scales where |Θ| over- or underflows f32 (the bound is scale-invariant).
+    for scale in [1e19, 1e-19] {
+        let big = |a: f64, b: f64| {
+            CoherenceShape::new(Matrix2::new(l(a * scale), l(0.0), l(0.0), l(b * scale))).unwrap()
+        };
+        for (m, ok) in [(0.79, true), (0.81, false)] {
+            let st = Stokes::new(l(1.0), l(0.0), l(m), l(0.0)).unwrap();
+            let r = WavePacket::new(st, big(1.0, 4.0), big(4.0, 1.0), f, l(0.5));
+            assert_eq!(r.is_ok(), ok, "m = {m}, scale = {scale:e}");
+        }
+        let p = WavePacket::new(s, big(1.0, 4.0), big(4.0, 1.0), f, l(0.5)).unwrap();
+        let wp = p.world_precision(Channel::X);
+        assert_close(
+            "world precision at extreme scale",
+            wp[(0, 0)].to_f64() * scale,
+            1.0,
+            tol,
+        );
+        assert_close("world precision yy", wp[(1, 1)].to_f64() * scale, 0.25, tol);
+    }
     // Rotation round trip with one shape.
     let psi = l(0.7);
     let r = p.rotated(psi).rotated(-psi);
