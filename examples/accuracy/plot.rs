@@ -62,6 +62,8 @@ pub fn pareto(
         .y_desc(format!(
             "max relative error of S0 vs reference (log; exact drawn at {ERR_FLOOR:.0e})"
         ))
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
         .draw()?;
@@ -70,7 +72,7 @@ pub fn pareto(
     chart
         .draw_series(LineSeries::new(
             [(t0 / 1.5, 0.01), (t1 * 3.0, 0.01)],
-            BLACK.mix(0.4).stroke_width(1),
+            BLACK.mix(0.6).stroke_width(2),
         ))?
         .label("1 % error")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.4)));
