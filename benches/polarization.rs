@@ -1,17 +1,21 @@
 //! Criterion benches for the polarization hot paths: Jones → Mueller (closed form and the literal
-//! S1.7 formula), Mueller × Stokes, Mueller × Mueller, and a frame rotation of a Stokes vector,
-//! in f32 and f64. Inputs are seeded and pass through `black_box`.
+//! S1.7 formula), Mueller × Stokes, Mueller × Mueller, a frame rotation of a Stokes vector, Fresnel
+//! reflection → Mueller (dielectric and conductor), the s/p frame of a direction (`Frame::sp`) and
+//! the Mueller matrix of a frame change (`frame_change_mueller`), in f32 and f64. Inputs are seeded
+//! and pass through `black_box`. Run:
+//! `cargo bench --bench polarization -- --warm-up-time 0.5 --measurement-time 1`.
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use gmueller::frame::rotation_mueller;
+use gmueller::frame::{Frame, frame_change_mueller, rotation_mueller};
+use gmueller::fresnel;
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
 use gmueller::real::Real;
 use gmueller::stack::kron;
 use gmueller::stokes::{Stokes, a_mul, a_mul_inv};
-use nalgebra::{Matrix2, Matrix4};
+use nalgebra::{Matrix2, Matrix4, Vector3};
 use num_complex::Complex;
 
 /// A small deterministic generator (`SplitMix64`) so every run benches the same inputs.
@@ -91,6 +95,73 @@ fn bench_precision<T: Real>(c: &mut Criterion, name: &str) {
     g.bench_function(BenchmarkId::new("rotate_stokes", "zero_angle"), |b| {
         b.iter(|| rotation_mueller(black_box(T::zero())) * black_box(s))
     });
+    g.finish();
+
+    // Fresnel reflection → Mueller at seeded cos θ_i ∈ (0, 1].
+    let cosines: Vec<T> = (0..64)
+        .map(|_| T::lit(0.5 + 0.499 * rng.next_f64()))
+        .collect();
+    let mut g = c.benchmark_group(format!("fresnel_mueller/{name}"));
+    for (label, eta) in [
+        ("glass", Complex::new(T::lit(1.5), T::zero())),
+        ("aluminium", Complex::new(T::lit(0.96), T::lit(6.69))),
+    ] {
+        g.bench_function(BenchmarkId::new("reflection_to_mueller", label), |b| {
+            let mut i = 0;
+            b.iter(|| {
+                i = (i + 1) & 63;
+                Mueller::from_jones(&fresnel::reflection(black_box(cosines[i]), black_box(eta)))
+            })
+        });
+    }
+    g.finish();
+
+    // Frames: the s/p frame of a direction, and the Mueller matrix between two frames.
+    let normal = Vector3::new(T::zero(), T::zero(), T::one());
+    let dirs: Vec<Vector3<T>> = (0..64)
+        .map(|_| {
+            Vector3::new(
+                T::lit(rng.next_f64()),
+                T::lit(rng.next_f64()),
+                T::lit(-0.2 - 0.8 * rng.next_f64().abs()),
+            )
+        })
+        .collect();
+    let frames: Vec<Frame<T>> = dirs
+        .iter()
+        .map(|d| Frame::sp(*d, normal).expect("valid direction"))
+        .collect();
+    let rotated: Vec<Frame<T>> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| f.rotated(T::lit(0.1 * i as f64)))
+        .collect();
+    let reversed: Vec<Frame<T>> = frames.iter().map(Frame::reversed).collect();
+    let mut g = c.benchmark_group(format!("frames/{name}"));
+    g.bench_function(BenchmarkId::new("frame_sp", "random"), |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i = (i + 1) & 63;
+            Frame::sp(black_box(dirs[i]), black_box(normal))
+        })
+    });
+    g.bench_function(BenchmarkId::new("frame_change_mueller", "same_k"), |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i = (i + 1) & 63;
+            frame_change_mueller(black_box(&frames[i]), black_box(&rotated[i]))
+        })
+    });
+    g.bench_function(
+        BenchmarkId::new("frame_change_mueller", "reversed_k"),
+        |b| {
+            let mut i = 0;
+            b.iter(|| {
+                i = (i + 1) & 63;
+                frame_change_mueller(black_box(&frames[i]), black_box(&reversed[i]))
+            })
+        },
+    );
     g.finish();
 }
 

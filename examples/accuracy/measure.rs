@@ -1,0 +1,415 @@
+//! Variants (model level × blur method × precision), their dispatch to monomorphised kernels,
+//! and the timing loop.
+
+use std::cell::RefCell;
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use gmueller::Real;
+use gmueller::gaussian::Gaussian;
+use gmueller::interaction::{
+    CoherenceModel, FresnelReflection, Full, Incoherent, Kernel, OneShape, Partial, Pbsdf,
+    PlaneWave, PolarizationModel, RayleighRice, RoughSurface, Scalar,
+};
+use gmueller::psd::{Adaptive, BlurMethod, ClosedForm, GaussHermite, Psd};
+use nalgebra::{Matrix2, Vector2};
+
+use super::scenes::{HeightGrating, MIXTURES, Material, SceneData};
+
+/// Polarization level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pol {
+    Scalar,
+    OneShape,
+    Full,
+}
+/// Coherence level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coh {
+    PlaneWave,
+    Incoherent,
+    Partial,
+}
+/// Blur method (only the partially coherent level blurs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Blur {
+    /// Not used (plane-wave and incoherent limits evaluate `p(h)` or `∫p` only).
+    None,
+    /// Exact closed form (Gaussian PSDs, the grating).
+    Exact,
+    /// Gaussian-mixture fit of the K-correlation with m components, then closed form.
+    Mixture(usize),
+    /// Gauss–Hermite of the given order (continuous PSDs).
+    GaussHermite(usize),
+    /// Adaptive Gauss–Kronrod to the given relative tolerance (continuous PSDs).
+    Adaptive(f64),
+}
+/// Precision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Prec {
+    F32,
+    F64,
+}
+
+/// One model variant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variant {
+    pub pol: Pol,
+    pub coh: Coh,
+    pub blur: Blur,
+    pub prec: Prec,
+}
+
+impl Variant {
+    /// Human-readable label, e.g. `Full·Partial·GH8·f64`.
+    pub fn label(&self) -> String {
+        format!(
+            "{}·{}·{}·{}",
+            match self.pol {
+                Pol::Scalar => "Scalar",
+                Pol::OneShape => "OneShape",
+                Pol::Full => "Full",
+            },
+            match self.coh {
+                Coh::PlaneWave => "PlaneWave",
+                Coh::Incoherent => "Incoherent",
+                Coh::Partial => "Partial",
+            },
+            self.blur_label(),
+            match self.prec {
+                Prec::F32 => "f32",
+                Prec::F64 => "f64",
+            }
+        )
+    }
+
+    /// The blur part of the label.
+    pub fn blur_label(&self) -> String {
+        match self.blur {
+            Blur::None => "—".into(),
+            Blur::Exact => "exact".into(),
+            Blur::Mixture(m) => format!("mix{m}"),
+            Blur::GaussHermite(n) => format!("GH{n}"),
+            Blur::Adaptive(t) => format!("adapt{t:.0e}"),
+        }
+    }
+
+    /// Whether the variant applies to a material (quadrature needs a continuous PSD, the
+    /// mixture fit a K-correlation, the exact blur a closed form).
+    pub fn applies(&self, m: &super::scenes::MaterialSpec) -> bool {
+        match self.blur {
+            Blur::None => true,
+            Blur::Exact => !matches!(m, super::scenes::MaterialSpec::KCorr { .. }),
+            Blur::Mixture(_) => matches!(m, super::scenes::MaterialSpec::KCorr { .. }),
+            Blur::GaussHermite(_) | Blur::Adaptive(_) => m.continuous(),
+        }
+    }
+}
+
+/// Every variant of the harness.
+pub fn all_variants() -> Vec<Variant> {
+    let mut v = Vec::new();
+    for prec in [Prec::F64, Prec::F32] {
+        for pol in [Pol::Full, Pol::OneShape, Pol::Scalar] {
+            for coh in [Coh::PlaneWave, Coh::Incoherent] {
+                v.push(Variant {
+                    pol,
+                    coh,
+                    blur: Blur::None,
+                    prec,
+                });
+            }
+            let mut blurs = vec![Blur::Exact];
+            blurs.extend(MIXTURES.iter().map(|&m| Blur::Mixture(m)));
+            blurs.extend([4, 8, 16].map(Blur::GaussHermite));
+            if pol == Pol::Full && prec == Prec::F64 {
+                // Slow (milliseconds per evaluation): full level, f64, 45° scenes only.
+                blurs.push(Blur::Adaptive(1e-4));
+            }
+            for blur in blurs {
+                v.push(Variant {
+                    pol,
+                    coh: Coh::Partial,
+                    blur,
+                    prec,
+                });
+            }
+        }
+    }
+    v
+}
+
+/// Output of one variant on one scene: total Stokes per exit direction, and the median time per
+/// evaluation (ns).
+pub struct Measured {
+    pub stokes: Vec<[f64; 4]>,
+    pub ns: f64,
+}
+
+/// Timing policy: at least `min_batches` batches (each = every exit direction of the scene once),
+/// more while the elapsed time is below `budget`, at most `max_batches`.
+#[derive(Debug, Clone, Copy)]
+pub struct Timing {
+    pub budget: Duration,
+    pub min_batches: usize,
+    pub max_batches: usize,
+}
+
+fn run<T, Pol2, Coh2, B, P, Sp, Sc>(
+    kernel: &Kernel<Pol2, Coh2, B>,
+    m: &RoughSurface<P, Sp, Sc>,
+    s: &SceneData<T>,
+    timing: Timing,
+) -> Measured
+where
+    T: Real,
+    Pol2: PolarizationModel,
+    Coh2: CoherenceModel,
+    P: Psd<T, 2>,
+    B: BlurMethod<T, 2, P>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+{
+    let n = s.geoms.len() as f64;
+    // The first pass records the values (and counts as a batch if it is already slow).
+    let t0 = Instant::now();
+    let stokes: Vec<[f64; 4]> = s
+        .geoms
+        .iter()
+        .map(|g| {
+            let v = kernel.evaluate(m, &s.packet, g).scattered.vector();
+            [v[0].to_f64(), v[1].to_f64(), v[2].to_f64(), v[3].to_f64()]
+        })
+        .collect();
+    let first = t0.elapsed();
+    let mut times = Vec::new();
+    let min = if first > timing.budget {
+        times.push(first.as_secs_f64() * 1e9 / n);
+        0
+    } else {
+        timing.min_batches
+    };
+    let start = Instant::now();
+    while times.len() < min || (start.elapsed() < timing.budget && times.len() < timing.max_batches)
+    {
+        let t = Instant::now();
+        for g in &s.geoms {
+            black_box(kernel.evaluate(black_box(m), black_box(&s.packet), black_box(g)));
+        }
+        times.push(t.elapsed().as_secs_f64() * 1e9 / n);
+    }
+    Measured {
+        stokes,
+        ns: median(&mut times),
+    }
+}
+
+/// Median (sorts in place); NaN for an empty slice.
+pub fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let k = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[k]
+    } else {
+        0.5 * (v[k - 1] + v[k])
+    }
+}
+
+macro_rules! levels {
+    ($pol:expr, $coh:expr, $blur:expr, $mat:expr, $scene:expr, $timing:expr) => {
+        match ($pol, $coh) {
+            (Pol::Scalar, Coh::PlaneWave) => run(
+                &Kernel::<Scalar, PlaneWave, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::Scalar, Coh::Incoherent) => run(
+                &Kernel::<Scalar, Incoherent, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::Scalar, Coh::Partial) => run(
+                &Kernel::<Scalar, Partial, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::OneShape, Coh::PlaneWave) => run(
+                &Kernel::<OneShape, PlaneWave, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::OneShape, Coh::Incoherent) => run(
+                &Kernel::<OneShape, Incoherent, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::OneShape, Coh::Partial) => run(
+                &Kernel::<OneShape, Partial, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::Full, Coh::PlaneWave) => run(
+                &Kernel::<Full, PlaneWave, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::Full, Coh::Incoherent) => run(
+                &Kernel::<Full, Incoherent, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+            (Pol::Full, Coh::Partial) => run(
+                &Kernel::<Full, Partial, _>::new($blur),
+                $mat,
+                $scene,
+                $timing,
+            ),
+        }
+    };
+}
+
+/// Runs variant `v` (its precision must be `T`'s) on a material and scene; `None` if it does not
+/// apply to the material.
+pub fn measure<T: GratingPrecision>(
+    v: &Variant,
+    mat: &Material<T>,
+    s: &SceneData<T>,
+    timing: Timing,
+) -> Option<Measured> {
+    let gh = |n: usize| GaussHermite::<T>::new(n).expect("order in range");
+    let ad = |t: f64| Adaptive::new(T::lit(t)).expect("tolerance in range");
+    Some(match (mat, v.blur) {
+        (Material::Gauss(m), Blur::None | Blur::Exact) => {
+            levels!(v.pol, v.coh, ClosedForm, m, s, timing)
+        }
+        (Material::Gauss(m), Blur::GaussHermite(n)) => levels!(v.pol, v.coh, gh(n), m, s, timing),
+        (Material::Gauss(m), Blur::Adaptive(t)) => levels!(v.pol, v.coh, ad(t), m, s, timing),
+        // The limits never blur: any method type satisfies the bound; it is not called.
+        (Material::K { exact, .. }, Blur::None) => levels!(v.pol, v.coh, gh(1), exact, s, timing),
+        (Material::K { exact, .. }, Blur::GaussHermite(n)) => {
+            levels!(v.pol, v.coh, gh(n), exact, s, timing)
+        }
+        (Material::K { exact, .. }, Blur::Adaptive(t)) => {
+            levels!(v.pol, v.coh, ad(t), exact, s, timing)
+        }
+        (Material::K { mixtures, .. }, Blur::Mixture(m)) => {
+            let i = MIXTURES.iter().position(|&x| x == m)?;
+            levels!(v.pol, v.coh, ClosedForm, &mixtures[i], s, timing)
+        }
+        (Material::Grating(m), Blur::None | Blur::Exact) => T::grating(v, m, s, timing),
+        _ => return None,
+    })
+}
+
+type GratingSurface<T> = RoughSurface<HeightGrating<T>, FresnelReflection<T>, RayleighRice<T>>;
+
+/// The precisions for which the example's grating has a closed-form blur (a concrete impl per
+/// precision: a generic `ClosedForm: BlurMethod<T, 2, HeightGrating<T>>` bound would shadow the
+/// library's impls during inference).
+pub trait GratingPrecision: Real {
+    /// Runs `v` on the grating.
+    fn grating(
+        v: &Variant,
+        m: &GratingSurface<Self>,
+        s: &SceneData<Self>,
+        timing: Timing,
+    ) -> Measured;
+}
+
+macro_rules! grating_precision {
+    ($t:ty) => {
+        impl GratingPrecision for $t {
+            fn grating(
+                v: &Variant,
+                m: &GratingSurface<Self>,
+                s: &SceneData<Self>,
+                timing: Timing,
+            ) -> Measured {
+                levels!(v.pol, v.coh, ClosedForm, m, s, timing)
+            }
+        }
+    };
+}
+grating_precision!(f32);
+grating_precision!(f64);
+
+/// The reference: f64, full polarization, partial coherence; the exact closed form for Gaussian
+/// PSDs and the grating, adaptive quadrature at 1e-10 for the K-correlation.
+pub fn reference(mat: &Material<f64>, s: &SceneData<f64>) -> Measured {
+    let timing = Timing {
+        budget: Duration::ZERO,
+        min_batches: 1,
+        max_batches: 1,
+    };
+    match mat {
+        Material::Gauss(m) => run(&Kernel::<Full, Partial, _>::new(ClosedForm), m, s, timing),
+        Material::Grating(m) => run(&Kernel::<Full, Partial, _>::new(ClosedForm), m, s, timing),
+        Material::K { exact, .. } => run(
+            &Kernel::<Full, Partial, _>::new(Cached::new(Adaptive::new(1e-10).expect("valid"))),
+            exact,
+            s,
+            timing,
+        ),
+    }
+}
+
+/// A blur method that remembers its last answer: the full level blurs three channels, which for
+/// a packet with one coherence shape are the same blur (saves 2/3 of the reference's cost).
+pub struct Cached<B> {
+    inner: B,
+    last: RefCell<Option<(Matrix2<f64>, Vector2<f64>, f64)>>,
+}
+
+impl<B> Cached<B> {
+    fn new(inner: B) -> Self {
+        Self {
+            inner,
+            last: RefCell::new(None),
+        }
+    }
+}
+
+impl<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>> BlurMethod<f64, 2, P> for Cached<B> {
+    fn blur(&self, psd: &P, cov: &Gaussian<f64, 2>, h: &Vector2<f64>) -> f64 {
+        if let Some((c, hh, v)) = *self.last.borrow() {
+            if c == *cov.covariance() && hh == *h {
+                return v;
+            }
+        }
+        let v = self.inner.blur(psd, cov, h);
+        *self.last.borrow_mut() = Some((*cov.covariance(), *h, v));
+        v
+    }
+}
+
+/// The cross-check of the Gaussian reference: the same kernel with adaptive quadrature at 1e-10.
+pub fn gaussian_adaptive(mat: &Material<f64>, s: &SceneData<f64>) -> Option<Vec<[f64; 4]>> {
+    let timing = Timing {
+        budget: Duration::MAX,
+        min_batches: 0,
+        max_batches: 0,
+    };
+    match mat {
+        Material::Gauss(m) => Some(
+            run(
+                &Kernel::<Full, Partial, _>::new(Adaptive::new(1e-10).expect("valid")),
+                m,
+                s,
+                timing,
+            )
+            .stokes,
+        ),
+        _ => None,
+    }
+}
