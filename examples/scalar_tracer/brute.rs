@@ -638,7 +638,7 @@ pub fn auto_grid(scene: &Scene, points_per_length: f64, beam_factor: f64) -> Gri
         let per = (period / dx).ceil().max(8.0) as usize;
         let per = per.next_power_of_two();
         dx = period / per as f64;
-        n = ((need / dx).ceil() as usize).next_power_of_two();
+        n = fast_size_multiple((need / dx).ceil() as usize, per);
     }
     Grid {
         n,
@@ -646,6 +646,15 @@ pub fn auto_grid(scene: &Scene, points_per_length: f64, beam_factor: f64) -> Gri
         beam_width,
         beam_compensation: true,
     }
+}
+
+/// The smallest 2ᵃ3ᵇ ≥ m that is a multiple of the power of two `per`.
+fn fast_size_multiple(m: usize, per: usize) -> usize {
+    let mut n = fast_size(m);
+    while n % per != 0 {
+        n = fast_size(n + 1);
+    }
+    n
 }
 
 fn fast_size(m: usize) -> usize {

@@ -122,7 +122,8 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
     psd: P,
     blur: B,
     exits: &[[f64; 3]],
-) -> Vec<Prediction> {
+    min_seconds: f64,
+) -> (Vec<Prediction>, f64) {
     let packet = packet(scene);
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).expect("surface");
     let material = RoughSurface {
@@ -131,18 +132,30 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
         scatter: PhaseScreen::new(1.0).expect("phase screen"),
     };
     let kernel = Kernel::<Scalar, Partial, B>::new(blur);
-    exits
-        .iter()
-        .map(|r| {
-            let g = Geometry::for_packet(&packet, &surface, Vector3::new(r[0], r[1], r[2]))
-                .expect("geometry");
-            let resp: Response<f64> = kernel.evaluate(&material, &packet, &g);
-            Prediction {
-                specular: resp.specular.s0(),
-                scattered: resp.scattered.s0(),
-            }
-        })
-        .collect()
+    let once = || -> Vec<Prediction> {
+        exits
+            .iter()
+            .map(|r| {
+                let g = Geometry::for_packet(&packet, &surface, Vector3::new(r[0], r[1], r[2]))
+                    .expect("geometry");
+                let resp: Response<f64> = kernel.evaluate(&material, &packet, &g);
+                Prediction {
+                    specular: resp.specular.s0(),
+                    scattered: resp.scattered.s0(),
+                }
+            })
+            .collect()
+    };
+    let out = once();
+    // Time the evaluations alone (geometry included, material set-up excluded).
+    let start = std::time::Instant::now();
+    let mut reps = 0usize;
+    while start.elapsed().as_secs_f64() < min_seconds {
+        std::hint::black_box(once());
+        reps += 1;
+    }
+    let per = start.elapsed().as_secs_f64() / (reps.max(1) * exits.len().max(1)) as f64;
+    (out, per)
 }
 
 /// The kernel's `L` (per unit `S0`) for each exit direction.
@@ -151,21 +164,40 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
 /// On invalid scene parameters.
 #[must_use]
 pub fn predict(scene: &Scene, exits: &[[f64; 3]]) -> Vec<Prediction> {
+    predict_timed(scene, exits, 0.0).0
+}
+
+/// As [`predict`], and the time per direction of the evaluations, measured by repeating them
+/// for at least `min_seconds` (the material — e.g. a mixture fit — is built once, untimed).
+///
+/// # Panics
+/// On invalid scene parameters.
+#[must_use]
+pub fn predict_timed(
+    scene: &Scene,
+    exits: &[[f64; 3]],
+    min_seconds: f64,
+) -> (Vec<Prediction>, f64) {
     match scene.matter {
         Matter::Gaussian { sigma, ell } => predict_with(
             scene,
             GaussianPsd::<f64, 2>::isotropic(sigma, ell).expect("psd"),
             ClosedForm,
             exits,
+            min_seconds,
         ),
         Matter::Exponential { sigma, ell } => {
             let k = KCorrelation::<f64, 2>::new(sigma * sigma, ell * ell, 2.0).expect("psd");
             let (fit, _, _) = k.mixture_fit_to(1e-6).expect("mixture fit");
-            predict_with(scene, fit, ClosedForm, exits)
+            predict_with(scene, fit, ClosedForm, exits, min_seconds)
         }
-        Matter::Sinusoid { amplitude, period } => {
-            predict_with(scene, height_grating(amplitude, period), ClosedForm, exits)
-        }
+        Matter::Sinusoid { amplitude, period } => predict_with(
+            scene,
+            height_grating(amplitude, period),
+            ClosedForm,
+            exits,
+            min_seconds,
+        ),
     }
 }
 

@@ -110,14 +110,6 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool) -> Vec<Conf
                    beam: f64,
                    half: f64,
                    k: usize| {
-        let beam = std::env::var("GM_BEAM")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(beam);
-        let ppl = std::env::var("GM_PPL")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(ppl);
         let mut grid = brute::auto_grid(&scene, ppl, beam);
         grid.beam_compensation = !raw_beam;
         let align = match scene.matter {
@@ -142,11 +134,7 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool) -> Vec<Conf
             realizations: scale(k),
         });
     };
-    let sigma = std::env::var("GM_VS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0.1)
-        / v0;
+    let sigma = 0.1 / v0;
     add(
         "gauss_coherent",
         format!(
@@ -162,7 +150,7 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool) -> Vec<Conf
         4.0,
         12.0,
         3.0,
-        48,
+        64,
     );
     add(
         "gauss_partial",
@@ -179,7 +167,7 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool) -> Vec<Conf
         4.0,
         12.0,
         5.0,
-        48,
+        64,
     );
     add(
         "kcorrelation",
@@ -196,7 +184,7 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool) -> Vec<Conf
         8.0,
         12.0,
         4.0,
-        48,
+        64,
     );
     let period = 3.0;
     let amplitude = 0.15 / v0;
@@ -276,16 +264,6 @@ fn verdict(s: &Summary) -> String {
             s.v_sigma
         )
     }
-}
-
-fn kernel_time_per_direction(scene: &Scene, exits: &[[f64; 3]]) -> f64 {
-    let start = Instant::now();
-    let mut reps = 0usize;
-    while start.elapsed().as_secs_f64() < 0.05 || reps < 3 {
-        std::hint::black_box(kernel_side::predict(scene, exits));
-        reps += 1;
-    }
-    start.elapsed().as_secs_f64() / (reps * exits.len()) as f64
 }
 
 fn fmt_time(t: f64) -> String {
@@ -410,8 +388,7 @@ fn main() {
             &|| bar.inc(1),
         );
         let brute_time = t0.elapsed().as_secs_f64();
-        let pred = kernel_side::predict(&c.scene, &exits);
-        let kt = kernel_time_per_direction(&c.scene, &exits);
+        let (pred, kt) = kernel_side::predict_timed(&c.scene, &exits, 0.1);
         let rows: Vec<Row> = (0..dirs.len())
             .map(|i| Row {
                 m: dirs[i],

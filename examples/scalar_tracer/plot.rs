@@ -85,7 +85,7 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
     chart
         .configure_mesh()
         .x_desc("exit angle θ_o in the plane of incidence (deg; specular at +30)")
-        .y_desc("radiance L (per unit irradiance, µm⁻² → sr⁻¹)")
+        .y_desc("radiance per unit incident irradiance, L/S (1/sr)")
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 15))
         .draw()?;
@@ -126,7 +126,7 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
             .build_cartesian_2d(hy0..hy1, (floor..peak * 2.0).log_scale())?;
         chart
             .configure_mesh()
-            .x_desc("h_y = k r̂·t̂₂ (rad/µm)")
+            .x_desc("h_y, out-of-plane component of k(r - d) (rad/µm)")
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 15))
             .draw()?;
