@@ -127,11 +127,10 @@ fn criterion_rejects_a_wrong_coherence_width() {
     let wrong = scene(0.1, [[1.44 * 1.21, 0.2 * 1.21], [0.2 * 1.21, 2.56 * 1.21]]);
     let hs = [[0.0, 0.0], [0.8, 0.0]];
     let c = compare(&s, &wrong, &hs, 8);
-    for i in 0..hs.len() {
+    for (i, h) in hs.iter().enumerate() {
         assert!(
             !agrees(c.kernel[i].total(), c.brute[i], c.se[i]),
-            "a 10 % error in w went unnoticed at h = {:?}",
-            hs[i]
+            "a 10 % error in w went unnoticed at h = {h:?}"
         );
     }
 }

@@ -48,7 +48,7 @@ use std::sync::{Arc, Mutex};
 use rustfft::num_complex::Complex64 as C;
 use rustfft::{Fft, FftPlanner};
 
-/// A small deterministic generator (SplitMix64), so results do not depend on thread timing.
+/// A small deterministic generator (`SplitMix64`), so results do not depend on thread timing.
 #[derive(Debug, Clone)]
 pub struct Rng(u64);
 
@@ -137,7 +137,7 @@ impl Matter {
 pub struct Scene {
     /// Wavelength λ (length).
     pub wavelength: f64,
-    /// Incidence angle θ_i (radians); the plane of incidence is (t̂₁, n̂) and the light travels
+    /// Incidence angle `θ_i` (radians); the plane of incidence is `(t̂₁, n̂)` and the light travels
     /// along `d = (sin θ_i, 0, −cos θ_i)`.
     pub theta_i: f64,
     /// The transverse coherence covariance `Θ⊥` (length²) in the packet's s/p frame
@@ -320,9 +320,9 @@ struct Plan {
     area: f64,
     /// sqrt of the height spectrum (circulant eigenvalues), for random fields.
     height_amp: Option<Vec<f64>>,
-    /// Light modes (qx, qy, weight λ_q / N²).
+    /// Light modes `(q_x, q_y, λ_q / N²)`.
     modes: Vec<(i64, i64, f64)>,
-    /// Per direction: DFT index (mx, my), Taylor coefficients (−iΔv)ⁿ/n!, cos θ_o/λ² / |P|.
+    /// Per direction: DFT index `(m_x, m_y)`, Taylor coefficients `(−iΔv)ⁿ/n!`, `cos θ_o/λ²/|P|`.
     dirs: Vec<([i64; 2], Vec<C>, f64)>,
     v0: f64,
     terms: usize,
@@ -651,7 +651,7 @@ pub fn auto_grid(scene: &Scene, points_per_length: f64, beam_factor: f64) -> Gri
 /// The smallest 2ᵃ3ᵇ ≥ m that is a multiple of the power of two `per`.
 fn fast_size_multiple(m: usize, per: usize) -> usize {
     let mut n = fast_size(m);
-    while n % per != 0 {
+    while !n.is_multiple_of(per) {
         n = fast_size(n + 1);
     }
     n
