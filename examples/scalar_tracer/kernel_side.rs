@@ -1,0 +1,214 @@
+//! The kernel's prediction for a brute-force [`Scene`]: gmueller's scalar S2.20 kernel with the
+//! `PhaseScreen` pBSDF (`M = |r|² v² I₄`, `|r|² = 1`) for the scattered part and a constant
+//! identity Mueller matrix (a perfect mirror) for the specular part.
+//!
+//! Height PSDs: `GaussianPsd::isotropic(σ, ℓ)`; the exponential correlation is
+//! `KCorrelation(σ², T = ℓ², γ = 2)`, blurred with a Gaussian-mixture fit (`ClosedForm`); the
+//! sinusoidal height grating `a sin(2πx/Λ + φ)` has `R(ξ) = (a²/2) cos(2πξ/Λ)`, i.e. a
+//! [`Grating`] with the two orders `±2π/Λ` of efficiency `a²/4` each and no zeroth order.
+//! `Grating` has no public constructor from an order list, so it is built from public ones:
+//! a sinusoidal *phase* grating of depth `j₀,₁` (first zero of `J₀`: `η₀ = J₀(j₀,₁)² ≈ 10⁻³³`,
+//! `η±1 = J₁(j₀,₁)²`) crossed with a zeroth-order-only grating of efficiency
+//! `J₀(b)² = a²/(4 J₁(j₀,₁)²)`, dropping products below `10⁻⁶ a²`.
+
+#![allow(dead_code)]
+
+use gmueller::frame::Frame;
+use gmueller::interaction::{
+    ConstantMueller, Geometry, Kernel, Partial, PhaseScreen, Response, RoughSurface, Scalar,
+};
+use gmueller::mueller::Mueller;
+use gmueller::packet::{CoherenceShape, WavePacket};
+use gmueller::psd::{
+    BlurMethod, ClosedForm, GaussianPsd, Grating, KCorrelation, OrderCutoff, Psd, bessel_j,
+};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Vector2, Vector3};
+
+use super::brute::{Matter, Scene};
+
+/// The kernel's answer per exit direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prediction {
+    /// Specular (coherent) part of `L`.
+    pub specular: f64,
+    /// Scattered part of `L`.
+    pub scattered: f64,
+}
+
+impl Prediction {
+    /// `L = specular + scattered` (`response.total().s0()`).
+    #[must_use]
+    pub fn total(&self) -> f64 {
+        self.specular + self.scattered
+    }
+}
+
+/// The packet for `scene`: unpolarized, `S0 = 1`, shape `Θ⊥`, frame = the brute force's s/p frame.
+///
+/// # Panics
+/// On invalid scene parameters.
+#[must_use]
+pub fn packet(scene: &Scene) -> WavePacket<f64> {
+    let f = scene.packet_frame();
+    let v = |a: [f64; 3]| Vector3::new(a[0], a[1], a[2]);
+    let frame = Frame::new(v(f[0]), v(f[1]), v(f[2])).expect("packet frame");
+    let t = scene.theta;
+    let shape = CoherenceShape::new(Matrix2::new(t[0][0], t[0][1], t[1][0], t[1][1]))
+        .expect("coherence shape");
+    WavePacket::from_stokes(
+        Stokes::unpolarized(1.0).expect("stokes"),
+        shape,
+        frame,
+        scene.wavelength,
+    )
+    .expect("packet")
+}
+
+/// The first-order height-grating PSD (see the module docs).
+///
+/// # Panics
+/// If the construction does not give exactly the two ±1 orders.
+#[must_use]
+pub fn height_grating(amplitude: f64, period: f64) -> Grating<f64, 2> {
+    const J01: f64 = 2.404_825_557_695_773;
+    let dir = Vector2::x();
+    let g = std::f64::consts::TAU / period;
+    let base = Grating::sinusoidal(
+        period,
+        &dir,
+        J01,
+        OrderCutoff {
+            max_frequency: 1.5 * g,
+            tail: 0.0,
+        },
+    )
+    .expect("grating");
+    let eta1 = bessel_j(1, J01)[1].powi(2);
+    let target = amplitude * amplitude / 4.0;
+    assert!(
+        target < eta1,
+        "height amplitude too large for this construction"
+    );
+    // J₀ decreases on [0, j₀,₁]: bisect J₀(b)² = target/eta1.
+    let want = target / eta1;
+    let (mut lo, mut hi) = (0.0_f64, J01);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if bessel_j(0, mid)[0].powi(2) > want {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let scale = Grating::sinusoidal(
+        period,
+        &dir,
+        0.5 * (lo + hi),
+        OrderCutoff {
+            max_frequency: 0.5 * g,
+            tail: 0.0,
+        },
+    )
+    .expect("grating");
+    let out = Grating::crossed(&base, &scale, 1e-6 * amplitude * amplitude);
+    assert_eq!(out.orders().len(), 2, "expected the ±1 orders only");
+    assert!((out.variance() / (0.5 * amplitude * amplitude) - 1.0).abs() < 1e-9);
+    out
+}
+
+fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
+    scene: &Scene,
+    psd: P,
+    blur: B,
+    exits: &[[f64; 3]],
+    min_seconds: f64,
+) -> (Vec<Prediction>, f64) {
+    let packet = packet(scene);
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).expect("surface");
+    let material = RoughSurface {
+        psd,
+        specular: ConstantMueller(Mueller::identity()),
+        scatter: PhaseScreen::new(1.0).expect("phase screen"),
+    };
+    let kernel = Kernel::<Scalar, Partial, B>::new(blur);
+    let once = || -> Vec<Prediction> {
+        exits
+            .iter()
+            .map(|r| {
+                let g = Geometry::for_packet(&packet, &surface, Vector3::new(r[0], r[1], r[2]))
+                    .expect("geometry");
+                let resp: Response<f64> = kernel.evaluate(&material, &packet, &g);
+                Prediction {
+                    specular: resp.specular.s0(),
+                    scattered: resp.scattered.s0(),
+                }
+            })
+            .collect()
+    };
+    let out = once();
+    // Time the evaluations alone (geometry included, material set-up excluded).
+    let start = std::time::Instant::now();
+    let mut reps = 0usize;
+    while start.elapsed().as_secs_f64() < min_seconds {
+        std::hint::black_box(once());
+        reps += 1;
+    }
+    let per = start.elapsed().as_secs_f64() / (reps.max(1) * exits.len().max(1)) as f64;
+    (out, per)
+}
+
+/// The kernel's `L` (per unit `S0`) for each exit direction.
+///
+/// # Panics
+/// On invalid scene parameters.
+#[must_use]
+pub fn predict(scene: &Scene, exits: &[[f64; 3]]) -> Vec<Prediction> {
+    predict_timed(scene, exits, 0.0).0
+}
+
+/// As [`predict`], and the time per direction of the evaluations, measured by repeating them
+/// for at least `min_seconds` (the material — e.g. a mixture fit — is built once, untimed).
+///
+/// # Panics
+/// On invalid scene parameters.
+#[must_use]
+pub fn predict_timed(
+    scene: &Scene,
+    exits: &[[f64; 3]],
+    min_seconds: f64,
+) -> (Vec<Prediction>, f64) {
+    match scene.matter {
+        Matter::Gaussian { sigma, ell } => predict_with(
+            scene,
+            GaussianPsd::<f64, 2>::isotropic(sigma, ell).expect("psd"),
+            ClosedForm,
+            exits,
+            min_seconds,
+        ),
+        Matter::Exponential { sigma, ell } => {
+            let k = KCorrelation::<f64, 2>::new(sigma * sigma, ell * ell, 2.0).expect("psd");
+            let (fit, _, _) = k.mixture_fit_to(1e-6).expect("mixture fit");
+            predict_with(scene, fit, ClosedForm, exits, min_seconds)
+        }
+        Matter::Sinusoid { amplitude, period } => predict_with(
+            scene,
+            height_grating(amplitude, period),
+            ClosedForm,
+            exits,
+            min_seconds,
+        ),
+    }
+}
+
+/// A short name of the kernel level used for `scene`.
+#[must_use]
+pub fn method_name(scene: &Scene) -> &'static str {
+    match scene.matter {
+        Matter::Gaussian { .. } => "Scalar/Partial/ClosedForm, GaussianPsd",
+        Matter::Exponential { .. } => {
+            "Scalar/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6"
+        }
+        Matter::Sinusoid { .. } => "Scalar/Partial/ClosedForm, Grating ±1 orders",
+    }
+}
