@@ -39,7 +39,7 @@ impl Lcg {
 }
 
 /// One seeded scene: a packet and its geometry for an exit direction near the specular one
-/// (within ~15°), incidence up to 70°, packet frame turned from s/p, Θ_x ≠ Θ_y, realizable μ.
+/// (within ~15°), incidence up to 70°, packet frame turned from s/p, `Θ_x ≠ Θ_y`, realizable μ.
 struct Scene<T: Real> {
     packet: WavePacket<T>,
     geometry: Geometry<T>,

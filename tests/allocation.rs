@@ -1,6 +1,6 @@
 //! Verifies that the S2.20 kernel allocates nothing per evaluation: a counting global allocator
 //! (wrapping `std::alloc::System`) counts heap allocations across many evaluations at every
-//! level (Scalar/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD + ClosedForm
+//! level (Scalar/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD + `ClosedForm`
 //! and with a K-correlation PSD + Gauss–Hermite blur, plus `Mueller::from_jones`, frame changes
 //! and `Geometry::for_packet`; the count must be zero.
 //!

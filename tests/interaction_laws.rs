@@ -171,8 +171,8 @@ fn plane_wave_level_equals_classical_evaluation() {
     }
 }
 
-/// The deviation of Partial (and its OneShape/Full levels) from PlaneWave as the coherence width
-/// grows, and from Incoherent as it shrinks, printed and asserted monotone with a final bound.
+/// The deviation of `Partial` (at the `OneShape` and `Full` levels) from `PlaneWave` as the width
+/// grows, and from `Incoherent` as it shrinks, printed and asserted monotone with a final bound.
 #[test]
 fn partial_coherence_tends_to_plane_wave_and_incoherent_limits() {
     let (lambda, sigma, ell) = (0.5, 0.02, 2.0);
@@ -244,7 +244,7 @@ fn partial_coherence_tends_to_plane_wave_and_incoherent_limits() {
     level::<Full>(&material, &make, exit, "Full");
 }
 
-/// With `Θ_x = Θ_y`: Full equals OneShape to rounding; Scalar equals S0 of OneShape for
+/// With `Θ_x = Θ_y`: `Full` equals `OneShape` to rounding; `Scalar` equals S0 of `OneShape` for
 /// unpolarized light (any M), and for any light when M is a multiple of the identity (the scalar
 /// level ignores diattenuation by design: it keeps `M₀₀ S0`).
 #[test]
@@ -323,7 +323,7 @@ fn levels_agree_for_a_single_shape() {
 
 /// The diffraction term `𝒟` (`surface_coherence_term`) and the specular weight, scanned over exit
 /// directions in the plane of incidence (0.01° steps), peak at the specular direction, and are even
-/// in `h_t`. Also prints where the FULL lobe (cos θ_o and the pBSDF included) peaks.
+/// in `h_t`. Also prints where the whole lobe (`cos θ_o` and the pBSDF included) peaks.
 #[test]
 fn diffraction_term_is_centred_on_the_specular_direction() {
     let lambda = 0.5;
@@ -533,7 +533,7 @@ fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), T
         scatter: RayleighRice::new(eta).unwrap(),
     };
     let g = Geometry::for_packet(&pk, &surface(), dir::<T>(c.theta_o, c.phi_o)).unwrap();
-    let mut check = |what: &str, st: Stokes<T>| -> Result<(), TestCaseError> {
+    let check = |what: &str, st: Stokes<T>| -> Result<(), TestCaseError> {
         // Scale before squaring: outputs of ~1e-162 would square into subnormals.
         let raw = st.vector().map(|x| x.to_f64());
         let scale = raw.amax();
@@ -690,7 +690,7 @@ fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 
 /// `∫ f(r̂) d²r_t` over the exit hemisphere `|r_t| < 1` (= `∫ f cos θ_o dω`), in polar coordinates
 /// centred on the specular point `r_t0`: trapezoid in the angle, Gauss–Legendre on radial panels
-/// refined geometrically toward the centre (narrow lobes) and toward the rim (the `√` of cos θ_o).
+/// refined geometrically toward the centre (narrow lobes) and toward the rim (the `√` of `cos θ_o`).
 fn hemisphere_integral(
     r0: Vector2<f64>,
     n_angle: usize,
@@ -758,7 +758,7 @@ fn reflected_fraction<Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
 /// The specular lobe alone integrates to `α(θ_o = θ_i) R_Fresnel` for a nearly smooth surface
 /// and a wide packet (w = 100 λ): an independent check of the lobe constant `2π|Σ|^{1/2} g`,
 /// with `R = (R_s + R_p)/2` from the textbook Fresnel formulas. Tolerance 1e-4 relative (the
-/// lobe's width in exit-tangent space is ~1/(k w) ≈ 1.6e-3, so cos θ_o and α vary across it by
+/// lobe's width in exit-tangent space is ~1/(k w) ≈ 1.6e-3, so `cos θ_o` and α vary across it by
 /// second-order amounts ~1e-6; the quadrature error is below that).
 #[test]
 fn specular_lobe_integrates_to_attenuated_fresnel_reflectance() {
@@ -856,7 +856,7 @@ fn energy_table(ti_deg: f64) -> Vec<(f64, f64, f64, bool)> {
 /// (75°, kσ = 0.1, w = 100λ: specular 0.99729 = α, scattered 0.00403 vs α v²σ² = 0.00267)
 /// ```
 /// Narrow coherence loses energy (the lobe spills past the horizon and is weighted by
-/// cos θ_o/cos θ_i); at grazing incidence the phase screen EXCEEDS 1 even inside the stated
+/// `cos θ_o/cos θ_i`); at grazing incidence the phase screen EXCEEDS 1 even inside the stated
 /// validity range — see `energy_at_grazing_incidence`.
 #[test]
 fn energy_reflected_fraction_table() {
@@ -874,7 +874,7 @@ fn energy_reflected_fraction_table() {
 
 /// The same bound at θi = 75°: FAILS (1.00132 at kσ = 0.1, w = 100λ; 1.00519 at kσ = 0.2), a
 /// limitation of the phase-screen pBSDF (`M = |r|² v² I`, no obliquity normalisation): the PSD
-/// lobe (width ~1/(kℓ) ≈ 0.08 in exit-tangent space) reaches from cos θ_o ≈ 0.26 toward the
+/// lobe (width ~1/(kℓ) ≈ 0.08 in exit-tangent space) reaches from `cos θ_o ≈ 0.26` toward the
 /// normal, where `cos θ_o/cos θ_i` and `v² ∝ (cos θ_i + cos θ_o)²` are larger, so the scattered
 /// part is 1.5× the energy-conserving first-order value `α v²σ²`. Run with `--ignored`.
 #[test]
@@ -974,7 +974,7 @@ fn fresnel_uses_rs_for_s_polarized_light() {
     }
 }
 
-/// A linear polarizer at θ (ConstantMueller of `JonesMatrix::linear_polarizer(θ)`) as the
+/// A linear polarizer at θ (`ConstantMueller` of `JonesMatrix::linear_polarizer(θ)`) as the
 /// specular pBSDF, on x̂-polarized light in the s/p frame: the output follows Malus `cos²θ`
 /// (a θ-instead-of-2θ bug would give `(1 + cos θ)/2`), and its Mueller matrix is the textbook
 /// `½[[1, c, s, 0], [c, c², cs, 0], [s, cs, s², 0], [0, 0, 0, 0]]`, `c = cos 2θ`, `s = sin 2θ`.
