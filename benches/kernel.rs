@@ -1,0 +1,262 @@
+//! Criterion benches of the S2.20 kernel (`gmueller::interaction`): every model level
+//! (Scalar/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD and the closed-form
+//! blur, Partial with a K-correlation PSD through Gauss–Hermite (orders 3, 5, 8) and through a
+//! Gaussian-mixture fit (8 and 16 components), f32 and f64; a classical incoherent polarized
+//! baseline (Fresnel Mueller × PSD at the half vector × Stokes, geometry precomputed the same
+//! way); and `Geometry` construction alone. Inputs are seeded (an LCG) and pass through
+//! `black_box`; each group also times one degenerate case (normal incidence, exact specular).
+//!
+//! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use gmueller::Real;
+use gmueller::frame::Frame;
+use gmueller::fresnel;
+use gmueller::interaction::{
+    CoherenceModel, FresnelReflection, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
+    PlaneWave, PolarizationModel, RayleighRice, RoughSurface, Scalar,
+};
+use gmueller::mueller::Mueller;
+use gmueller::packet::{CoherenceShape, WavePacket};
+use gmueller::psd::{BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Vector3};
+use num_complex::Complex;
+
+const N: usize = 64;
+
+/// A small LCG so the inputs are reproducible without a dependency.
+struct Lcg(u64);
+impl Lcg {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// One seeded scene: a packet and its geometry for an exit direction near the specular one
+/// (within ~15°), incidence up to 70°, packet frame turned from s/p, `Θ_x ≠ Θ_y`, realizable μ.
+struct Scene<T: Real> {
+    packet: WavePacket<T>,
+    geometry: Geometry<T>,
+}
+
+fn surface<T: Real>() -> Frame<T> {
+    Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap()
+}
+
+fn scene<T: Real>(theta_i: f64, theta_o: f64, phi_o: f64, psi: f64, w: f64) -> Scene<T> {
+    let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos()).map(T::lit);
+    let exit = Vector3::new(
+        theta_o.sin() * phi_o.cos(),
+        theta_o.sin() * phi_o.sin(),
+        theta_o.cos(),
+    )
+    .map(T::lit);
+    let frame = Frame::sp(travel, Vector3::z())
+        .unwrap()
+        .rotated(T::lit(psi));
+    let sx = CoherenceShape::new(Matrix2::new(w * w, 0.0, 0.0, w * w).map(T::lit)).unwrap();
+    let wy = 1.2 * w;
+    let sy = CoherenceShape::new(Matrix2::new(wy * wy, 0.0, 0.0, wy * wy).map(T::lit)).unwrap();
+    let stokes = Stokes::new(T::lit(1.0), T::lit(0.3), T::lit(0.2), T::lit(-0.3)).unwrap();
+    let packet = WavePacket::new(stokes, sx, sy, frame, T::lit(0.5)).unwrap();
+    let geometry = Geometry::for_packet(&packet, &surface(), exit).unwrap();
+    Scene { packet, geometry }
+}
+
+fn scenes<T: Real>() -> Vec<Scene<T>> {
+    let mut rng = Lcg(0x5eed);
+    (0..N)
+        .map(|_| {
+            let ti = rng.uniform() * 70f64.to_radians();
+            let to = (ti + (rng.uniform() - 0.5) * 30f64.to_radians())
+                .abs()
+                .min(1.4);
+            let po = (rng.uniform() - 0.5) * 0.6;
+            let psi = (rng.uniform() - 0.5) * 6.0;
+            let w = 1.0 + 20.0 * rng.uniform();
+            scene(ti, to, po, psi, w)
+        })
+        .collect()
+}
+
+/// Normal incidence, exact specular exit.
+fn degenerate<T: Real>() -> Scene<T> {
+    scene(0.0, 0.0, 0.0, 0.0, 5.0)
+}
+
+fn glass<T: Real, P>(psd: P) -> RoughSurface<P, FresnelReflection<T>, RayleighRice<T>> {
+    let eta = Complex::new(T::lit(1.5), T::zero());
+    RoughSurface {
+        psd,
+        specular: FresnelReflection::new(eta).unwrap(),
+        scatter: RayleighRice::new(eta).unwrap(),
+    }
+}
+
+fn bench_level<T, Pol, Coh, P, B>(
+    c: &mut Criterion,
+    group: &str,
+    name: &str,
+    blur: B,
+    material: &RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
+) where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel,
+    P: Psd<T, 2>,
+    B: BlurMethod<T, 2, P> + Clone,
+{
+    let mut g = c.benchmark_group(group);
+    let kernel = Kernel::<Pol, Coh, B>::new(blur);
+    let sc = scenes::<T>();
+    g.bench_function(BenchmarkId::new(name, "seeded"), |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i = (i + 1) & (N - 1);
+            let s = &sc[i];
+            black_box(kernel.evaluate(
+                black_box(material),
+                black_box(&s.packet),
+                black_box(&s.geometry),
+            ))
+        });
+    });
+    let d = degenerate::<T>();
+    g.bench_function(BenchmarkId::new(name, "normal-specular"), |b| {
+        b.iter(|| {
+            black_box(kernel.evaluate(
+                black_box(material),
+                black_box(&d.packet),
+                black_box(&d.geometry),
+            ))
+        });
+    });
+    g.finish();
+}
+
+fn levels_for<T: Real>(c: &mut Criterion, prec: &str) {
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let m = glass(psd);
+    let group = format!("kernel_gaussian/{prec}");
+    macro_rules! lv {
+        ($pol:ty, $coh:ty) => {
+            bench_level::<T, $pol, $coh, _, _>(
+                c,
+                &group,
+                concat!(stringify!($pol), "x", stringify!($coh)),
+                ClosedForm,
+                &m,
+            )
+        };
+    }
+    lv!(Scalar, PlaneWave);
+    lv!(Scalar, Partial);
+    lv!(Scalar, Incoherent);
+    lv!(OneShape, PlaneWave);
+    lv!(OneShape, Partial);
+    lv!(OneShape, Incoherent);
+    lv!(Full, PlaneWave);
+    lv!(Full, Partial);
+    lv!(Full, Incoherent);
+
+    // K-correlation (T = 4 µm², γ = 2.5) at the Full×Partial level.
+    let kc = KCorrelation::<T, 2>::new(T::lit(4e-4), T::lit(4.0), T::lit(2.5)).unwrap();
+    let mk = glass(kc);
+    let group = format!("kernel_kcorrelation/{prec}");
+    for order in [3usize, 5, 8] {
+        bench_level::<T, Full, Partial, _, _>(
+            c,
+            &group,
+            &format!("FullxPartial/GaussHermite{order}"),
+            GaussHermite::<T>::new(order).unwrap(),
+            &mk,
+        );
+    }
+    for comps in [8usize, 16] {
+        let (mix, err) = kc.mixture_fit(comps).unwrap();
+        eprintln!("K-correlation mixture fit, {comps} components: sup error / p(0) = {err:.2e}");
+        bench_level::<T, Full, Partial, _, _>(
+            c,
+            &group,
+            &format!("FullxPartial/Mixture{comps}"),
+            ClosedForm,
+            &glass(mix),
+        );
+    }
+}
+
+/// The classical incoherent polarized evaluation: `cos θ_o/λ² · M_Fresnel · S · 2π p(h_t)` with
+/// the Fresnel Mueller matrix at the same geometry (what a renderer without coherence computes).
+fn baseline_for<T: Real>(c: &mut Criterion, prec: &str) {
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let eta = Complex::new(T::lit(1.5), T::zero());
+    let sc = scenes::<T>();
+    let mut g = c.benchmark_group(format!("baseline/{prec}"));
+    let eval = |s: &Scene<T>| {
+        let geo = &s.geometry;
+        let m = Mueller::from_jones(&fresnel::reflection(geo.cos_i, eta));
+        let lambda = geo.wavelength();
+        let f = geo.cos_o / (lambda * lambda) * T::two_pi() * psd.value(&geo.h_t);
+        (m * s.packet.stokes()).vector() * f
+    };
+    g.bench_function(BenchmarkId::new("classical_fresnel_psd", "seeded"), |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i = (i + 1) & (N - 1);
+            black_box(eval(black_box(&sc[i])))
+        });
+    });
+    let d = degenerate::<T>();
+    g.bench_function(
+        BenchmarkId::new("classical_fresnel_psd", "normal-specular"),
+        |b| b.iter(|| black_box(eval(black_box(&d)))),
+    );
+    g.finish();
+}
+
+fn geometry_for<T: Real>(c: &mut Criterion, prec: &str) {
+    let sc = scenes::<T>();
+    let surf = surface::<T>();
+    let mut g = c.benchmark_group(format!("geometry/{prec}"));
+    g.bench_function(BenchmarkId::new("for_packet", "seeded"), |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i = (i + 1) & (N - 1);
+            let s = &sc[i];
+            black_box(Geometry::for_packet(
+                black_box(&s.packet),
+                black_box(&surf),
+                black_box(s.geometry.exit),
+            ))
+        });
+    });
+    let d = degenerate::<T>();
+    g.bench_function(BenchmarkId::new("for_packet", "normal-specular"), |b| {
+        b.iter(|| {
+            black_box(Geometry::for_packet(
+                black_box(&d.packet),
+                black_box(&surf),
+                black_box(d.geometry.exit),
+            ))
+        });
+    });
+    g.finish();
+}
+
+fn benches(c: &mut Criterion) {
+    levels_for::<f64>(c, "f64");
+    levels_for::<f32>(c, "f32");
+    baseline_for::<f64>(c, "f64");
+    baseline_for::<f32>(c, "f32");
+    geometry_for::<f64>(c, "f64");
+    geometry_for::<f32>(c, "f32");
+}
+
+criterion_group!(kernel, benches);
+criterion_main!(kernel);

@@ -1,0 +1,223 @@
+//! Verifies that the S2.20 kernel allocates nothing per evaluation: a counting global allocator
+//! (wrapping `std::alloc::System`) counts heap allocations across many evaluations at every
+//! level (Scalar/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD + `ClosedForm`
+//! and with a K-correlation PSD + Gauss–Hermite blur, plus `Mueller::from_jones`, frame changes
+//! and `Geometry::for_packet`; the count must be zero.
+//!
+//! The counting allocator needs `unsafe impl GlobalAlloc`, which the crate's
+//! `[lints.rust] unsafe_code = "forbid"` (Cargo `[lints]` apply to every target, tests included,
+//! and `forbid` cannot be overridden by `#[allow]`) rejects. The test is therefore compiled only
+//! with `--cfg gmueller_count_allocations`, which must come with `--cap-lints warn` while the lint
+//! is `forbid` (a separate target dir avoids rebuilding the main one):
+//! ```text
+//! CARGO_TARGET_DIR=target/alloc RUSTFLAGS="--cfg gmueller_count_allocations --cap-lints warn" \
+//!     cargo test --test allocation
+//! ```
+//! With the lint at `deny` instead, the `#![allow(unsafe_code, …)]` below suffices and the
+//! `cfg` gate can be removed so the test runs by default.
+#![allow(
+    unexpected_cfgs,
+    reason = "`gmueller_count_allocations` is set by hand (see the header)"
+)]
+#![cfg(gmueller_count_allocations)]
+#![allow(
+    unsafe_code,
+    reason = "a counting global allocator for this test only; it forwards to System"
+)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::hint::black_box;
+
+use gmueller::Real;
+use gmueller::frame::{Frame, frame_change_mueller, stokes_to_frame};
+use gmueller::fresnel;
+use gmueller::interaction::{
+    CoherenceModel, FresnelReflection, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
+    PlaneWave, PolarizationModel, RayleighRice, RoughSurface, Scalar,
+};
+use gmueller::mueller::Mueller;
+use gmueller::packet::{CoherenceShape, WavePacket};
+use gmueller::psd::{BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Vector3};
+use num_complex::Complex;
+
+struct Counting;
+
+thread_local! {
+    /// Allocations made by this thread (the harness's other threads allocate concurrently).
+    static THREAD_ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn record() {
+    // `try_with`: no count during thread-local destruction.
+    let _ = THREAD_ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
+
+// SAFETY: forwards every call unchanged to `System`, which upholds the `GlobalAlloc` contract;
+// the counter is a thread-local `Cell` with no effect on the returned memory.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        record();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        record();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        record();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations made by `f` on the calling thread.
+fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
+    let before = THREAD_ALLOCATIONS.with(Cell::get);
+    let r = f();
+    let after = THREAD_ALLOCATIONS.with(Cell::get);
+    (after - before, r)
+}
+
+struct Scene<T: Real> {
+    packet: WavePacket<T>,
+    surface: Frame<T>,
+    exits: Vec<Vector3<T>>,
+}
+
+fn scene<T: Real>() -> Scene<T> {
+    let ti = 0.6f64;
+    let travel = Vector3::new(ti.sin(), 0.0, -ti.cos()).map(T::lit);
+    let frame = Frame::sp(travel, Vector3::z())
+        .unwrap()
+        .rotated(T::lit(0.4));
+    let sx = CoherenceShape::new(Matrix2::new(9.0, 1.0, 1.0, 4.0).map(T::lit)).unwrap();
+    let sy = CoherenceShape::new(Matrix2::new(12.0, 0.0, 0.0, 6.0).map(T::lit)).unwrap();
+    let stokes = Stokes::new(T::lit(1.0), T::lit(0.2), T::lit(0.1), T::lit(-0.2)).unwrap();
+    let packet = WavePacket::new(stokes, sx, sy, frame, T::lit(0.5)).unwrap();
+    let exits = (0..50)
+        .map(|i| {
+            let t = 0.02 * i as f64;
+            let (to, po) = (0.3 + t, -0.5 + t);
+            Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(T::lit)
+        })
+        .collect();
+    Scene {
+        packet,
+        surface: Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap(),
+        exits,
+    }
+}
+
+fn run_level<T, Pol, Coh, P, B>(
+    name: &str,
+    kernel: &Kernel<Pol, Coh, B>,
+    material: &RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
+    s: &Scene<T>,
+) where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel,
+    P: Psd<T, 2>,
+    B: BlurMethod<T, 2, P>,
+{
+    let geometries: Vec<_> = s
+        .exits
+        .iter()
+        .map(|e| Geometry::for_packet(&s.packet, &s.surface, *e).unwrap())
+        .collect();
+    let (n, sum) = count(|| {
+        let mut acc = T::zero();
+        for _ in 0..20 {
+            for g in &geometries {
+                let r = kernel.evaluate(black_box(material), black_box(&s.packet), black_box(g));
+                acc += r.total().s0();
+            }
+        }
+        acc
+    });
+    assert!(sum.is_finite(), "{name}: finite results");
+    assert_eq!(n, 0, "{name}: {n} heap allocations in 1000 evaluations");
+}
+
+fn all_levels<T: Real>() {
+    let s = scene::<T>();
+    let eta = Complex::new(T::lit(1.5), T::zero());
+    let gaussian = RoughSurface {
+        psd: GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap(),
+        specular: FresnelReflection::new(eta).unwrap(),
+        scatter: RayleighRice::new(eta).unwrap(),
+    };
+    let kc = RoughSurface {
+        psd: KCorrelation::<T, 2>::new(T::lit(4e-4), T::lit(4.0), T::lit(2.5)).unwrap(),
+        specular: FresnelReflection::new(eta).unwrap(),
+        scatter: RayleighRice::new(eta).unwrap(),
+    };
+    let gh = GaussHermite::<T>::new(6).unwrap();
+    macro_rules! level {
+        ($pol:ty, $coh:ty) => {{
+            let name = concat!(stringify!($pol), "×", stringify!($coh));
+            run_level(
+                &format!("{name} Gaussian/ClosedForm"),
+                &Kernel::<$pol, $coh, ClosedForm>::new(ClosedForm),
+                &gaussian,
+                &s,
+            );
+            run_level(
+                &format!("{name} KCorrelation/GaussHermite"),
+                &Kernel::<$pol, $coh, GaussHermite<T>>::new(gh.clone()),
+                &kc,
+                &s,
+            );
+        }};
+    }
+    level!(Scalar, PlaneWave);
+    level!(Scalar, Partial);
+    level!(Scalar, Incoherent);
+    level!(OneShape, PlaneWave);
+    level!(OneShape, Partial);
+    level!(OneShape, Incoherent);
+    level!(Full, PlaneWave);
+    level!(Full, Partial);
+    level!(Full, Incoherent);
+
+    // The building blocks on their own.
+    let g0 = Geometry::for_packet(&s.packet, &s.surface, s.exits[3]).unwrap();
+    let (n, ok) = count(|| {
+        let mut ok = true;
+        for e in &s.exits {
+            ok &= Geometry::for_packet(black_box(&s.packet), &s.surface, *e).is_ok();
+            let m = Mueller::from_jones(&fresnel::reflection(black_box(g0.cos_i), eta));
+            let t = frame_change_mueller(s.packet.frame(), black_box(&g0.incident_sp));
+            let st = stokes_to_frame(&s.packet.stokes(), s.packet.frame(), &g0.incident_sp);
+            ok &= (m * t).matrix()[(0, 0)].is_finite() && st.s0().is_finite();
+            ok &= s.packet.rotated(black_box(T::lit(0.3))).sx().is_finite();
+        }
+        ok
+    });
+    assert!(ok);
+    assert_eq!(
+        n, 0,
+        "{n} allocations in geometry / from_jones / frame changes"
+    );
+}
+
+#[test]
+fn kernel_evaluation_allocates_nothing() {
+    // Sanity: the counter sees allocations.
+    let (n, v) = count(|| black_box(vec![1u8; 16]));
+    assert!(n >= 1 && v.len() == 16, "the counting allocator counts");
+    all_levels::<f64>();
+    all_levels::<f32>();
+}

@@ -1,0 +1,1073 @@
+//! Verifies physical laws of the S2.20 kernel (`gmueller::interaction`) against independent
+//! computations made in this file: the plane-wave level equals the classical evaluation
+//! `(cos θ_o/λ²) α M T S 2π p(h_t)` and Partial coherence tends to it (w → ∞) and to the
+//! Incoherent level (w → 0); the model levels agree when `Θ_x = Θ_y`; the diffraction term peaks
+//! at `h_t = 0` (the specular direction) and is even in `h_t`; Stokes validity is preserved
+//! (proptest, f64 and f32); Helmholtz reciprocity of the plane-wave Rayleigh–Rice BRDF; energy
+//! (hemispherical quadrature in exit-tangent coordinates) and the specular lobe's normalisation;
+//! the known bugs of the authors' renderers (frame identity, `R_s` for s light, Malus with 2θ);
+//! the documented geometry errors.
+//!
+//! Measured energy table (printed by `energy_reflected_fraction_table`, run with
+//! `cargo test --test interaction_laws energy -- --nocapture`): see that test's doc comment.
+
+mod common;
+
+use std::f64::consts::{PI, TAU};
+
+use common::{Tol, assert_all_close, assert_close};
+use gmueller::Real;
+use gmueller::error::Error;
+use gmueller::frame::{Frame, frame_change_mueller};
+use gmueller::interaction::{
+    CoherenceModel, ConstantMueller, FresnelReflection, Full, Geometry, Incoherent, Kernel,
+    OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave, PolarizationModel, RayleighRice,
+    RoughSurface, Scalar, surface_coherence_term, surface_inverse_coherence,
+};
+use gmueller::jones::JonesMatrix;
+use gmueller::mueller::Mueller;
+use gmueller::packet::{Channel, CoherenceShape, WavePacket};
+use gmueller::psd::{ClosedForm, GaussianPsd};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Vector2, Vector3, Vector4};
+use num_complex::Complex;
+use proptest::prelude::*;
+
+const DEG: f64 = PI / 180.0;
+
+// ------------------------------------------------------------------ scene helpers
+
+/// The surface z = 0, normal +ẑ, tangents (x̂, ŷ).
+fn surface<T: Real>() -> Frame<T> {
+    Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap()
+}
+
+/// Propagation direction of light arriving at polar angle `theta_i` in the x–z plane (from −x).
+fn travel<T: Real>(theta_i: f64) -> Vector3<T> {
+    Vector3::new(theta_i.sin(), 0.0, -theta_i.cos()).map(T::lit)
+}
+
+/// A unit direction above the surface: polar angle θ, azimuth φ (φ = 0 is the specular side).
+fn dir<T: Real>(theta: f64, phi: f64) -> Vector3<T> {
+    Vector3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    )
+    .map(T::lit)
+}
+
+/// An isotropic packet travelling along `travel(theta_i)` in its s/p frame turned by `psi`.
+fn packet(stokes: [f64; 4], width: f64, theta_i: f64, psi: f64, lambda: f64) -> WavePacket<f64> {
+    let frame = Frame::sp(travel::<f64>(theta_i), Vector3::z())
+        .unwrap()
+        .rotated(psi);
+    WavePacket::from_stokes(
+        Stokes::new(stokes[0], stokes[1], stokes[2], stokes[3]).unwrap(),
+        CoherenceShape::isotropic(width).unwrap(),
+        frame,
+        lambda,
+    )
+    .unwrap()
+}
+
+type Glass = RoughSurface<GaussianPsd<f64, 2>, FresnelReflection<f64>, RayleighRice<f64>>;
+
+fn glass(sigma: f64, ell: f64) -> Glass {
+    let eta = Complex::new(1.5, 0.0);
+    RoughSurface {
+        psd: GaussianPsd::isotropic(sigma, ell).unwrap(),
+        specular: FresnelReflection::new(eta).unwrap(),
+        scatter: RayleighRice::new(eta).unwrap(),
+    }
+}
+
+fn eval<Pol: PolarizationModel, Coh: CoherenceModel, Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
+    material: &RoughSurface<GaussianPsd<f64, 2>, Sp, Sc>,
+    packet: &WavePacket<f64>,
+    exit: Vector3<f64>,
+) -> gmueller::interaction::Response<f64> {
+    let g = Geometry::for_packet(packet, &surface(), exit).unwrap();
+    Kernel::<Pol, Coh, ClosedForm>::new(ClosedForm).evaluate(material, packet, &g)
+}
+
+fn rel_diff(a: &Vector4<f64>, b: &Vector4<f64>) -> f64 {
+    (a - b).norm() / b.norm()
+}
+
+/// Textbook Fresnel power reflectances of a dielectric (Hecht, Optics, eq. 4.42–4.43).
+fn fresnel_rs_rp(cos_i: f64, n: f64) -> (f64, f64) {
+    let sin2 = 1.0 - cos_i * cos_i;
+    let q = (n * n - sin2).sqrt(); // n cos θ_t
+    let rs = (cos_i - q) / (cos_i + q);
+    let rp = (n * n * cos_i - q) / (n * n * cos_i + q);
+    (rs * rs, rp * rp)
+}
+
+// ------------------------------------------------------------------ 1. limits and levels
+
+/// The plane-wave level against `(cos θ_o/λ²) α M_scat T S 2π p(h_t)` computed here: directions,
+/// `h_t`, `α` and the Gaussian PSD in closed form; `M` from the pBSDF's Jones matrix; `T` from
+/// `frame_change_mueller` with a packet frame turned away from the s/p frame.
+#[test]
+fn plane_wave_level_equals_classical_evaluation() {
+    let (lambda, sigma, ell) = (0.5, 0.03, 2.0);
+    let k = TAU / lambda;
+    let material = glass(sigma, ell);
+    let rr = material.scatter;
+    let cases = [
+        (30.0, 35.0, 10.0, 0.4, [1.0, 0.3, -0.5, 0.2]),
+        (0.0, 5.0, 80.0, -1.2, [2.0, 0.0, 0.0, 2.0]),
+        (60.0, 58.0, -3.0, 2.0, [1.0, -1.0, 0.0, 0.0]),
+        (75.0, 70.0, 175.0, 0.1, [1.0, 0.2, 0.2, 0.2]),
+        (45.0, 47.0, 0.0, 0.0, [1.0, 0.0, 0.0, 0.0]),
+    ];
+    for (ti, to, po, psi, s) in cases {
+        let (ti, to, po) = (ti * DEG, to * DEG, po * DEG);
+        let pk = packet(s, 7.0, ti, psi, lambda);
+        let exit = dir::<f64>(to, po);
+        let g = Geometry::for_packet(&pk, &surface(), exit).unwrap();
+        // Independent quantities.
+        let s_hat = -travel::<f64>(ti);
+        let (ci, co) = (s_hat.z, exit.z);
+        let h = (exit + s_hat) * k;
+        let ht = Vector2::new(h.x, h.y);
+        let alpha = (-(k * sigma * (ci + co)).powi(2)).exp();
+        let p = sigma * sigma * ell * ell * (-0.5 * ell * ell * ht.norm_squared()).exp();
+        let m = Mueller::from_jones(&rr.jones(&g)).matrix();
+        let t = frame_change_mueller(pk.frame(), &g.incident_sp).matrix();
+        let sv = Vector4::from(s);
+        let expected = m * t * sv * (co / (lambda * lambda) * alpha * TAU * p);
+        let what = format!("θi={ti:.3} θo={to:.3} φo={po:.3}");
+        let tol = Tol::new(1e-13 * expected.norm(), 1e-11);
+        let full = eval::<Full, PlaneWave, _, _>(&material, &pk, exit);
+        assert_all_close(
+            &format!("Full scattered {what}"),
+            full.scattered.vector().iter().copied(),
+            expected.iter().copied(),
+            tol,
+        );
+        assert_eq!(
+            full.specular.vector(),
+            Vector4::zeros(),
+            "no lobe for a plane wave"
+        );
+        assert_close("attenuation", full.attenuation, alpha, Tol::new(0.0, 1e-13));
+        let one = eval::<OneShape, PlaneWave, _, _>(&material, &pk, exit);
+        assert_all_close(
+            &format!("OneShape scattered {what}"),
+            one.scattered.vector().iter().copied(),
+            expected.iter().copied(),
+            tol,
+        );
+        // Scalar: M₀₀ S0 only.
+        let scalar = eval::<Scalar, PlaneWave, _, _>(&material, &pk, exit);
+        assert_close(
+            &format!("Scalar scattered {what}"),
+            scalar.scattered.s0(),
+            m[(0, 0)] * s[0] * co / (lambda * lambda) * alpha * TAU * p,
+            Tol::new(0.0, 1e-11),
+        );
+    }
+}
+
+/// The deviation of `Partial` (at the `OneShape` and `Full` levels) from `PlaneWave` as the width
+/// grows, and from `Incoherent` as it shrinks, printed and asserted monotone with a final bound.
+#[test]
+fn partial_coherence_tends_to_plane_wave_and_incoherent_limits() {
+    let (lambda, sigma, ell) = (0.5, 0.02, 2.0);
+    let material = glass(sigma, ell);
+    let (ti, to, po) = (40.0 * DEG, 44.0 * DEG, 6.0 * DEG);
+    let exit = dir::<f64>(to, po);
+    let frame = Frame::sp(travel::<f64>(ti), Vector3::z())
+        .unwrap()
+        .rotated(0.3);
+    // Θ_y = 1.3² Θ_x; correlation inside the realizability bound.
+    let make = |w: f64| {
+        let (wx, wy) = (w, 1.3 * w);
+        let sx = CoherenceShape::isotropic(wx).unwrap();
+        let sy = CoherenceShape::isotropic(wy).unwrap();
+        WavePacket::new(
+            Stokes::new(1.0, 0.2, 0.3, -0.2).unwrap(),
+            sx,
+            sy,
+            frame,
+            lambda,
+        )
+        .unwrap()
+    };
+    fn level<Pol: PolarizationModel>(
+        material: &Glass,
+        make: &dyn Fn(f64) -> WavePacket<f64>,
+        exit: Vector3<f64>,
+        name: &str,
+    ) {
+        let mut last = f64::INFINITY;
+        let mut dev = f64::NAN;
+        for w in [3.0, 30.0, 300.0, 3e3, 3e4] {
+            let pk = make(w);
+            let part = eval::<Pol, Partial, _, _>(material, &pk, exit);
+            let pw = eval::<Pol, PlaneWave, _, _>(material, &pk, exit);
+            dev = rel_diff(&part.scattered.vector(), &pw.scattered.vector());
+            println!("{name}: w = {w:>7} µm  |Partial − PlaneWave|/|PlaneWave| = {dev:.3e}");
+            assert!(
+                dev < last,
+                "{name}: deviation must shrink ({dev:e} after {last:e})"
+            );
+            last = dev;
+        }
+        assert!(dev < 1e-6, "{name}: deviation at w = 3e4 µm is {dev:e}");
+        let mut last = f64::INFINITY;
+        for w in [0.5, 0.1, 0.02, 0.004] {
+            let pk = make(w);
+            let part = eval::<Pol, Partial, _, _>(material, &pk, exit);
+            let inc = eval::<Pol, Incoherent, _, _>(material, &pk, exit);
+            dev = rel_diff(&part.scattered.vector(), &inc.scattered.vector());
+            println!("{name}: w = {w:>7} µm  |Partial − Incoherent|/|Incoherent| = {dev:.3e}");
+            assert!(
+                dev < last,
+                "{name}: deviation must shrink ({dev:e} after {last:e})"
+            );
+            // The specular lobe is the same function at both levels.
+            assert_all_close(
+                "specular Partial vs Incoherent",
+                part.specular.vector().iter().copied(),
+                inc.specular.vector().iter().copied(),
+                Tol::new(0.0, 1e-13),
+            );
+            last = dev;
+        }
+        // Relative deviation ~ (w/ℓ)²: 4e-6 at w = 0.004 µm, ℓ = 2 µm.
+        assert!(dev < 1e-4, "{name}: deviation at w = 0.004 µm is {dev:e}");
+    }
+    level::<OneShape>(&material, &make, exit, "OneShape");
+    level::<Full>(&material, &make, exit, "Full");
+}
+
+/// With `Θ_x = Θ_y`: `Full` equals `OneShape` to rounding; `Scalar` equals S0 of `OneShape` for
+/// unpolarized light (any M), and for any light when M is a multiple of the identity (the scalar
+/// level ignores diattenuation by design: it keeps `M₀₀ S0`).
+#[test]
+fn levels_agree_for_a_single_shape() {
+    let lambda = 0.6;
+    let material = glass(0.02, 1.5);
+    let screen = RoughSurface {
+        psd: GaussianPsd::isotropic(0.02, 1.5).unwrap(),
+        specular: ConstantMueller(
+            Mueller::from_matrix(nalgebra::Matrix4::identity() * 0.8).unwrap(),
+        ),
+        scatter: PhaseScreen::new(0.9).unwrap(),
+    };
+    for (ti, to, po, w, psi) in [
+        (20.0, 21.0, 1.0, 4.0, 0.7),
+        (0.0, 1.0, 90.0, 1.0, -0.3),
+        (70.0, 69.5, 0.5, 30.0, 2.5),
+    ] {
+        let (ti, to, po) = (ti * DEG, to * DEG, po * DEG);
+        let exit = dir::<f64>(to, po);
+        let pol = packet([1.0, 0.3, 0.4, -0.5], w, ti, psi, lambda);
+        let unpol = packet([1.0, 0.0, 0.0, 0.0], w, ti, psi, lambda);
+        macro_rules! coh {
+            ($coh:ty) => {{
+                let full = eval::<Full, $coh, _, _>(&material, &pol, exit);
+                let one = eval::<OneShape, $coh, _, _>(&material, &pol, exit);
+                for (a, b, what) in [
+                    (full.specular, one.specular, "specular"),
+                    (full.scattered, one.scattered, "scattered"),
+                ] {
+                    let scale = b.vector().norm();
+                    assert_all_close(
+                        &format!("Full vs OneShape {what} {}", stringify!($coh)),
+                        a.vector().iter().copied(),
+                        b.vector().iter().copied(),
+                        Tol::new(1e-14 * scale, 1e-13),
+                    );
+                }
+                let one = eval::<OneShape, $coh, _, _>(&material, &unpol, exit);
+                let sc = eval::<Scalar, $coh, _, _>(&material, &unpol, exit);
+                assert_close(
+                    "Scalar vs OneShape S0 (spec)",
+                    sc.specular.s0(),
+                    one.specular.s0(),
+                    Tol::new(1e-300, 1e-13),
+                );
+                assert_close(
+                    "Scalar vs OneShape S0 (scat)",
+                    sc.scattered.s0(),
+                    one.scattered.s0(),
+                    Tol::new(1e-300, 1e-13),
+                );
+                let one = eval::<OneShape, $coh, _, _>(&screen, &pol, exit);
+                let sc = eval::<Scalar, $coh, _, _>(&screen, &pol, exit);
+                assert_close(
+                    "Scalar vs OneShape S0 (screen spec)",
+                    sc.specular.s0(),
+                    one.specular.s0(),
+                    Tol::new(1e-300, 1e-13),
+                );
+                assert_close(
+                    "Scalar vs OneShape S0 (screen scat)",
+                    sc.scattered.s0(),
+                    one.scattered.s0(),
+                    Tol::new(1e-300, 1e-13),
+                );
+            }};
+        }
+        coh!(PlaneWave);
+        coh!(Partial);
+        coh!(Incoherent);
+    }
+}
+
+// ------------------------------------------------------------------ 2. the lobe's centre
+
+/// The diffraction term `𝒟` (`surface_coherence_term`) and the specular weight, scanned over exit
+/// directions in the plane of incidence (0.01° steps), peak at the specular direction, and are even
+/// in `h_t`. Also prints where the whole lobe (`cos θ_o` and the pBSDF included) peaks.
+#[test]
+fn diffraction_term_is_centred_on_the_specular_direction() {
+    let lambda = 0.5;
+    let k = TAU / lambda;
+    let step = 0.01;
+    for (ti_deg, w, sigma, ell) in [
+        (30.0, 2.0, 0.01, 2.0),
+        (60.0, 0.7, 0.05, 0.5),
+        (10.0, 20.0, 0.02, 5.0),
+        (75.0, 5.0, 0.02, 1.0),
+    ] {
+        let ti = ti_deg * DEG;
+        let material = glass(sigma, ell);
+        let pk = packet([1.0, 0.0, 0.0, 0.0], w, ti, 0.0, lambda);
+        let xi = surface_inverse_coherence(&pk, Channel::Half, &surface()).unwrap();
+        let (mut best_term, mut best_spec, mut best_full) =
+            ((f64::MIN, 0.0), (f64::MIN, 0.0), (f64::MIN, 0.0));
+        let n = (178.0 / step) as i64;
+        for i in 0..=n {
+            let to_deg = -89.0 + i as f64 * step;
+            let exit = Vector3::new((to_deg * DEG).sin(), 0.0, (to_deg * DEG).cos());
+            let g = Geometry::for_packet(&pk, &surface(), exit).unwrap();
+            let term = surface_coherence_term(
+                &material.psd,
+                &ClosedForm,
+                &pk,
+                Channel::Half,
+                &surface(),
+                &g.h_t,
+            );
+            let spec = Partial::specular_weight(Some(&xi), &g.h_t);
+            let full = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm)
+                .evaluate(&material, &pk, &g)
+                .total()
+                .s0();
+            for (best, v) in [
+                (&mut best_term, term),
+                (&mut best_spec, spec),
+                (&mut best_full, full),
+            ] {
+                if v > best.0 {
+                    *best = (v, to_deg);
+                }
+            }
+        }
+        for (what, best) in [("𝒟", best_term), ("specular weight", best_spec)] {
+            assert!(
+                (best.1 - ti_deg).abs() <= step * 0.5 + 1e-9,
+                "{what} peaks at θo = {}°, specular is {ti_deg}°",
+                best.1
+            );
+        }
+        println!(
+            "θi = {ti_deg}°, w = {w} µm, σ = {sigma} µm, ℓ = {ell} µm: 𝒟 peaks at {:.2}°, \
+             the full lobe (Full×Partial, Fresnel+RR, unpolarized) at {:.2}°",
+            best_term.1, best_full.1
+        );
+        // Evenness in h_t: exit directions with h_t = ±a x̂ in the plane of incidence, and
+        // arbitrary ±h_t vectors off the plane.
+        for a in [0.05 * k, 0.2 * k, 0.4 * k] {
+            let so = |sign: f64| ti.sin() + sign * a / k;
+            if so(1.0).abs() >= 1.0 || so(-1.0).abs() >= 1.0 {
+                continue;
+            }
+            let term_at = |sin_o: f64| {
+                let exit = Vector3::new(sin_o, 0.0, (1.0 - sin_o * sin_o).sqrt());
+                let g = Geometry::for_packet(&pk, &surface(), exit).unwrap();
+                assert_close(
+                    "h_t.x",
+                    g.h_t.x,
+                    (sin_o - ti.sin()) * k,
+                    Tol::new(1e-12 * k, 0.0),
+                );
+                surface_coherence_term(
+                    &material.psd,
+                    &ClosedForm,
+                    &pk,
+                    Channel::Half,
+                    &surface(),
+                    &g.h_t,
+                )
+            };
+            assert_close(
+                "𝒟(+a) vs 𝒟(−a)",
+                term_at(so(1.0)),
+                term_at(so(-1.0)),
+                Tol::new(1e-300, 1e-12),
+            );
+        }
+        for h in [
+            Vector2::new(1.0, 2.0),
+            Vector2::new(-3.0, 0.5),
+            Vector2::new(0.2, -4.0),
+        ] {
+            let t = |h: Vector2<f64>| {
+                surface_coherence_term(
+                    &material.psd,
+                    &ClosedForm,
+                    &pk,
+                    Channel::Half,
+                    &surface(),
+                    &h,
+                )
+            };
+            assert_close("𝒟(h) vs 𝒟(−h)", t(h), t(-h), Tol::new(1e-300, 1e-12));
+            assert_close(
+                "lobe(h) vs lobe(−h)",
+                Partial::specular_weight(Some(&xi), &h),
+                Partial::specular_weight(Some(&xi), &(-h)),
+                Tol::new(1e-300, 1e-12),
+            );
+        }
+    }
+}
+
+// ------------------------------------------------------------------ 3. Stokes validity
+
+#[derive(Debug, Clone)]
+struct ValidityCase {
+    stokes: [f64; 4],
+    shape_x: Matrix2<f64>,
+    shape_y: Matrix2<f64>,
+    theta_i: f64,
+    theta_o: f64,
+    phi_o: f64,
+    psi: f64,
+    sigma: f64,
+    ell: f64,
+    lambda: f64,
+    metal: bool,
+}
+
+fn shape() -> impl Strategy<Value = Matrix2<f64>> {
+    (0.3..50.0f64, 0.3..50.0f64, -PI..PI).prop_map(|(a, b, r)| {
+        let (s, c) = r.sin_cos();
+        let rot = Matrix2::new(c, -s, s, c);
+        rot * Matrix2::new(a * a, 0.0, 0.0, b * b) * rot.transpose()
+    })
+}
+
+fn validity_case() -> impl Strategy<Value = ValidityCase> {
+    let theta_i = prop_oneof![Just(0.0), 0.0..1e-6f64, 0.0..(85.0 * DEG)];
+    (
+        common::stokes_vector(),
+        shape(),
+        shape(),
+        theta_i,
+        0.0..(85.0 * DEG),
+        -PI..PI,
+        -PI..PI,
+        (1e-3..0.2f64, 0.3..5.0f64, 0.4..1.0f64, any::<bool>()),
+    )
+        .prop_map(
+            |(s, shape_x, shape_y, theta_i, theta_o, phi_o, psi, (sigma, ell, lambda, metal))| {
+                // Scale the correlation into the realizability bound |μ|² ≤ √(|Θx||Θy|)/|Θ½|.
+                let bound = (shape_x.determinant() * shape_y.determinant()).sqrt()
+                    / ((shape_x + shape_y) * 0.5).determinant();
+                let four_sxsy = s[0] * s[0] - s[1] * s[1];
+                let mu2 = (s[2] * s[2] + s[3] * s[3]) / four_sxsy.max(1e-300);
+                let scale = if mu2 > bound * (1.0 - 1e-3) {
+                    (bound * (1.0 - 1e-3) / mu2).sqrt()
+                } else {
+                    1.0
+                };
+                ValidityCase {
+                    stokes: [s[0], s[1], s[2] * scale, s[3] * scale],
+                    shape_x,
+                    shape_y,
+                    theta_i,
+                    theta_o,
+                    phi_o,
+                    psi,
+                    sigma,
+                    ell,
+                    lambda,
+                    metal,
+                }
+            },
+        )
+}
+
+/// Checks `S0 ≥ 0` and `|S| ≤ S0` within `rel` (relative; `abs` for outputs that underflowed),
+/// for every part of every level.
+fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), TestCaseError> {
+    let lit = |m: Matrix2<f64>| m.map(T::lit);
+    let frame = Frame::sp(travel::<T>(c.theta_i), Vector3::z())
+        .unwrap()
+        .rotated(T::lit(c.psi));
+    let s = c.stokes.map(T::lit);
+    let stokes = Stokes::new(s[0], s[1], s[2], s[3]).unwrap();
+    let pk = WavePacket::new(
+        stokes,
+        CoherenceShape::new(lit(c.shape_x)).unwrap(),
+        CoherenceShape::new(lit(c.shape_y)).unwrap(),
+        frame,
+        T::lit(c.lambda),
+    )
+    .unwrap();
+    let eta = if c.metal {
+        Complex::new(T::lit(0.18), T::lit(3.0))
+    } else {
+        Complex::new(T::lit(1.5), T::zero())
+    };
+    let material = RoughSurface {
+        psd: GaussianPsd::<T, 2>::isotropic(T::lit(c.sigma), T::lit(c.ell)).unwrap(),
+        specular: FresnelReflection::new(eta).unwrap(),
+        scatter: RayleighRice::new(eta).unwrap(),
+    };
+    let g = Geometry::for_packet(&pk, &surface(), dir::<T>(c.theta_o, c.phi_o)).unwrap();
+    let check = |what: &str, st: Stokes<T>| -> Result<(), TestCaseError> {
+        // Scale before squaring: outputs of ~1e-162 would square into subnormals.
+        let raw = st.vector().map(|x| x.to_f64());
+        let scale = raw.amax();
+        let v = if scale > 0.0 { raw / scale } else { raw };
+        let pol = (v[1] * v[1] + v[2] * v[2] + v[3] * v[3]).sqrt();
+        prop_assert!(
+            raw.iter().all(|x| x.is_finite()),
+            "{what}: non-finite {raw:?}"
+        );
+        prop_assert!(raw[0] >= -abs, "{what}: S0 < 0: {raw:?}");
+        // In units of the largest component: |S| ≤ S0 (1 + rel), or all below `abs`.
+        prop_assert!(
+            pol <= v[0] * (1.0 + rel) || scale <= abs,
+            "{what}: |S| > S0: {raw:?} (|S|/S0 − 1 = {:e})",
+            pol / v[0] - 1.0
+        );
+        Ok(())
+    };
+    macro_rules! level {
+        ($pol:ty, $coh:ty) => {{
+            let r = Kernel::<$pol, $coh, ClosedForm>::new(ClosedForm).evaluate(&material, &pk, &g);
+            let name = concat!(stringify!($pol), "×", stringify!($coh));
+            check(&format!("{name} specular"), r.specular)?;
+            check(&format!("{name} scattered"), r.scattered)?;
+            check(&format!("{name} total"), r.total())?;
+        }};
+    }
+    level!(Full, Partial);
+    level!(Full, Incoherent);
+    level!(Full, PlaneWave);
+    level!(OneShape, Partial);
+    level!(Scalar, Partial);
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// f64: `S0 ≥ |S|` within 1e-9 relative (abs 1e-300 for underflowed outputs).
+    #[test]
+    fn stokes_validity_is_preserved_f64(c in validity_case()) {
+        check_validity::<f64>(&c, 1e-9, 1e-300)?;
+    }
+
+    /// f32: within 1e-4 relative (abs 1e-30).
+    #[test]
+    fn stokes_validity_is_preserved_f32(c in validity_case()) {
+        check_validity::<f32>(&c, 1e-4, 1e-30)?;
+    }
+}
+
+// ------------------------------------------------------------------ 4. reciprocity
+
+/// The plane-wave scalar BRDF `f = L/(S0 cos θ_i)` for light from `src` (toward the source)
+/// leaving along `out`.
+fn scalar_brdf<Sc: Pbsdf<f64>>(scatter: Sc, src: Vector3<f64>, out: Vector3<f64>) -> f64 {
+    let lambda = 0.5;
+    let material = RoughSurface {
+        psd: GaussianPsd::isotropic(0.01, 1.0).unwrap(),
+        specular: FresnelReflection::new(Complex::new(1.5, 0.0)).unwrap(),
+        scatter,
+    };
+    let frame = Frame::sp(-src, Vector3::z()).unwrap();
+    let pk = WavePacket::from_stokes(
+        Stokes::unpolarized(1.0).unwrap(),
+        CoherenceShape::isotropic(10.0).unwrap(),
+        frame,
+        lambda,
+    )
+    .unwrap();
+    let r = eval::<Scalar, PlaneWave, _, _>(&material, &pk, out);
+    r.scattered.s0() / src.z
+}
+
+/// Helmholtz reciprocity `f(ŝ → r̂) = f(r̂ → ŝ)` of the plane-wave Rayleigh–Rice BRDF holds to
+/// 1e-12. The phase screen is *not* reciprocal as a BRDF: its `M = |r|² v² I` lacks the
+/// `cos θ_i` obliquity factor that the Rayleigh–Rice Jones matrix carries (`2k cos θ_i`), so
+/// `f(ŝ → r̂)/f(r̂ → ŝ) = (cos θ_o/cos θ_i)²` exactly — asserted here as the model's property
+/// (the Kirchhoff phase-screen, like the original Harvey–Shack model, is not reciprocal).
+#[test]
+fn helmholtz_reciprocity_of_the_plane_wave_brdf() {
+    let rr = RayleighRice::new(Complex::new(1.5, 0.0)).unwrap();
+    let metal = RayleighRice::new(Complex::new(0.18, 3.0)).unwrap();
+    let screen = PhaseScreen::new(1.0).unwrap();
+    for (ta, pa, tb, pb) in [
+        (30.0, 180.0, 40.0, 10.0),
+        (10.0, 170.0, 70.0, -30.0),
+        (60.0, 200.0, 5.0, 90.0),
+        (80.0, 135.0, 20.0, 0.0),
+    ] {
+        let (a, b) = (
+            dir::<f64>(ta * DEG, pa * DEG),
+            dir::<f64>(tb * DEG, pb * DEG),
+        );
+        for (name, f_ab, f_ba) in [
+            ("RR glass", scalar_brdf(rr, a, b), scalar_brdf(rr, b, a)),
+            (
+                "RR metal",
+                scalar_brdf(metal, a, b),
+                scalar_brdf(metal, b, a),
+            ),
+        ] {
+            assert!(f_ab > 0.0, "{name}: positive BRDF");
+            assert_close(
+                &format!("{name} reciprocity {ta},{pa} ↔ {tb},{pb}"),
+                f_ab,
+                f_ba,
+                Tol::new(0.0, 1e-12),
+            );
+        }
+        let (f_ab, f_ba) = (scalar_brdf(screen, a, b), scalar_brdf(screen, b, a));
+        let expected = (b.z / a.z).powi(2);
+        println!(
+            "phase screen: f(a→b)/f(b→a) = {:.6} (θa = {ta}°, θb = {tb}°)",
+            f_ab / f_ba
+        );
+        assert_close(
+            "phase-screen reciprocity ratio",
+            f_ab / f_ba,
+            expected,
+            Tol::new(0.0, 1e-12),
+        );
+    }
+}
+
+// ------------------------------------------------------------------ 5. energy
+
+/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the Legendre recurrence).
+fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut x = vec![0.0; n];
+    let mut w = vec![0.0; n];
+    for i in 0..n {
+        let mut z = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut dp = 0.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, z);
+            for j in 2..=n {
+                let p2 = ((2 * j - 1) as f64 * z * p1 - (j - 1) as f64 * p0) / j as f64;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
+            let dz = p1 / dp;
+            z -= dz;
+            if dz.abs() < 1e-15 {
+                break;
+            }
+        }
+        x[i] = z;
+        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
+    (x, w)
+}
+
+/// `∫ f(r̂) d²r_t` over the exit hemisphere `|r_t| < 1` (= `∫ f cos θ_o dω`), in polar coordinates
+/// centred on the specular point `r_t0`: trapezoid in the angle, Gauss–Legendre on radial panels
+/// refined geometrically toward the centre (narrow lobes) and toward the rim (the `√` of `cos θ_o`).
+fn hemisphere_integral(
+    r0: Vector2<f64>,
+    n_angle: usize,
+    f: &mut dyn FnMut(Vector3<f64>) -> [f64; 2],
+) -> [f64; 2] {
+    let (gx, gw) = gauss_legendre(12);
+    let mut total = [0.0; 2];
+    for j in 0..n_angle {
+        let psi = TAU * j as f64 / n_angle as f64;
+        let u = Vector2::new(psi.cos(), psi.sin());
+        let b = r0.dot(&u);
+        let rho_max = -b + (b * b + 1.0 - r0.norm_squared()).sqrt();
+        let mut breaks: Vec<f64> = vec![0.0, rho_max];
+        for m in 1..=26 {
+            breaks.push(rho_max * 0.5f64.powi(m));
+        }
+        for m in 2..=14 {
+            breaks.push(rho_max * (1.0 - 0.5f64.powi(m)));
+        }
+        breaks.sort_by(f64::total_cmp);
+        let mut radial = [0.0; 2];
+        for pair in breaks.windows(2) {
+            let (a, c) = (pair[0], pair[1]);
+            let (mid, half) = ((a + c) * 0.5, (c - a) * 0.5);
+            for (x, w) in gx.iter().zip(&gw) {
+                let rho = mid + half * x;
+                let rt = r0 + u * rho;
+                let cz2 = 1.0 - rt.norm_squared();
+                if cz2 <= 0.0 {
+                    continue;
+                }
+                let v = f(Vector3::new(rt.x, rt.y, cz2.sqrt()));
+                for (acc, v) in radial.iter_mut().zip(v) {
+                    *acc += w * half * rho * v;
+                }
+            }
+        }
+        for (t, r) in total.iter_mut().zip(radial) {
+            *t += r * TAU / n_angle as f64;
+        }
+    }
+    total
+}
+
+/// Reflected fractions (specular, scattered) of unpolarized light: `∫ L cos θ_o dω / (S0 cos θ_i)`.
+fn reflected_fraction<Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
+    material: &RoughSurface<GaussianPsd<f64, 2>, Sp, Sc>,
+    theta_i: f64,
+    width: f64,
+    lambda: f64,
+) -> (f64, f64) {
+    let pk = packet([1.0, 0.0, 0.0, 0.0], width, theta_i, 0.0, lambda);
+    let r0 = Vector2::new(theta_i.sin(), 0.0);
+    let kernel = Kernel::<OneShape, Partial, ClosedForm>::new(ClosedForm);
+    let [spec, scat] = hemisphere_integral(r0, 96, &mut |exit| {
+        let Ok(g) = Geometry::for_packet(&pk, &surface(), exit) else {
+            return [0.0, 0.0];
+        };
+        let r = kernel.evaluate(material, &pk, &g);
+        [r.specular.s0(), r.scattered.s0()]
+    });
+    (spec / theta_i.cos(), scat / theta_i.cos())
+}
+
+/// The specular lobe alone integrates to `α(θ_o = θ_i) R_Fresnel` for a nearly smooth surface
+/// and a wide packet (w = 100 λ): an independent check of the lobe constant `2π|Σ|^{1/2} g`,
+/// with `R = (R_s + R_p)/2` from the textbook Fresnel formulas. Tolerance 1e-4 relative (the
+/// lobe's width in exit-tangent space is ~1/(k w) ≈ 1.6e-3, so `cos θ_o` and α vary across it by
+/// second-order amounts ~1e-6; the quadrature error is below that).
+#[test]
+fn specular_lobe_integrates_to_attenuated_fresnel_reflectance() {
+    let lambda = 0.5;
+    let k = TAU / lambda;
+    for ti_deg in [0.0, 30.0, 60.0] {
+        let ti = ti_deg * DEG;
+        let sigma = 1e-3;
+        let material = glass(sigma, 2.0);
+        let (spec, _) = reflected_fraction(&material, ti, 100.0 * lambda, lambda);
+        let (rs, rp) = fresnel_rs_rp(ti.cos(), 1.5);
+        let alpha = (-(2.0 * k * sigma * ti.cos()).powi(2)).exp();
+        let expected = alpha * (rs + rp) * 0.5;
+        println!("θi = {ti_deg}°: ∫specular = {spec:.8e}, α R = {expected:.8e}");
+        assert_close(
+            &format!("specular fraction θi = {ti_deg}°"),
+            spec,
+            expected,
+            Tol::new(0.0, 1e-4),
+        );
+    }
+}
+
+/// Prints the table of total reflected fractions at incidence `theta_i` and returns, per
+/// (kσ, w/λ), the total and whether the case lies within the first-order validity range
+/// `kσ (cos θ_i + 1) < 0.5` (every exit direction).
+fn energy_table(ti_deg: f64) -> Vec<(f64, f64, f64, bool)> {
+    let lambda = 0.5;
+    let k = TAU / lambda;
+    let ell = 2.0 * lambda;
+    let widths = [0.5, 1.0, 3.0, 10.0, 30.0, 100.0];
+    let ksigmas = [0.01, 0.03, 0.1, 0.2, 0.3, 0.5, 1.0];
+    let ti = ti_deg * DEG;
+    let mut out = Vec::new();
+    println!(
+        "\nθi = {ti_deg}°: total (specular + scattered) reflected fraction, phase screen |r|² = 1"
+    );
+    print!("{:>8}", "kσ \\ w/λ");
+    for w in widths {
+        print!("{w:>22}");
+    }
+    println!();
+    for ks in ksigmas {
+        let sigma = ks / k;
+        let screen = RoughSurface {
+            psd: GaussianPsd::isotropic(sigma, ell).unwrap(),
+            specular: ConstantMueller(Mueller::identity()),
+            scatter: PhaseScreen::new(1.0).unwrap(),
+        };
+        let glass = glass(sigma, ell);
+        let valid = ks * (ti.cos() + 1.0) < 0.5;
+        print!("{ks:>8}");
+        for w in widths {
+            let (s, d) = reflected_fraction(&screen, ti, w * lambda, lambda);
+            let (gs, gd) = reflected_fraction(&glass, ti, w * lambda, lambda);
+            print!("  {:.4} ({s:.3}+{d:.3})", s + d);
+            assert!(
+                gs + gd <= 1.0,
+                "glass reflects more than it receives: {}",
+                gs + gd
+            );
+            out.push((ks, w, s + d, valid));
+        }
+        println!("{}", if valid { "" } else { "   (outside validity)" });
+    }
+    out
+}
+
+/// Energy: the total reflected fraction `∫ (L_spec + L_scat) cos θ_o dω / (S0 cos θ_i)` of
+/// unpolarized light on a lossless phase screen (`|r|² = 1`, mirror specular part), Gaussian PSD
+/// (ℓ = 2λ, λ = 0.5 µm), OneShape×Partial (= Full for unpolarized light), over kσ and the
+/// coherence width w, at θi = 0° and 45°; asserted ≤ 1 + 1e-5 where the first-order model is
+/// valid (`kσ (cos θ_i + 1) < 0.5`). Glass (Fresnel + Rayleigh–Rice) must stay ≤ 1 everywhere.
+/// The quadrature is converged to ~1e-8 (doubling the angles and going from 12 to 20
+/// Gauss–Legendre points per panel changed no printed digit of the 75° case below).
+///
+/// Measured (`cargo test --test interaction_laws energy -- --nocapture --include-ignored`),
+/// total fraction, rows kσ, columns w/λ = 0.5, 1, 3, 10, 30, 100:
+/// ```text
+/// θi = 0°   0.01  0.8825 0.9740 0.9972 0.9997 1.0000 1.0000
+///           0.1   0.8815 0.9728 0.9959 0.9985 0.9987 0.9987
+///           0.2   0.8724 0.9617 0.9842 0.9867 0.9869 0.9869
+///           0.3   0.8413 0.9236 0.9438 0.9460 0.9462 0.9462   (outside validity)
+///           1     0.1124 0.0979 0.0931 0.0926 0.0925 0.0925   (outside validity)
+/// θi = 45°  0.01  0.7751 0.9412 0.9943 0.9995 0.9999 1.0000
+///           0.2   0.7720 0.9369 0.9896 0.9948 0.9952 0.9953
+///           0.5   0.6982 0.8494 0.8969 0.9015 0.9019 0.9020   (outside validity)
+/// θi = 75°  0.01  0.6015 0.7276 0.9500 0.9962 0.9996 1.0000
+///           0.03  0.6016 0.7277 0.9501 0.9963 0.9997 1.0001
+///           0.1   0.6023 0.7289 0.9514 0.9975 1.0009 1.0013
+///           0.2   0.6047 0.7327 0.9554 1.0014 1.0048 1.0052
+///           0.3   0.6081 0.7384 0.9615 1.0072 1.0106 1.0110
+///           0.5   0.6148 0.7522 0.9759 1.0208 1.0240 1.0244   (outside validity)
+///           1     0.5893 0.7485 0.9674 1.0074 1.0103 1.0106   (outside validity)
+/// (75°, kσ = 0.1, w = 100λ: specular 0.99729 = α, scattered 0.00403 vs α v²σ² = 0.00267)
+/// ```
+/// Narrow coherence loses energy (the lobe spills past the horizon and is weighted by
+/// `cos θ_o/cos θ_i`); at grazing incidence the phase screen EXCEEDS 1 even inside the stated
+/// validity range — see `energy_at_grazing_incidence`.
+#[test]
+fn energy_reflected_fraction_table() {
+    for ti_deg in [0.0, 45.0] {
+        for (ks, w, total, valid) in energy_table(ti_deg) {
+            if valid {
+                assert!(
+                    total <= 1.0 + 1e-5,
+                    "θi = {ti_deg}°, kσ = {ks}, w = {w}λ: reflected fraction {total} > 1"
+                );
+            }
+        }
+    }
+}
+
+/// The same bound at θi = 75°: FAILS (1.00132 at kσ = 0.1, w = 100λ; 1.00519 at kσ = 0.2), a
+/// limitation of the phase-screen pBSDF (`M = |r|² v² I`, no obliquity normalisation): the PSD
+/// lobe (width ~1/(kℓ) ≈ 0.08 in exit-tangent space) reaches from `cos θ_o ≈ 0.26` toward the
+/// normal, where `cos θ_o/cos θ_i` and `v² ∝ (cos θ_i + cos θ_o)²` are larger, so the scattered
+/// part is 1.5× the energy-conserving first-order value `α v²σ²`. Run with `--ignored`.
+#[test]
+#[ignore = "known model limitation: the lossless phase screen reflects > 1 at θi = 75° (see doc)"]
+fn energy_at_grazing_incidence() {
+    let table = energy_table(75.0);
+    let exceed: Vec<_> = table.iter().filter(|c| c.3 && c.2 > 1.0 + 1e-5).collect();
+    assert!(
+        exceed.is_empty(),
+        "(kσ, w/λ, fraction, valid) above 1: {exceed:?}"
+    );
+}
+
+// ------------------------------------------------------------------ 6. the authors' known bugs
+
+/// Frame identity: the kernel with the packet in the incident s/p frame applies no rotation
+/// (`T = I` exactly), and the same light described in a turned frame gives the same output.
+#[test]
+fn frame_rotation_is_identity_for_identical_frames() {
+    let lambda = 0.5;
+    let material = glass(0.02, 1.5);
+    let ti = 35.0 * DEG;
+    let exit = dir::<f64>(38.0 * DEG, 12.0 * DEG);
+    let pk = packet([1.0, 0.4, -0.3, 0.5], 5.0, ti, 0.0, lambda);
+    let g = Geometry::for_packet(&pk, &surface(), exit).unwrap();
+    assert_eq!(
+        frame_change_mueller(pk.frame(), &g.incident_sp).matrix(),
+        nalgebra::Matrix4::identity(),
+        "T between the packet's s/p frame and the geometry's incident s/p frame"
+    );
+    let base = eval::<Full, Partial, _, _>(&material, &pk, exit);
+    // Independent: without T, L = (cos θ_o/λ²) α K M S.
+    let m = material.scatter.mueller(&g).matrix();
+    let xi = surface_inverse_coherence(&pk, Channel::Half, &surface()).unwrap();
+    let kd = Partial::scatter_weight(&material.psd, &ClosedForm, Some(&xi), &g.h_t);
+    let expected = m * pk.stokes().vector() * (g.cos_o / (lambda * lambda) * base.attenuation * kd);
+    assert_all_close(
+        "no rotation in the s/p frame",
+        base.scattered.vector().iter().copied(),
+        expected.iter().copied(),
+        Tol::new(1e-14 * expected.norm(), 1e-12),
+    );
+    for psi in [0.3, 1.0, -2.2, PI] {
+        let turned = pk.rotated(psi);
+        let r = eval::<Full, Partial, _, _>(&material, &turned, exit);
+        for (a, b, what) in [
+            (r.specular, base.specular, "specular"),
+            (r.scattered, base.scattered, "scattered"),
+        ] {
+            assert_all_close(
+                &format!("{what}: packet frame turned by {psi}"),
+                a.vector().iter().copied(),
+                b.vector().iter().copied(),
+                Tol::new(1e-13 * b.vector().norm(), 1e-12),
+            );
+        }
+    }
+}
+
+/// s-polarized light on a smooth Fresnel surface: the specular output is `∝ R_s` (and p light
+/// `∝ R_p`), with `R_s`, `R_p` from the textbook formulas; s stays s (S1 = S0) in the exit frame.
+/// Near Brewster's angle the p output vanishes.
+#[test]
+fn fresnel_uses_rs_for_s_polarized_light() {
+    let lambda = 0.5;
+    let material = glass(1e-4, 2.0);
+    for ti_deg in [20.0, 45.0, 56.309932474020215, 70.0] {
+        let ti = ti_deg * DEG;
+        let exit = dir::<f64>(ti, 0.0);
+        let s_light = packet([1.0, 1.0, 0.0, 0.0], 10.0, ti, 0.0, lambda);
+        let p_light = packet([1.0, -1.0, 0.0, 0.0], 10.0, ti, 0.0, lambda);
+        let unpol = packet([1.0, 0.0, 0.0, 0.0], 10.0, ti, 0.0, lambda);
+        let rs_out = eval::<Full, Partial, _, _>(&material, &s_light, exit).specular;
+        let rp_out = eval::<Full, Partial, _, _>(&material, &p_light, exit).specular;
+        let un = eval::<Full, Partial, _, _>(&material, &unpol, exit).specular;
+        let (rs, rp) = fresnel_rs_rp(ti.cos(), 1.5);
+        // Unpolarized output S0 ∝ (R_s + R_p)/2: the common factor.
+        let scale = un.s0() / ((rs + rp) * 0.5);
+        assert_close(
+            &format!("s light at {ti_deg}°"),
+            rs_out.s0() / scale,
+            rs,
+            Tol::new(1e-14, 1e-12),
+        );
+        assert_close(
+            &format!("p light at {ti_deg}°"),
+            rp_out.s0() / scale,
+            rp,
+            Tol::new(1e-14, 1e-12),
+        );
+        assert_close(
+            "s stays s",
+            rs_out.s1(),
+            rs_out.s0(),
+            Tol::new(1e-300, 1e-12),
+        );
+    }
+}
+
+/// A linear polarizer at θ (`ConstantMueller` of `JonesMatrix::linear_polarizer(θ)`) as the
+/// specular pBSDF, on x̂-polarized light in the s/p frame: the output follows Malus `cos²θ`
+/// (a θ-instead-of-2θ bug would give `(1 + cos θ)/2`), and its Mueller matrix is the textbook
+/// `½[[1, c, s, 0], [c, c², cs, 0], [s, cs, s², 0], [0, 0, 0, 0]]`, `c = cos 2θ`, `s = sin 2θ`.
+#[test]
+fn polarizer_through_the_kernel_follows_malus() {
+    let lambda = 0.5;
+    let ti = 25.0 * DEG;
+    let exit = dir::<f64>(ti, 0.0);
+    let light = packet([1.0, 1.0, 0.0, 0.0], 10.0, ti, 0.0, lambda);
+    let out = |theta: f64| {
+        let m = Mueller::from_jones(&JonesMatrix::linear_polarizer(theta));
+        let material = RoughSurface {
+            psd: GaussianPsd::isotropic(1e-4, 2.0).unwrap(),
+            specular: ConstantMueller(m),
+            scatter: ConstantMueller(m),
+        };
+        eval::<Full, Partial, _, _>(&material, &light, exit).specular
+    };
+    let i0 = out(0.0).s0();
+    for theta_deg in [10.0, 30.0, 45.0, 60.0, 90.0, 135.0] {
+        let theta = theta_deg * DEG;
+        assert_close(
+            &format!("Malus at {theta_deg}°"),
+            out(theta).s0() / i0,
+            theta.cos().powi(2),
+            Tol::new(1e-14, 1e-12),
+        );
+        let m = Mueller::from_jones(&JonesMatrix::linear_polarizer(theta)).matrix();
+        let (s, c) = (2.0 * theta).sin_cos();
+        let textbook = [
+            [1.0, c, s, 0.0],
+            [c, c * c, c * s, 0.0],
+            [s, c * s, s * s, 0.0],
+            [0.0, 0.0, 0.0, 0.0],
+        ];
+        for r in 0..4 {
+            for col in 0..4 {
+                assert_close(
+                    "polarizer Mueller",
+                    m[(r, col)],
+                    0.5 * textbook[r][col],
+                    Tol::new(1e-15, 1e-14),
+                );
+            }
+        }
+    }
+}
+
+// ------------------------------------------------------------------ 7. geometry errors
+
+/// Source or exit direction on or below the surface, zero and non-finite directions: the
+/// documented errors of `Geometry::new`.
+#[test]
+fn geometry_rejects_directions_below_the_horizon() {
+    let k = TAU / 0.5;
+    let up = Vector3::new(0.3, 0.1, 0.9);
+    let s = surface::<f64>();
+    for (src, exit, which) in [
+        (Vector3::new(0.3, 0.0, -0.1), up, "cos θ_i"),
+        (Vector3::new(1.0, 0.0, 0.0), up, "cos θ_i"),
+        (up, Vector3::new(0.2, 0.2, -0.5), "cos θ_o"),
+        (up, Vector3::new(0.0, 1.0, 0.0), "cos θ_o"),
+    ] {
+        match Geometry::new(k, &s, src, exit) {
+            Err(Error::OutOfRange {
+                what,
+                value,
+                expected,
+            }) => {
+                assert!(what.starts_with(which), "{what} should name {which}");
+                assert!(value <= 0.0 && expected == "> 0");
+            }
+            other => panic!("expected OutOfRange for {which}, got {other:?}"),
+        }
+    }
+    assert!(matches!(
+        Geometry::new(k, &s, Vector3::zeros(), up),
+        Err(Error::InvalidBasis { .. })
+    ));
+    assert!(matches!(
+        Geometry::new(k, &s, up, Vector3::new(f64::NAN, 0.0, 1.0)),
+        Err(Error::NonFinite { .. })
+    ));
+    // The packet form: a packet travelling upward has its source below.
+    let pk = WavePacket::from_stokes(
+        Stokes::unpolarized(1.0).unwrap(),
+        CoherenceShape::isotropic(1.0).unwrap(),
+        Frame::sp(Vector3::new(0.1, 0.0, 1.0), Vector3::z()).unwrap(),
+        0.5,
+    )
+    .unwrap();
+    assert!(matches!(
+        Geometry::for_packet(&pk, &s, up),
+        Err(Error::OutOfRange { .. })
+    ));
+}
