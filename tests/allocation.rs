@@ -4,22 +4,10 @@
 //! and with a K-correlation PSD + Gauss–Hermite blur, plus `Mueller::from_jones`, frame changes
 //! and `Geometry::for_packet`; the count must be zero.
 //!
-//! The counting allocator needs `unsafe impl GlobalAlloc`, which the crate's
-//! `[lints.rust] unsafe_code = "forbid"` (Cargo `[lints]` apply to every target, tests included,
-//! and `forbid` cannot be overridden by `#[allow]`) rejects. The test is therefore compiled only
-//! with `--cfg gmueller_count_allocations`, which must come with `--cap-lints warn` while the lint
-//! is `forbid` (a separate target dir avoids rebuilding the main one):
-//! ```text
-//! CARGO_TARGET_DIR=target/alloc RUSTFLAGS="--cfg gmueller_count_allocations --cap-lints warn" \
-//!     cargo test --test allocation
-//! ```
-//! With the lint at `deny` instead, the `#![allow(unsafe_code, …)]` below suffices and the
-//! `cfg` gate can be removed so the test runs by default.
-#![allow(
-    unexpected_cfgs,
-    reason = "`gmueller_count_allocations` is set by hand (see the header)"
-)]
-#![cfg(gmueller_count_allocations)]
+//! The counting allocator needs `unsafe impl GlobalAlloc`: the crate's `[lints]` deny
+//! `unsafe_code` for every target and the library forbids it in `src/lib.rs`; this test file alone
+//! allows it, for an allocator that only forwards to `System` and counts per thread (the test
+//! harness's own threads allocate).
 #![allow(
     unsafe_code,
     reason = "a counting global allocator for this test only; it forwards to System"
