@@ -38,6 +38,7 @@
 
 pub mod geometry;
 pub mod pbsdf;
+pub mod sampling;
 
 use core::marker::PhantomData;
 
