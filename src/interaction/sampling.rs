@@ -316,6 +316,9 @@ impl<T: Real> TruncatedLobe<T> {
         let tol = T::lit(4.0) * T::EPSILON;
         for _ in 0..64 {
             let f = clenshaw(&p.integral, x) - target;
+            if f.abs() <= T::lit(2.0) * T::EPSILON * top {
+                break; // the CDF residual is at rounding level
+            }
             if f < T::zero() {
                 lo = x;
             } else {
