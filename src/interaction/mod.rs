@@ -39,6 +39,7 @@
 pub mod exitant;
 pub mod geometry;
 pub mod pbsdf;
+pub mod sampling;
 
 use core::marker::PhantomData;
 
