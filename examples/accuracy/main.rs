@@ -13,7 +13,7 @@
 //! 10, 68.4 (sunlight, Ω = 6.8e-5 sr) and 1000 λ; incidence 0°, 45°, 80° (45° only for the
 //! K-correlation, whose adaptive reference is slow); unpolarized input
 //! (one coherence shape) and polarized input (Stokes (1, .5, .5, .3), `Θ_y = 1.3² Θ_x`). Exit
-//! directions: θ_o = 5°…85° × φ = 0°…180° (63), near-specular θ_i ± 1°, ± 3° in plane, and the
+//! directions: `θ_o` = 5°…85° × φ = 0°…180° (63), near-specular `θ_i` ± 1°, ± 3° in plane, and the
 //! grating's first orders in plane; the exact specular direction is left out.
 //!
 //! **Reference.** f64, `Full`, `Partial`: the closed-form blur for Gaussian PSDs and the grating
@@ -22,7 +22,7 @@
 //!
 //! **Errors.** S0: relative, `|S0 − S0_ref|/S0_ref`, over exit directions where `S0_ref` is at
 //! least 1e-6 of the scene's maximum (others are skipped and counted). Degree of polarization:
-//! the *absolute* difference `|DoP − DoP_ref|` (DoP is already a ratio in [0, 1]); "n/a" for the
+//! the *absolute* difference `|DoP − DoP_ref|` (`DoP` is already a ratio in [0, 1]); "n/a" for the
 //! `Scalar` level, which outputs S0 only. Max and RMS are pooled over all kept (scene, direction)
 //! pairs a variant applies to.
 //!
@@ -281,8 +281,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let check_width = [0.1, 10.0, 1000.0]
             .iter()
             .any(|w| (w - s.width_lambda).abs() < 1e-12);
-        if mat.gaussian() && s.theta_i == 45.0 && s.input == Input::Unpolarized && check_width {
-            if let Some(ad) = measure::gaussian_adaptive(&mats64[s.material], &sc64) {
+        if mat.gaussian()
+            && s.theta_i == 45.0
+            && s.input == Input::Unpolarized
+            && check_width
+            && let Some(ad) = measure::gaussian_adaptive(&mats64[s.material], &sc64)
+        {
+            {
                 for ((a, r), k) in ad.iter().zip(&reference.stokes).zip(&keep) {
                     if *k {
                         crosscheck = crosscheck.max((a[0] - r[0]).abs() / r[0]);

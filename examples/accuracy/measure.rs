@@ -364,11 +364,14 @@ pub fn reference(mat: &Material<f64>, s: &SceneData<f64>) -> Measured {
     }
 }
 
+/// The last blur: covariance, `h` and the value.
+type CacheEntry = (Matrix2<f64>, Vector2<f64>, f64);
+
 /// A blur method that remembers its last answer: the full level blurs three channels, which for
 /// a packet with one coherence shape are the same blur (saves 2/3 of the reference's cost).
 pub struct Cached<B> {
     inner: B,
-    last: RefCell<Option<(Matrix2<f64>, Vector2<f64>, f64)>>,
+    last: RefCell<Option<CacheEntry>>,
 }
 
 impl<B> Cached<B> {
@@ -382,10 +385,11 @@ impl<B> Cached<B> {
 
 impl<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>> BlurMethod<f64, 2, P> for Cached<B> {
     fn blur(&self, psd: &P, cov: &Gaussian<f64, 2>, h: &Vector2<f64>) -> f64 {
-        if let Some((c, hh, v)) = *self.last.borrow() {
-            if c == *cov.covariance() && hh == *h {
-                return v;
-            }
+        if let Some((c, hh, v)) = *self.last.borrow()
+            && c == *cov.covariance()
+            && hh == *h
+        {
+            return v;
         }
         let v = self.inner.blur(psd, cov, h);
         *self.last.borrow_mut() = Some((*cov.covariance(), *h, v));

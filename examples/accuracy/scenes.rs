@@ -195,7 +195,7 @@ pub fn build_material<T: Real>(spec: &MaterialSpec) -> Material<T> {
 pub enum Input {
     /// Unpolarized, one coherence shape `w² I` for both components (sunlight).
     Unpolarized,
-    /// Stokes (1, 0.5, 0.5, 0.3) in the incident s/p frame (DoP 0.77) with unequal component
+    /// Stokes (1, 0.5, 0.5, 0.3) in the incident s/p frame (`DoP` 0.77) with unequal component
     /// coherence `Θ_x = w² I`, `Θ_y = (1.3 w)² I` (light that already met matter), so that the
     /// one-shape level differs from the full one.
     Polarized,
@@ -223,8 +223,8 @@ pub struct SceneData<T: Real> {
 }
 
 /// The exit directions (unit vectors, surface normal +z, incidence in the x–z plane travelling
-/// toward +x): θ_o ∈ {5°, 20°, …, 80°} × φ ∈ {0°, 45°, …, 180°} from the forward plane of
-/// incidence, plus in-plane near-specular directions θ_i ± 1°, ± 3° and the in-plane directions of
+/// toward +x): `θ_o` ∈ {5°, 20°, …, 80°} × φ ∈ {0°, 45°, …, 180°} from the forward plane of
+/// incidence, plus in-plane near-specular directions `θ_i` ± 1°, ± 3° and the in-plane directions of
 /// the grating's diffraction orders m = ±1, ±2, ±3 (period `grating_period` λ). The exact
 /// specular direction is left out: there the plane-wave level's specular lobe is a Dirac delta.
 pub fn exit_directions(theta_i: f64, grating_period: f64, quick: bool) -> Vec<Vector3<f64>> {
