@@ -329,7 +329,10 @@ impl<T: Real> Frame<T> {
 /// The orthogonal 2×2 frame change: `τ = R(ψ)` or `diag(1, −1) R(ψ)` with `ψ = −phi`.
 #[derive(Debug, Clone, Copy)]
 struct Change<T> {
-    phi: T,
+    /// `cos φ`, `sin φ` of S2.3's angle, from the normalised entries of P (no trigonometry:
+    /// the frame change sits on the kernel's hot path).
+    cos: T,
+    sin: T,
     flip: bool,
 }
 
@@ -343,28 +346,40 @@ fn change<T: Real>(from: &Frame<T>, to: &Frame<T>) -> Change<T> {
     // (x̂′ ∥ k̂ or ŷ′ ∥ k̂) has k̂·k̂′ = 0, which rounding (frames are orthonormal to 256 ε) may
     // make slightly negative: it counts as a rotation, as the text says, unless k̂·k̂′ < −256 ε.
     let flip = dot(&from.k, &to.k) < -Frame::<T>::tolerance();
-    let phi = if flip {
+    let (x, y) = if flip {
         // Closest reflection [[cos ψ, sin ψ], [sin ψ, −cos ψ]] to P: ψ = atan2(b + c, a − d).
         // It is diag(1, −1) times the rotation to `to.reversed()` (rows (a, b), (−c, −d)).
-        (-(b + c)).atan2(a - d)
+        (a - d, -(b + c))
     } else {
         // Closest rotation [[cos ψ, sin ψ], [−sin ψ, cos ψ]] to P (polar decomposition):
         // ψ = atan2(b − c, a + d), and φ = −ψ. a + d = b − c = 0 would need P = 0, impossible.
-        (c - b).atan2(a + d)
+        (a + d, c - b)
     };
-    Change { phi, flip }
+    // φ = atan2(y, x); identical frames give (x, y) = (2, 0) and so exactly cos φ = 1, sin φ = 0.
+    let r = x.hypot(y);
+    Change {
+        cos: x / r,
+        sin: y / r,
+        flip,
+    }
 }
 
 impl<T: Real> Change<T> {
+    fn phi(self) -> T {
+        self.sin.atan2(self.cos)
+    }
+
     fn tau(self) -> Matrix2<T> {
-        let (s, c) = self.phi.sin_cos();
+        let (s, c) = (self.sin, self.cos);
         // R(ψ) with ψ = −φ: [[cos φ, −sin φ], [sin φ, cos φ]].
         let sign = if self.flip { -T::one() } else { T::one() };
         Matrix2::new(c, -s, sign * s, sign * c)
     }
 
     fn mueller(self) -> Matrix4<T> {
-        let mut m = rotation_mueller(self.phi).0;
+        // cos 2φ, sin 2φ by the double-angle formulas.
+        let (c, s) = (self.cos, self.sin);
+        let mut m = rotation_mueller_cs(c * c - s * s, (s + s) * c);
         if self.flip {
             // A_mül (F ⊗ F) A_mül⁻¹ with F = diag(1, −1) is diag(1, 1, −1, −1).
             for col in 0..4 {
@@ -408,7 +423,7 @@ impl<T: Real> Change<T> {
 /// ```
 #[must_use]
 pub fn rotation_angle<T: Real>(from: &Frame<T>, to: &Frame<T>) -> T {
-    change(from, to).phi
+    change(from, to).phi()
 }
 
 /// `true` when the frame change `from → to` reverses transverse handedness (`k̂·k̂′ < 0`, beyond a
@@ -490,13 +505,19 @@ pub fn tau<T: Real>(from: &Frame<T>, to: &Frame<T>) -> Matrix2<T> {
 #[must_use]
 pub fn rotation_mueller<T: Real>(phi: T) -> Mueller<T> {
     let (s, c) = (phi + phi).sin_cos();
+    Mueller(rotation_mueller_cs(c, s))
+}
+
+/// S2.4's T from `cos 2φ` and `sin 2φ`.
+#[inline]
+fn rotation_mueller_cs<T: Real>(c: T, s: T) -> Matrix4<T> {
     let (o, z) = (T::one(), T::zero());
-    Mueller(Matrix4::new(
+    Matrix4::new(
         o, z, z, z, //
         z, c, -s, z, //
         z, s, c, z, //
         z, z, z, o,
-    ))
+    )
 }
 
 /// The Mueller matrix T of the frame change `from → to`: `S′ = T S` re-expresses a Stokes vector.

@@ -363,7 +363,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         scat_in: Vector4<T>,
         attenuation: T,
     ) -> Response<T> {
-        let specular = if Coh::USES_SHAPE {
+        // Off the specular lobe its weights underflow to exactly 0: skip the specular pBSDF.
+        let specular = if Coh::USES_SHAPE && spec_in != Vector4::zeros() {
             material.specular.mueller(g).0 * spec_in
         } else {
             Vector4::zeros()
