@@ -165,7 +165,36 @@ fn bench_precision<T: Real>(c: &mut Criterion, name: &str) {
     g.finish();
 }
 
+/// The structure-of-arrays batch path, 1024 matrices per iteration (time per matrix = time / 1024).
+fn bench_batch<T: Real>(c: &mut Criterion, name: &str) {
+    use gmueller::mueller::batch::{JonesSoa, mueller_from_jones_soa};
+    const N: usize = 1024;
+    let mut rng = SplitMix(0xBA7C);
+    let re: Vec<Vec<T>> = (0..4)
+        .map(|_| (0..N).map(|_| T::lit(rng.next_f64())).collect())
+        .collect();
+    let im: Vec<Vec<T>> = (0..4)
+        .map(|_| (0..N).map(|_| T::lit(rng.next_f64())).collect())
+        .collect();
+    let mut out = vec![vec![T::zero(); N]; 16];
+    let mut g = c.benchmark_group(format!("jones_to_mueller_batch/{name}"));
+    g.throughput(criterion::Throughput::Elements(N as u64));
+    g.bench_function(BenchmarkId::new("soa", N), |b| {
+        b.iter(|| {
+            let soa = JonesSoa {
+                re: [&re[0], &re[1], &re[2], &re[3]],
+                im: [&im[0], &im[1], &im[2], &im[3]],
+            };
+            let mut slices: Vec<&mut [T]> = out.iter_mut().map(Vec::as_mut_slice).collect();
+            mueller_from_jones_soa(black_box(&soa), &mut slices).expect("equal lengths");
+        })
+    });
+    g.finish();
+}
+
 fn benches(c: &mut Criterion) {
+    bench_batch::<f32>(c, "f32");
+    bench_batch::<f64>(c, "f64");
     bench_precision::<f32>(c, "f32");
     bench_precision::<f64>(c, "f64");
 }

@@ -1,6 +1,8 @@
 //! Mueller matrices: classical (real 4×4, acting on Stokes vectors) and generalized (complex 4×4,
 //! acting on generalized Stokes parameters), S1.6–S1.7.
 
+pub mod batch;
+
 use core::ops::Mul;
 
 use nalgebra::{Matrix2, Matrix3, Matrix4, Vector3, Vector4};
