@@ -738,7 +738,7 @@ fn error_table(n: usize) -> Vec<Row> {
             rng.uniform(-1.0, 1.0),
         )
         .map(r32);
-        let psi = r32(rng.uniform(-3.14, 3.14));
+        let psi = r32(rng.uniform(-std::f64::consts::PI, std::f64::consts::PI));
         let (Ok(f64a), Ok(f32a)) = (
             Frame::from_direction_and_x(k, h),
             Frame::from_direction_and_x(k.map(|x| x as f32), h.map(|x| x as f32)),
@@ -758,7 +758,7 @@ fn error_table(n: usize) -> Vec<Row> {
         let (a, b, t) = (
             r32(s),
             r32(s * rng.log_uniform(1e-3, 1.0)),
-            rng.uniform(0.0, 3.14),
+            rng.uniform(0.0, std::f64::consts::PI),
         );
         let (sn, cs) = t.sin_cos();
         let rot = Matrix2::new(cs, -sn, sn, cs);
@@ -808,7 +808,7 @@ fn error_table(n: usize) -> Vec<Row> {
         let x64 = Gaussian::<f64, 2>::isotropic(1.0 / w).unwrap();
         let x32 = Gaussian::<f32, 2>::isotropic((1.0 / w) as f32).unwrap();
         let b64 = ClosedForm.normalized_blur(&p64, &x64, &h);
-        if !(b64 > 1e-30) {
+        if b64.is_nan() || b64 <= 1e-30 {
             continue;
         }
         let b32 = f64::from(ClosedForm.normalized_blur(&p32, &x32, &h.map(|v| v as f32)));
@@ -855,7 +855,7 @@ fn error_table(n: usize) -> Vec<Row> {
                 (r32_.scattered, r64.scattered),
             ] {
                 let v64: Vec<f64> = b.vector().iter().copied().collect();
-                if !(v64[0] > 1e-30) || v64[0] > 1e30 {
+                if v64[0].is_nan() || v64[0] <= 1e-30 || v64[0] > 1e30 {
                     continue;
                 }
                 let v32: Vec<f64> = a.vector().iter().map(|x| f64::from(*x)).collect();
