@@ -135,6 +135,20 @@ pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
     /// normal number. The default does exactly that round trip (in log space for the factor);
     /// every blur method of this crate overrides it with a form that never leaves the scale of
     /// the result (log space for the closed forms, the plain expectation for the quadratures).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::gaussian::Gaussian;
+    /// use gmueller::psd::{BlurMethod, ClosedForm, GaussianPsd, Psd};
+    /// use nalgebra::Vector2;
+    /// let p = GaussianPsd::<f32, 2>::isotropic(1e-3, 1.0).unwrap();
+    /// let h = Vector2::new(110f32.sqrt(), 0.0);
+    /// // A coherence width of 10⁸ (length): |Σ|^{1/2} = 1e-16, and p(h) ≈ 1.3e-30.
+    /// let wide = Gaussian::<f32, 2>::isotropic(1e-8).unwrap();
+    /// let n = ClosedForm.normalized_blur(&p, &wide, &h);
+    /// assert!((n / p.value(&h) - 1.0).abs() < 1e-5); // → p(h) as Σ → 0
+    /// assert_eq!(ClosedForm.blur(&p, &wide, &h), 0.0); // the un-normalised blur underflows
+    /// ```
     #[inline]
     #[must_use]
     fn normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
