@@ -926,3 +926,30 @@ fn stokes_validation_is_scale_invariant() {
         );
     }
 }
+
+/// Regression (fix "Geometry direction scale"): `Geometry::new` normalised its directions by
+/// `|v|` directly, so directions with components of 1e±200 (f64) or 1e±25 (f32) were rejected
+/// as "zero direction vector"; any non-zero finite direction now gives the unit-scale geometry.
+#[test]
+fn geometry_directions_of_any_scale() {
+    fn check<T: Real>(scales: &[f64]) {
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let (s, r) = (Vector3::new(-0.3, 0.1, 0.9), Vector3::new(0.5, 0.2, 0.7));
+        let k = T::lit(12.0);
+        let g1 = Geometry::new(k, &surface, s.map(T::lit), r.map(T::lit)).unwrap();
+        for &sc in scales {
+            let g = Geometry::new(k, &surface, (s * sc).map(T::lit), (r * sc).map(T::lit))
+                .unwrap_or_else(|e| panic!("scale {sc:e}: {e}"));
+            let tol = Tol::new(8.0 * T::EPSILON.to_f64(), 8.0 * T::EPSILON.to_f64());
+            assert_close("cos_i", g.cos_i.to_f64(), g1.cos_i.to_f64(), tol);
+            assert_close(
+                "h_t.x",
+                g.h_t.x.to_f64(),
+                g1.h_t.x.to_f64(),
+                Tol::new(tol.abs * 12.0, tol.rel),
+            );
+        }
+    }
+    check::<f64>(&[1e-300, 1e-200, 1e-160, 1e160, 1e200, 1e300]);
+    check::<f32>(&[1e-30, 1e-25, 1e-20, 1e20, 1e25, 1e30]);
+}
