@@ -953,3 +953,55 @@ fn geometry_directions_of_any_scale() {
     check::<f64>(&[1e-300, 1e-200, 1e-160, 1e160, 1e200, 1e300]);
     check::<f32>(&[1e-30, 1e-25, 1e-20, 1e20, 1e25, 1e30]);
 }
+
+/// Continuity across the normal-incidence switch of `Frame::sp` (|d̂ × n̂| < √ε: 1.5e-8 rad in
+/// f64, 3.5e-4 rad in f32): with the packet's polarization fixed in a world-aligned frame and the
+/// output converted to a fixed frame about r̂, the Full/Partial response at incidence angle δ
+/// matches the one at δ = 0 to `20 δ_max` (relative, normwise) on both sides of the threshold —
+/// the s/p frames jump there, the physics must not. Exit at 40° and exactly along the normal.
+#[test]
+fn normal_incidence_switch_is_invisible_in_a_fixed_frame() {
+    fn response<T: Real>(delta: f64, exit: Vector3<f64>) -> Vec<f64> {
+        let l = |x: f64| T::lit(x);
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let travel = Vector3::new(delta.sin() * 0.6, delta.sin() * 0.8, -delta.cos()).map(l);
+        let pframe = Frame::from_direction_and_x(travel, Vector3::x()).unwrap();
+        let packet = WavePacket::from_stokes(
+            Stokes::new(l(1.0), l(0.5), l(0.3), l(0.2)).unwrap(),
+            CoherenceShape::new(Matrix2::new(l(4.0), l(1.0), l(1.0), l(2.0))).unwrap(),
+            pframe,
+            l(0.5),
+        )
+        .unwrap();
+        let eta = Complex::new(l(1.5), l(0.1));
+        let material = RoughSurface {
+            psd: GaussianPsd::isotropic(l(0.005), l(0.7)).unwrap(),
+            specular: FresnelReflection::new(eta).unwrap(),
+            scatter: RayleighRice::new(eta).unwrap(),
+        };
+        let g = Geometry::for_packet(&packet, &surface, exit.map(l)).unwrap();
+        let r =
+            Kernel::<Full, Partial, ClosedForm>::new(ClosedForm).evaluate(&material, &packet, &g);
+        let fixed = Frame::from_direction_and_x(g.exit, Vector3::y()).unwrap();
+        let mut out = Vec::new();
+        for s in [r.specular, r.scattered] {
+            let s = gmueller::frame::stokes_to_frame(&s, &g.exit_sp, &fixed);
+            out.extend(s.vector().iter().map(|x| x.to_f64()));
+        }
+        out
+    }
+    let exits = [Vector3::new(0.4, -0.5, 0.766).normalize(), Vector3::z()];
+    for exit in exits {
+        let at0 = response::<f64>(0.0, exit);
+        for d in [1e-10, 1e-9, 1.4e-8, 1.5e-8, 1.6e-8, 3e-8, 1e-7] {
+            let r = response::<f64>(d, exit);
+            let e = normwise(&r, &at0);
+            assert!(e <= 20.0 * 1e-7, "f64 δ={d:e}: {e:e}");
+        }
+        let at0 = response::<f32>(0.0, exit);
+        for d in [1e-5, 3e-4, 3.4e-4, 3.5e-4, 3.6e-4, 4e-4] {
+            let e = normwise(&response::<f32>(d, exit), &at0);
+            assert!(e <= 20.0 * 4e-4, "f32 δ={d:e}: {e:e}");
+        }
+    }
+}
