@@ -275,6 +275,18 @@ fn realizability<T: Real>(s: &Scene) -> Result<(), TestCaseError> {
     use gmueller::interaction::Pbsdf;
     use_pbsdf(b.material.specular.mueller(&b.g), "Fresnel")?;
     use_pbsdf(b.material.scatter.mueller(&b.g), "RayleighRice")?;
+    use_pbsdf(
+        gmueller::interaction::PhaseScreen::new(T::lit(0.9))
+            .unwrap()
+            .mueller(&b.g),
+        "PhaseScreen",
+    )?;
+    use_pbsdf(
+        gmueller::interaction::IdealDiffuse::new(T::lit(0.7))
+            .unwrap()
+            .mueller(&b.g),
+        "IdealDiffuse",
+    )?;
     prop_assert!(t.is_physically_realizable(tol), "T");
     Ok(())
 }
@@ -1003,5 +1015,64 @@ fn normal_incidence_switch_is_invisible_in_a_fixed_frame() {
             let e = normwise(&response::<f32>(d, exit), &at0);
             assert!(e <= 20.0 * 4e-4, "f32 δ={d:e}: {e:e}");
         }
+    }
+}
+
+/// The normalised blur of every method agrees with the Gaussian closed form at both ends of the
+/// width range (10⁻³ λ and 10⁶ λ; λ = 1, ℓ = 2): Gauss–Hermite (order 24) and Adaptive (1e-8)
+/// to 1e-6 relative in f64 where the integrand is resolved, and the Smooth PSD's log-space form
+/// equals `w g^Σ(h) |Σ|^{−1/2}` computed here from the log-determinant; in f32 at width 10⁶ λ
+/// (the regime where the un-normalised blur underflows) to 1e-4.
+#[test]
+fn normalized_blur_methods_agree_at_the_width_extremes() {
+    use gmueller::psd::Adaptive;
+    let psd = GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap();
+    let h = Vector2::new(0.4, -0.3);
+    for w in [1e-3, 1e6] {
+        let xi = Gaussian::<f64, 2>::isotropic(1.0 / w).unwrap();
+        let exact = ClosedForm.normalized_blur(&psd, &xi, &h);
+        let ad = Adaptive::new(1e-8).unwrap().normalized_blur(&psd, &xi, &h);
+        assert_close(&format!("Adaptive w={w:e}"), ad, exact, Tol::new(0.0, 1e-6));
+        if w > 1.0 {
+            // Gauss–Hermite resolves p only when Σ is narrower than p (wide coherence).
+            let gh = GaussHermite::<f64>::new(24)
+                .unwrap()
+                .normalized_blur(&psd, &xi, &h);
+            assert_close(
+                &format!("GaussHermite w={w:e}"),
+                gh,
+                exact,
+                Tol::new(0.0, 1e-6),
+            );
+        }
+        let smooth = gmueller::psd::Smooth::new(0.3).unwrap();
+        let s = ClosedForm.normalized_blur(&smooth, &xi, &h);
+        let expect = 0.3 * (xi.log_value(&h) - 0.5 * xi.log_det()).exp();
+        assert_close(&format!("Smooth w={w:e}"), s, expect, common::F64);
+    }
+    let p32 = GaussianPsd::<f32, 2>::isotropic(0.01, 2.0).unwrap();
+    let xi32 = Gaussian::<f32, 2>::isotropic(1e-6).unwrap();
+    let h32 = Vector2::new(0.4f32, -0.3);
+    let xi = Gaussian::<f64, 2>::isotropic(1e-6).unwrap();
+    let exact = ClosedForm.normalized_blur(&psd, &xi, &h);
+    for (what, v) in [
+        (
+            "f32 ClosedForm",
+            ClosedForm.normalized_blur(&p32, &xi32, &h32),
+        ),
+        (
+            "f32 GaussHermite",
+            GaussHermite::<f32>::new(8)
+                .unwrap()
+                .normalized_blur(&p32, &xi32, &h32),
+        ),
+        (
+            "f32 Adaptive",
+            gmueller::psd::Adaptive::new(1e-5f32)
+                .unwrap()
+                .normalized_blur(&p32, &xi32, &h32),
+        ),
+    ] {
+        assert_close(what, f64::from(v), exact, Tol::new(0.0, 1e-4));
     }
 }
