@@ -67,6 +67,9 @@
 //!
 //! ## Errata of the seed derivation
 #![doc = include_str!("../docs/errata.md")]
+//!
+//! ## Numerical behaviour
+#![doc = include_str!("../docs/numerical.md")]
 #![forbid(unsafe_code)]
 
 pub mod error;

@@ -67,6 +67,14 @@ pub fn a_mul_inv<T: Real>() -> Matrix4<Complex<T>> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stokes<T: Real>(pub(crate) Vector4<T>);
 
+/// `√(a² + b² + c²)` without overflow or underflow of the squares (`hypot` twice): the plain
+/// sum of squares overflows f32 above ~1.8e19 and underflows f64 below ~1.5e-154, which made
+/// [`Stokes::new`] reject valid vectors of large intensity and accept invalid tiny ones.
+#[inline]
+fn norm3<T: Real>(a: T, b: T, c: T) -> T {
+    a.hypot(b).hypot(c)
+}
+
 impl<T: Real> Stokes<T> {
     /// Relative slack allowed in `S0 ≥ |S|` for rounding: `|S| ≤ S0 (1 + STOKES_SLACK_ULPS · ε)`.
     pub const SLACK_ULPS: f64 = 64.0;
@@ -78,7 +86,7 @@ impl<T: Real> Stokes<T> {
     /// a rounding slack of [`Self::SLACK_ULPS`] machine epsilons (relative), which includes `S0 < 0`.
     pub fn new(s0: T, s1: T, s2: T, s3: T) -> Result<Self, Error> {
         ensure_finite("Stokes parameter", [s0, s1, s2, s3])?;
-        let polarized = (s1 * s1 + s2 * s2 + s3 * s3).sqrt();
+        let polarized = norm3(s1, s2, s3);
         let slack = T::one() + T::lit(Self::SLACK_ULPS) * T::EPSILON;
         if s0 < T::zero() || polarized > s0 * slack {
             return Err(Error::InvalidStokes {
@@ -146,7 +154,7 @@ impl<T: Real> Stokes<T> {
     #[inline]
     #[must_use]
     pub fn polarized_intensity(&self) -> T {
-        (self.s1() * self.s1() + self.s2() * self.s2() + self.s3() * self.s3()).sqrt()
+        norm3(self.s1(), self.s2(), self.s3())
     }
 
     /// The degree of polarization, in `[0, 1]` (up to rounding).

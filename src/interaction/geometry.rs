@@ -126,13 +126,16 @@ impl<T: Real> Geometry<T> {
     }
 }
 
+/// `v/|v|`, rescaled by the largest component first: `|v|` itself over- or underflows for
+/// components beyond ~1e±154 (f64) or ~1e±19 (f32), which rejected valid directions as zero.
 fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
     crate::error::ensure_finite(what, v.iter().copied())?;
-    let n = v.norm();
-    if n == T::zero() || !n.is_finite() {
+    let m = v.amax();
+    if m == T::zero() {
         return Err(Error::InvalidBasis {
             reason: "zero direction vector",
         });
     }
-    Ok(v / n)
+    let u = v / m;
+    Ok(u / u.norm())
 }

@@ -169,10 +169,9 @@ impl CoherenceModel for Partial {
         h_t: &Vector2<T>,
     ) -> T {
         match xi {
-            // K = 2π |Σ|^{1/2} (p * g^Ξ)(h) with |Σ| = 1/|Ξ|.
-            Some(xi) => {
-                blur.blur(psd, xi, h_t) * (T::two_pi() * (T::lit(-0.5) * xi.log_det()).exp())
-            }
+            // K = 2π |Σ|^{1/2} (p * g^Ξ)(h) with |Σ| = 1/|Ξ|: 2π times the normalised blur,
+            // which never forms the tiny (p * g^Ξ) of a wide coherence area.
+            Some(xi) => T::two_pi() * blur.normalized_blur(psd, xi, h_t),
             None => T::two_pi() * psd.value(h_t),
         }
     }
@@ -333,45 +332,56 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
             PolarizationLevel::OneShape => {
                 let (ks, kd) = weights(Channel::Half);
                 let t = frame_change_mueller(packet.frame(), &g.incident_sp).0 * s;
-                self.finish(material, g, t * (front * ks), t * (front * kd), attenuation)
+                self.finish(material, g, (t, front * ks), (t, front * kd), attenuation)
             }
             PolarizationLevel::Full => {
                 let (xs, xd) = weights(Channel::X);
                 let (ys, yd) = weights(Channel::Y);
                 let (hs, hd) = weights(Channel::Half);
                 let (sx, sy) = (packet.sx(), packet.sy());
+                let t_mat = frame_change_mueller(packet.frame(), &g.incident_sp).0;
+                // The effective Stokes vector with the weights divided by their largest, and
+                // that largest weight (times `front`) as a separate scale applied last.
                 let eff = |kx: T, ky: T, kh: T| {
-                    Vector4::new(kx * sx + ky * sy, kx * sx - ky * sy, kh * s[2], kh * s[3])
+                    let m = kx.max(ky).max(kh);
+                    if m > T::zero() {
+                        let (kx, ky, kh) = (kx / m, ky / m, kh / m);
+                        let v = Vector4::new(
+                            kx * sx + ky * sy,
+                            kx * sx - ky * sy,
+                            kh * s[2],
+                            kh * s[3],
+                        );
+                        (t_mat * v, front * m)
+                    } else {
+                        (Vector4::zeros(), T::zero())
+                    }
                 };
-                let t = frame_change_mueller(packet.frame(), &g.incident_sp).0;
-                self.finish(
-                    material,
-                    g,
-                    t * eff(xs, ys, hs) * front,
-                    t * eff(xd, yd, hd) * front,
-                    attenuation,
-                )
+                self.finish(material, g, eff(xs, ys, hs), eff(xd, yd, hd), attenuation)
             }
         }
     }
 
+    /// `M (v · scale)` for the specular and scattered parts, with the scalar `scale` (which
+    /// may be tiny: `front · K`) applied last, so that the 4×4 products run on numbers of the
+    /// Stokes vector's own magnitude and the result is rounded once when it is subnormal.
     fn finish<T: Real, P, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
         &self,
         material: &RoughSurface<P, Sp, Sc>,
         g: &Geometry<T>,
-        spec_in: Vector4<T>,
-        scat_in: Vector4<T>,
+        (spec_in, spec_scale): (Vector4<T>, T),
+        (scat_in, scat_scale): (Vector4<T>, T),
         attenuation: T,
     ) -> Response<T> {
-        // Off the specular lobe its weights underflow to exactly 0: skip the specular pBSDF.
-        let specular = if Coh::USES_SHAPE && spec_in != Vector4::zeros() {
-            material.specular.mueller(g).0 * spec_in
+        // Off the specular lobe its weight underflows to exactly 0: skip the specular pBSDF.
+        let specular = if Coh::USES_SHAPE && spec_scale != T::zero() {
+            material.specular.mueller(g).0 * spec_in * spec_scale
         } else {
             Vector4::zeros()
         };
         Response {
             specular: Stokes(specular),
-            scattered: Stokes(material.scatter.mueller(g).0 * scat_in),
+            scattered: Stokes(material.scatter.mueller(g).0 * scat_in * scat_scale),
             attenuation,
         }
     }
@@ -472,7 +482,6 @@ pub fn volume_coherence_term<T: Real, P: Psd<T, 3>, B: BlurMethod<T, 3, P>>(
         });
     }
     let xi = Gaussian::new(packet.world_precision(channel))?;
-    // (2π)^{3/2} |Θ|^{1/2} with |Θ| = 1/|Ξ|.
-    let front = (T::lit(1.5) * T::two_pi().ln() - T::lit(0.5) * xi.log_det()).exp();
-    Ok(blur.blur(psd, &xi, h) * front)
+    // (2π)^{3/2} |Θ|^{1/2} (p * g^Ξ) with |Θ| = 1/|Ξ|: (2π)^{3/2} times the normalised blur.
+    Ok(blur.normalized_blur(psd, &xi, h) * crate::psd::two_pi_pow_half_n::<T>(3))
 }

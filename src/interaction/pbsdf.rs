@@ -6,6 +6,7 @@ use num_complex::Complex;
 
 use super::geometry::Geometry;
 use crate::error::Error;
+use crate::frame::{Frame, frame_change_mueller};
 use crate::fresnel::{self, principal_sqrt};
 use crate::jones::JonesMatrix;
 use crate::mueller::Mueller;
@@ -42,6 +43,18 @@ impl<T: Real> Pbsdf<T> for ConstantMueller<T> {
 
 /// Specular reflection by a planar interface of relative index `η = n + iκ` (dielectric or
 /// conductor): the Mueller matrix of [`fresnel::reflection`] at `cos θ_i`, in s/p frames.
+///
+/// # Formula
+/// ```text
+/// M = T(F_spec → F_exit) · A_mül (J* ⊗ J) A_mül⁻¹,   J = fresnel::reflection(cos θ_i, η)
+/// F_spec = Frame::sp(r_spec, n̂),  r_spec = −ŝ + 2 cos θ_i n̂     (shares ŝ with the incident frame)
+/// ```
+/// `J` maps the incident s/p frame to the s/p frame of the *specular* direction; the coherent
+/// lobe's exit directions `r̂ ≠ r_spec` (finite coherence) receive it by the minimal rotation
+/// `r_spec → r̂` ([`crate::frame::frame_change_mueller`], the identity at `r̂ = r_spec`). Without
+/// that transport the output depended on the arbitrary choice of ŝ at normal incidence (a jump
+/// of the Stokes vector across the `Frame::sp` normal-incidence switch; `tests/extremes.rs`,
+/// `normal_incidence_switch_is_invisible_in_a_fixed_frame`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FresnelReflection<T: Real> {
     eta: Complex<T>,
@@ -61,8 +74,16 @@ impl<T: Real> FresnelReflection<T> {
 impl<T: Real> Pbsdf<T> for FresnelReflection<T> {
     #[inline]
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
-        Mueller::from_jones(&fresnel::reflection(g.cos_i, self.eta))
+        let m = Mueller::from_jones(&fresnel::reflection(g.cos_i, self.eta));
+        let n = g.surface.k();
+        let r_spec = n * (g.cos_i + g.cos_i) - g.to_source;
+        match Frame::sp(r_spec, n) {
+            Ok(spec) => frame_change_mueller(&spec, &g.exit_sp) * m,
+            // Unreachable for a valid Geometry (r_spec is a finite unit vector).
+            Err(_) => m,
+        }
     }
+    /// `M₀₀` (the frame transport leaves it unchanged).
     #[inline]
     fn m00(&self, g: &Geometry<T>) -> T {
         let c = fresnel::coefficients(g.cos_i, self.eta);

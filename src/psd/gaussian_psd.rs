@@ -132,6 +132,20 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     #[inline]
     #[must_use]
     pub fn log_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.log_normalized_blur(cov, h) + T::lit(0.5) * cov.log_det()
+    }
+
+    /// `ln ∫ p(ζ) 𝒩_Σ(h − ζ) dⁿζ = ln (p * g^Σ)(h) − ½ ln|Σ|` in closed form
+    /// ([`BlurMethod::normalized_blur`]); `|Σ|` cancels analytically, so nothing large or tiny
+    /// is formed even as `Σ → 0` (where it tends to [`Self::log_value`]).
+    ///
+    /// # Formula
+    /// ```text
+    /// ln ∫ p 𝒩_Σ(h − ·) = ln(σ²|Λ|^{1/2}) + ½ (ln|Λ⁻¹| − ln|Λ⁻¹ + Σ|) − ½ hᵀ(Λ⁻¹ + Σ)⁻¹h
+    /// ```
+    #[inline]
+    #[must_use]
+    pub fn log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
         let Ok(l) = cholesky(&sum) else {
             // Only reachable by overflow of the sum at extreme scales.
@@ -143,8 +157,7 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
         }
         log_det_sum *= T::lit(2.0);
         let m = solve_lower(&l, h).norm_squared();
-        self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() + cov.log_det() - log_det_sum)
-            - T::lit(0.5) * m
+        self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() - log_det_sum - m)
     }
 }
 
@@ -169,6 +182,15 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianPsd<T, N>> for ClosedForm
     #[inline]
     fn blur(&self, psd: &GaussianPsd<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         psd.log_blur(cov, h).exp()
+    }
+    #[inline]
+    fn normalized_blur(
+        &self,
+        psd: &GaussianPsd<T, N>,
+        cov: &Gaussian<T, N>,
+        h: &SVector<T, N>,
+    ) -> T {
+        psd.log_normalized_blur(cov, h).exp()
     }
 }
 
@@ -239,6 +261,17 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianMixturePsd<T, N>> for Clo
             .iter()
             .fold(T::zero(), |acc, c| acc + ClosedForm.blur(c, cov, h))
     }
+    #[inline]
+    fn normalized_blur(
+        &self,
+        psd: &GaussianMixturePsd<T, N>,
+        cov: &Gaussian<T, N>,
+        h: &SVector<T, N>,
+    ) -> T {
+        psd.components.iter().fold(T::zero(), |acc, c| {
+            acc + ClosedForm.normalized_blur(c, cov, h)
+        })
+    }
 }
 
 /// A smooth (non-random) surface: `p = (2π)^{n/2} w δ(ζ)`, all power in the specular order.
@@ -281,5 +314,10 @@ impl<T: Real, const N: usize> BlurMethod<T, N, Smooth<T>> for ClosedForm {
     #[inline]
     fn blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         psd.weight * cov.value(h)
+    }
+    /// `w g^Σ(h) |Σ|^{−1/2}`, in log space.
+    #[inline]
+    fn normalized_blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.weight * (cov.log_value(h) - T::lit(0.5) * cov.log_det()).exp()
     }
 }

@@ -289,4 +289,12 @@ impl<T: Real, const N: usize> BlurMethod<T, N, Grating<T, N>> for ClosedForm {
             .iter()
             .fold(T::zero(), |acc, (z, e)| acc + *e * cov.value(&(h - z)))
     }
+    /// `Σ e_m g^Σ(h − ζ_m) |Σ|^{−1/2}`, each term in log space.
+    #[inline]
+    fn normalized_blur(&self, psd: &Grating<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        let half_log_det = T::lit(0.5) * cov.log_det();
+        psd.orders.iter().fold(T::zero(), |acc, (z, e)| {
+            acc + *e * (cov.log_value(&(h - z)) - half_log_det).exp()
+        })
+    }
 }

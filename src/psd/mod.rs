@@ -120,6 +120,40 @@ pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
     /// `(p * g^Σ)(h)`; finite for finite input, `0` on underflow.
     #[must_use]
     fn blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T;
+
+    /// The PSD smoothed by the *normalised* Gaussian density of covariance Σ:
+    /// `∫ p(ζ) 𝒩_Σ(h − ζ) dⁿζ = |Σ|^{−1/2} (p * g^Σ)(h)`, which tends to `p(h)` as `Σ → 0`.
+    ///
+    /// # Formula
+    /// ```text
+    /// 𝒩_Σ(x) = (2π)^{−n/2} |Σ|^{−1/2} g^Σ(x)
+    /// ∫ p(ζ) 𝒩_Σ(h − ζ) dⁿζ = |Σ|^{−1/2} (p * g^Σ)(h) = E_{u∼𝒩(0,I)}[ p(h − L u) ]
+    /// ```
+    /// This is the quantity the S2.17/S2.20 coherence terms need (`K = (2π)^{n/2} ×` it, with
+    /// `Σ = Ξ`). Computing it as `blur · |Σ|^{−1/2}` is a `0 · ∞` round trip when the coherence
+    /// is wide (`|Ξ| → 0`): the blur underflows (in f32 below ~1e-38) while the product is a
+    /// normal number. The default does exactly that round trip (in log space for the factor);
+    /// every blur method of this crate overrides it with a form that never leaves the scale of
+    /// the result (log space for the closed forms, the plain expectation for the quadratures).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::gaussian::Gaussian;
+    /// use gmueller::psd::{BlurMethod, ClosedForm, GaussianPsd, Psd};
+    /// use nalgebra::Vector2;
+    /// let p = GaussianPsd::<f32, 2>::isotropic(1e-3, 1.0).unwrap();
+    /// let h = Vector2::new(110f32.sqrt(), 0.0);
+    /// // A coherence width of 10⁸ (length): |Σ|^{1/2} = 1e-16, and p(h) ≈ 1.3e-30.
+    /// let wide = Gaussian::<f32, 2>::isotropic(1e-8).unwrap();
+    /// let n = ClosedForm.normalized_blur(&p, &wide, &h);
+    /// assert!((n / p.value(&h) - 1.0).abs() < 1e-5); // → p(h) as Σ → 0
+    /// assert_eq!(ClosedForm.blur(&p, &wide, &h), 0.0); // the un-normalised blur underflows
+    /// ```
+    #[inline]
+    #[must_use]
+    fn normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.blur(psd, cov, h) * (T::lit(-0.5) * cov.log_det()).exp()
+    }
 }
 
 /// The exact, closed-form blur (Gaussian, Gaussian-mixture, grating and smooth PSDs).

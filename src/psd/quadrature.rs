@@ -77,6 +77,11 @@ impl<T: Real> GaussHermite<T> {
 
 impl<T: Real, const N: usize, P: Psd<T, N> + ?Sized> BlurMethod<T, N, P> for GaussHermite<T> {
     fn blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.normalized_blur(psd, cov, h) * (T::lit(0.5) * cov.log_det()).exp()
+    }
+
+    /// `E[p(h − L u)]` by the tensor rule, without the `|Σ|^{1/2}` factor.
+    fn normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         let l = cov.cholesky_factor();
         let n = self.nodes.len();
         let mut idx = [0usize; N];
@@ -92,7 +97,7 @@ impl<T: Real, const N: usize, P: Psd<T, N> + ?Sized> BlurMethod<T, N, P> for Gau
             let mut d = 0;
             loop {
                 if d == N {
-                    return sum * (T::lit(0.5) * cov.log_det()).exp();
+                    return sum;
                 }
                 idx[d] += 1;
                 if idx[d] < n {
@@ -331,6 +336,11 @@ impl<T: Real, const N: usize, P: Psd<T, N> + ?Sized> Nested<'_, T, N, P> {
 
 impl<T: Real, const N: usize, P: Psd<T, N> + ?Sized> BlurMethod<T, N, P> for Adaptive<T> {
     fn blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.normalized_blur(psd, cov, h) * (T::lit(0.5) * cov.log_det()).exp()
+    }
+
+    /// The nested integral of `p(h − L u)` against the standard normal, without `|Σ|^{1/2}`.
+    fn normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         let r = (T::lit(2.0) * (T::lit(10.0) / self.tol).ln()).sqrt() + T::lit(0.5);
         let ctx = Nested {
             psd,
@@ -342,6 +352,6 @@ impl<T: Real, const N: usize, P: Psd<T, N> + ?Sized> BlurMethod<T, N, P> for Ada
             evals: core::cell::Cell::new(0),
         };
         let mut u = SVector::<T, N>::zeros();
-        ctx.level(0, &mut u, self.tol) * (T::lit(0.5) * cov.log_det()).exp()
+        ctx.level(0, &mut u, self.tol)
     }
 }
