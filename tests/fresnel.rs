@@ -6,6 +6,8 @@
 
 mod common;
 
+use common::{flip_s3, json_rows as rows, peer_cases as cases};
+
 use common::{F32, F64, Tol, assert_all_close, assert_close, entries4, matrix4_from_rows};
 use gmueller::error::Error;
 use gmueller::fresnel::{coefficients, reflection, transmission, try_coefficients};
@@ -36,40 +38,6 @@ fn c64<T: Real>(z: Complex<T>) -> Complex<f64> {
 
 fn m64<T: Real>(m: &Mueller<T>) -> Matrix4<f64> {
     m.matrix().map(Real::to_f64)
-}
-
-fn cases(kind: &str) -> Vec<serde_json::Value> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/peer_values.json");
-    let text = std::fs::read_to_string(path).expect("reference file tests/data/peer_values.json");
-    let all: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let out: Vec<_> = all["cases"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["kind"] == kind)
-        .cloned()
-        .collect();
-    assert!(!out.is_empty(), "no reference cases of kind {kind}");
-    out
-}
-
-fn rows(v: &serde_json::Value) -> Vec<Vec<f64>> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect()
-}
-
-fn flip_s3(m: Matrix4<f64>) -> Matrix4<f64> {
-    let d = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, 1.0, -1.0));
-    d * m * d
 }
 
 /// Textbook Fresnel amplitudes written independently with real angles (Hecht, *Optics*, §4.6.2,

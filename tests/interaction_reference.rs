@@ -23,19 +23,7 @@ use num_complex::Complex;
 use serde_json::Value;
 
 fn cases() -> Vec<Value> {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/peer_values.json"
-    ))
-    .expect("tests/data/peer_values.json");
-    let json: Value = serde_json::from_str(&text).expect("valid JSON");
-    json["cases"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["kind"] == "rayleigh_rice_gaussian")
-        .cloned()
-        .collect()
+    common::peer_cases("rayleigh_rice_gaussian")
 }
 
 fn f(c: &Value, key: &str) -> f64 {

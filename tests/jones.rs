@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::{flip_s3, json_rows as rows, peer_cases as cases};
+
 use common::{
     F32, F64, Tol, angle, assert_all_close, assert_close, complex, complex_matrix2, entries4,
     matrix4_from_rows, stokes_vector,
@@ -64,41 +66,6 @@ fn tol<T: Real>() -> Tol {
     } else {
         F64
     }
-}
-
-fn cases(kind: &str) -> Vec<serde_json::Value> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/peer_values.json");
-    let text = std::fs::read_to_string(path).expect("reference file tests/data/peer_values.json");
-    let all: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let out: Vec<_> = all["cases"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["kind"] == kind)
-        .cloned()
-        .collect();
-    assert!(!out.is_empty(), "no reference cases of kind {kind}");
-    out
-}
-
-fn rows(v: &serde_json::Value) -> Vec<Vec<f64>> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect()
-}
-
-/// `D M D` with `D = diag(1, 1, 1, −1)`: flips the sign of S3 (e^{+iωt} ↔ e^{−iωt}).
-fn flip_s3(m: Matrix4<f64>) -> Matrix4<f64> {
-    let d = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, 1.0, -1.0));
-    d * m * d
 }
 
 // ------------------------------------------------------------------ laws, generic over T

@@ -146,3 +146,43 @@ pub fn spd2() -> impl Strategy<Value = Matrix2<f64>> {
         x.transpose() * x + Matrix2::identity() * 0.05
     })
 }
+
+// ---------------------------------------------------------------- reference values
+
+/// The cases of one `kind` in `tests/data/peer_values.json` (values computed by Mitsuba 3,
+/// py-pol and pySCATMECH, each in its own convention; see `tests/data/README.md`).
+pub fn peer_cases(kind: &str) -> Vec<serde_json::Value> {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/peer_values.json");
+    let text = std::fs::read_to_string(path).expect("reference file tests/data/peer_values.json");
+    let all: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
+    let out: Vec<_> = all["cases"]
+        .as_array()
+        .expect("a `cases` array")
+        .iter()
+        .filter(|c| c["kind"] == kind)
+        .cloned()
+        .collect();
+    assert!(!out.is_empty(), "no reference cases of kind {kind}");
+    out
+}
+
+/// A JSON array of arrays of numbers as nested rows.
+pub fn json_rows(v: &serde_json::Value) -> Vec<Vec<f64>> {
+    v.as_array()
+        .expect("an array of rows")
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .expect("a row")
+                .iter()
+                .map(|x| x.as_f64().expect("a number"))
+                .collect()
+        })
+        .collect()
+}
+
+/// `D M D` with `D = diag(1, 1, 1, −1)`: flips the sign of S3 (`e^{+iωt}` ↔ `e^{−iωt}`).
+pub fn flip_s3(m: Matrix4<f64>) -> Matrix4<f64> {
+    let d = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, 1.0, -1.0));
+    d * m * d
+}
