@@ -15,7 +15,7 @@ mod common;
 
 use std::f64::consts::{PI, TAU};
 
-use common::{Tol, assert_all_close, assert_close};
+use common::{Tol, assert_all_close, assert_close, gauss_legendre};
 use gmueller::Real;
 use gmueller::error::Error;
 use gmueller::frame::{Frame, frame_change_mueller};
@@ -660,33 +660,6 @@ fn helmholtz_reciprocity_of_the_plane_wave_brdf() {
 }
 
 // ------------------------------------------------------------------ 5. energy
-
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the Legendre recurrence).
-fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut x = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    for i in 0..n {
-        let mut z = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 0.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, z);
-            for j in 2..=n {
-                let p2 = ((2 * j - 1) as f64 * z * p1 - (j - 1) as f64 * p0) / j as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-            let dz = p1 / dp;
-            z -= dz;
-            if dz.abs() < 1e-15 {
-                break;
-            }
-        }
-        x[i] = z;
-        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    (x, w)
-}
 
 /// `∫ f(r̂) d²r_t` over the exit hemisphere `|r_t| < 1` (= `∫ f cos θ_o dω`), in polar coordinates
 /// centred on the specular point `r_t0`: trapezoid in the angle, Gauss–Legendre on radial panels

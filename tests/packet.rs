@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{F32, F64, Tol, assert_all_close, assert_close, spd2, unit_vector3};
+use common::{F32, F64, Tol, assert_all_close, assert_close, gauss_legendre, spd2, unit_vector3};
 use gmueller::Error;
 use gmueller::frame::{Frame, rotation_mueller};
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
@@ -62,33 +62,6 @@ fn stokes64(v: Vector4<f64>) -> Stokes<f64> {
 /// `√(|Θx||Θy|)/|Θ½|`, with nalgebra determinants.
 fn bound(tx: &Matrix2<f64>, ty: &Matrix2<f64>) -> f64 {
     (tx.determinant() * ty.determinant()).sqrt() / ((tx + ty) * 0.5).determinant()
-}
-
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the three-term recurrence).
-fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut x = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    for i in 0..n {
-        let mut z = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 0.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, z);
-            for j in 2..=n {
-                let p2 = ((2 * j - 1) as f64 * z * p1 - (j - 1) as f64 * p0) / j as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-            let dz = p1 / dp;
-            z -= dz;
-            if dz.abs() < 1e-16 {
-                break;
-            }
-        }
-        x[i] = z;
-        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    (x, w)
 }
 
 /// `J₁(x)` by its power series `Σ (−1)ᵐ (x/2)^{2m+1} / (m! (m+1)!)` (fine for |x| ≲ 12).
