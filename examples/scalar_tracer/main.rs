@@ -305,7 +305,7 @@ fn parse_args() -> Result<Args, String> {
         raw_beam: false,
         width: 480,
         height: 300,
-        wavelengths: 32,
+        wavelengths: 48,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {

@@ -7,13 +7,13 @@
 //! Scene (scene units are metres; micro-geometry is in µm): a rough ground plane (Gaussian PSD
 //! σ = 0.06 µm, ℓ = 3 µm, grey phase screen), a rough glass-like sphere (Gaussian PSD
 //! σ = 0.03 µm, ℓ = 1.5 µm, Fresnel/Rayleigh–Rice with n = 1.5) and a tilted metal plate carrying
-//! a first-order sinusoidal height grating (amplitude 0.08 µm, period 3.7 µm, built as in
+//! a first-order sinusoidal height grating (amplitude 0.08 µm, period 8 µm, built as in
 //! `kernel_side::height_grating`), oriented so that its first diffraction order reaches the
 //! camera. Pixel radiance per unit source irradiance is `response.total().s0()` per wavelength,
 //! plus a small spectral ambient term (sky light × a diffuse albedo, not from the kernel) so the
 //! shapes stay visible; the sphere and the plate cast hard shadows of the source.
 //!
-//! Spectral: `--wavelengths N` (default 32) stratified samples over 0.40–0.70 µm, jittered per
+//! Spectral: `--wavelengths N` (default 48) stratified samples over 0.40–0.70 µm, jittered per
 //! pixel so that the sharp diffraction orders give a continuous rainbow rather than N spots;
 //! XYZ from the CIE 1931 2° matching functions (multi-lobe fit of Wyman, Sloan & Shirley 2013),
 //! white-balanced for the equal-energy source, → linear sRGB (D65 matrix), exposure so that the
@@ -69,7 +69,7 @@ const SUN_OMEGA: f64 = 6.8e-5;
 const SKY_OMEGA: f64 = 0.1;
 const LAMBDA_MIN: f64 = 0.40;
 /// Period of the plate's height grating, µm.
-const GRATING_PERIOD: f64 = 3.7;
+const GRATING_PERIOD: f64 = 8.0;
 const LAMBDA_MAX: f64 = 0.70;
 
 /// CIE 1931 2° colour matching functions, multi-lobe piecewise-Gaussian fit of
@@ -153,7 +153,7 @@ struct SceneGeo {
 
 impl SceneGeo {
     fn new(camera: V3, to_sun: V3) -> Self {
-        let plate_center = V3::new(1.25, 0.8, -0.9);
+        let plate_center = V3::new(1.3, 0.9, -0.6);
         // Tilt the plate normal from the sun–camera bisector b towards the camera, in the plane
         // of incidence, by δ with |(r̂ + ŝ)_t| = 2 cos θ_h sin δ = λ_mid/Λ: the first order at
         // λ_mid then reaches the camera (δ < 90° − θ_h keeps both directions above the plate).
@@ -168,7 +168,7 @@ impl SceneGeo {
         let u = axis.cross(&n).normalize();
         let v = n.cross(&u);
         Self {
-            sphere_center: V3::new(-0.9, 0.6, -0.8),
+            sphere_center: V3::new(-1.8, 0.6, 1.2),
             sphere_radius: 0.6,
             plate_center,
             plate_u: u,
@@ -318,9 +318,9 @@ const AMBIENT: f64 = 0.15;
 pub fn run(args: &RenderArgs) -> Result<(), Box<dyn Error>> {
     let start = Instant::now();
     let (w, h, nl) = (args.width, args.height, args.wavelengths.max(1));
-    let camera = V3::new(0.0, 1.3, 5.0);
-    let target = V3::new(0.0, 0.45, 0.0);
-    let to_sun = V3::new(-0.25, 0.42, -1.0).normalize();
+    let camera = V3::new(0.0, 3.0, 5.0);
+    let target = V3::new(0.0, 0.4, 0.0);
+    let to_sun = V3::new(-0.2, 0.7, -1.0).normalize();
     let travel = -to_sun;
     let geo = SceneGeo::new(camera, to_sun);
     let mats = Materials::new()?;
