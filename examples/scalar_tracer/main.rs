@@ -8,6 +8,9 @@
 //! (a quarter of the realizations), `--threads N`, `--seed S`, `--out DIR` (default
 //! `target/scalar_tracer/`), `--only NAME` (one configuration), `--raw-beam` (no beam
 //! compensation: shows the finite beam's blur of the lobe tails, see `brute.rs`).
+//! `--render [--width N] [--height N] [--wavelengths N]` instead renders a small spectral scene
+//! with the kernel under the sun and under a low-coherence source, side by side, into
+//! `render.png` in the output folder (see `render.rs`).
 //!
 //! The brute force (`brute.rs`) uses no gmueller code; `kernel_side.rs` calls the kernel for its
 //! prediction only. Units: µm. Output radiance `L` is per unit incident irradiance across the beam.
