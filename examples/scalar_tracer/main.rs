@@ -8,6 +8,9 @@
 //! (a quarter of the realizations), `--threads N`, `--seed S`, `--out DIR` (default
 //! `target/scalar_tracer/`), `--only NAME` (one configuration), `--raw-beam` (no beam
 //! compensation: shows the finite beam's blur of the lobe tails, see `brute.rs`).
+//! `--render [--width N] [--height N] [--wavelengths N]` instead renders a small spectral scene
+//! with the kernel under the sun and under a low-coherence source, side by side, into
+//! `render.png` in the output folder (see `render.rs`).
 //!
 //! The brute force (`brute.rs`) uses no gmueller code; `kernel_side.rs` calls the kernel for its
 //! prediction only. Units: µm. Output radiance `L` is per unit incident irradiance across the beam.
@@ -15,6 +18,7 @@
 mod brute;
 mod kernel_side;
 mod plot;
+mod render;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -287,6 +291,9 @@ struct Args {
     only: Option<String>,
     render: bool,
     raw_beam: bool,
+    width: usize,
+    height: usize,
+    wavelengths: usize,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -299,6 +306,9 @@ fn parse_args() -> Result<Args, String> {
         only: None,
         render: false,
         raw_beam: false,
+        width: 480,
+        height: 300,
+        wavelengths: 48,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -314,9 +324,15 @@ fn parse_args() -> Result<Args, String> {
             "--only" => a.only = Some(val("--only")?),
             "--render" => a.render = true,
             "--raw-beam" => a.raw_beam = true,
+            "--width" => a.width = val("--width")?.parse().map_err(|e| format!("{e}"))?,
+            "--height" => a.height = val("--height")?.parse().map_err(|e| format!("{e}"))?,
+            "--wavelengths" => {
+                a.wavelengths = val("--wavelengths")?.parse().map_err(|e| format!("{e}"))?;
+            }
             "-h" | "--help" => {
                 println!(
-                    "scalar_tracer [--realizations N] [--quick] [--threads N] [--seed S] [--out DIR] [--only NAME] [--raw-beam]"
+                    "scalar_tracer [--realizations N] [--quick] [--threads N] [--seed S] [--out DIR] [--only NAME] [--raw-beam]\n\
+                     scalar_tracer --render [--width N] [--height N] [--wavelengths N] [--threads N] [--out DIR]"
                 );
                 std::process::exit(0);
             }
@@ -335,7 +351,18 @@ fn main() {
         }
     };
     if args.render {
-        eprintln!("--render is not implemented yet; running the reference comparison.");
+        let r = render::RenderArgs {
+            width: args.width.max(1),
+            height: args.height.max(1),
+            wavelengths: args.wavelengths.max(1),
+            threads: args.threads.max(1),
+            out: args.out.clone(),
+        };
+        if let Err(e) = render::run(&r) {
+            eprintln!("render failed: {e}");
+            std::process::exit(1);
+        }
+        return;
     }
     let mut configs = configs(args.realizations, args.quick, args.raw_beam);
     if let Some(only) = &args.only {
