@@ -31,25 +31,8 @@ fn fourier_quad<const N: usize>(
     half: f64,
     n: usize,
 ) -> Complex<f64> {
-    let step = 2.0 * half / (n - 1) as f64;
-    let mut idx = [0usize; N];
-    let mut sum = Complex::new(0.0, 0.0);
-    loop {
-        let x = SVector::<f64, N>::from_fn(|d, _| -half + step * idx[d] as f64);
-        sum += f(&x) * Complex::from_polar(1.0, -q.dot(&x));
-        let mut d = 0;
-        loop {
-            if d == N {
-                return sum * step.powi(N as i32) / TAU.powf(N as f64 / 2.0);
-            }
-            idx[d] += 1;
-            if idx[d] < n {
-                break;
-            }
-            idx[d] = 0;
-            d += 1;
-        }
-    }
+    common::cube_quad(|x| f(x) * Complex::from_polar(1.0, -q.dot(x)), half, n)
+        / TAU.powf(N as f64 / 2.0)
 }
 
 /// `∫ f dᴺx` by the same trapezoid rule (no prefactor).

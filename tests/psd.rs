@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{Tol, assert_close};
+use common::{Tol, assert_close, cube_quad};
 use gmueller::gaussian::Gaussian;
 use gmueller::psd::{
     Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, Grating,
@@ -32,33 +32,6 @@ fn radial_integral(n: usize, f: impl Fn(f64) -> f64) -> f64 {
         })
         .sum();
     surface * s * dt
-}
-
-/// Trapezoid rule over `[−half, half]ᴺ` with `n` points per axis, of a complex integrand.
-fn cube_quad<const N: usize>(
-    f: impl Fn(&SVector<f64, N>) -> Complex<f64>,
-    half: f64,
-    n: usize,
-) -> Complex<f64> {
-    let step = 2.0 * half / (n - 1) as f64;
-    let mut idx = [0usize; N];
-    let mut sum = Complex::new(0.0, 0.0);
-    loop {
-        let x = SVector::<f64, N>::from_fn(|d, _| -half + step * idx[d] as f64);
-        sum += f(&x);
-        let mut d = 0;
-        loop {
-            if d == N {
-                return sum * step.powi(N as i32);
-            }
-            idx[d] += 1;
-            if idx[d] < n {
-                break;
-            }
-            idx[d] = 0;
-            d += 1;
-        }
-    }
 }
 
 fn literal_gauss<const N: usize>(cov: &SMatrix<f64, N, N>, x: &SVector<f64, N>) -> f64 {

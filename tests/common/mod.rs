@@ -215,3 +215,30 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     }
     (x, w)
 }
+
+/// Trapezoid rule over `[−half, half]ᴺ` with `n` points per axis, of a complex integrand.
+pub fn cube_quad<const N: usize>(
+    f: impl Fn(&nalgebra::SVector<f64, N>) -> Complex<f64>,
+    half: f64,
+    n: usize,
+) -> Complex<f64> {
+    let step = 2.0 * half / (n - 1) as f64;
+    let mut idx = [0usize; N];
+    let mut sum = Complex::new(0.0, 0.0);
+    loop {
+        let x = nalgebra::SVector::<f64, N>::from_fn(|d, _| -half + step * idx[d] as f64);
+        sum += f(&x);
+        let mut d = 0;
+        loop {
+            if d == N {
+                return sum * step.powi(N as i32);
+            }
+            idx[d] += 1;
+            if idx[d] < n {
+                break;
+            }
+            idx[d] = 0;
+            d += 1;
+        }
+    }
+}
