@@ -713,32 +713,12 @@ fn constructors_reject_invalid_input() {
 /// of the reference frame by +θ: must equal our `rotation_mueller(−θ)` within the case tolerance.
 #[test]
 fn mitsuba_rotator_matches_rotation_mueller_of_minus_theta() {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/peer_values.json"
-    ))
-    .expect("reference data");
-    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
     let mut n = 0;
-    for case in json["cases"].as_array().unwrap() {
-        if case["kind"] != "rotator" {
-            continue;
-        }
+    for case in common::peer_cases("rotator") {
         assert!(case["source"].as_str().unwrap().contains("Mitsuba 3.9.1"));
         let theta = case["theta"].as_f64().unwrap();
         let case_tol = case["tol"].as_f64().unwrap();
-        let rows: Vec<Vec<f64>> = case["mueller"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|r| {
-                r.as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|v| v.as_f64().unwrap())
-                    .collect()
-            })
-            .collect();
+        let rows = common::json_rows(&case["mueller"]);
         let theirs = matrix4_from_rows(&rows);
         let t = Tol::new(case_tol, 0.0);
         assert_all_close(

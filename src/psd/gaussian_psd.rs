@@ -40,29 +40,29 @@ pub struct GaussianPsd<T: Real, const N: usize> {
 }
 
 fn check_positive<T: Real>(what: &'static str, v: T) -> Result<(), Error> {
-    if v.is_finite() && v > T::zero() {
-        Ok(())
-    } else if !v.is_finite() {
-        Err(Error::NonFinite { what })
-    } else {
-        Err(Error::OutOfRange {
-            what,
-            value: v.to_f64(),
-            expected: "(0, ∞)",
-        })
-    }
+    check_range(what, v, v > T::zero(), "(0, ∞)")
 }
 
 fn check_nonnegative<T: Real>(what: &'static str, v: T) -> Result<(), Error> {
-    if v.is_finite() && v >= T::zero() {
-        Ok(())
-    } else if !v.is_finite() {
+    check_range(what, v, v >= T::zero(), "[0, ∞)")
+}
+
+/// `NonFinite` for NaN/∞, `OutOfRange` (with `expected`) when `ok` is false.
+fn check_range<T: Real>(
+    what: &'static str,
+    v: T,
+    ok: bool,
+    expected: &'static str,
+) -> Result<(), Error> {
+    if !v.is_finite() {
         Err(Error::NonFinite { what })
+    } else if ok {
+        Ok(())
     } else {
         Err(Error::OutOfRange {
             what,
             value: v.to_f64(),
-            expected: "[0, ∞)",
+            expected,
         })
     }
 }
