@@ -232,16 +232,28 @@ impl<T: Real> Frame<T> {
     pub fn sp(direction: Vector3<T>, normal: Vector3<T>) -> Result<Self, Error> {
         let d = normalize_checked(&direction, "propagation direction")?;
         let n = normalize_checked(&normal, "surface normal")?;
+        Ok(Self::sp_unit(d, n))
+    }
+
+    /// [`Frame::sp`] for inputs the caller knows to be finite unit vectors (hot paths).
+    ///
+    /// Away from normal incidence (`|d̂ × n̂| ≥ 1/8`) the normalized cross product is orthogonal
+    /// to d̂ within a few ε and is used as is; closer to the normal it is re-orthogonalized
+    /// against d̂ (twice), and below `√ε` replaced by the tangent of n̂, as documented on `sp`.
+    #[inline]
+    pub(crate) fn sp_unit(d: Vector3<T>, n: Vector3<T>) -> Self {
         let c = d.cross(&n);
-        let s_raw = if c.norm() < Self::parallel_tolerance() {
+        let c2 = c.norm_squared();
+        let s = if c2 >= T::lit(1.0 / 64.0) {
+            c / c2.sqrt()
+        } else if c2.sqrt() < Self::parallel_tolerance() {
             // Degenerate plane of incidence: a tangent from n̂ alone (same for ±d̂).
-            duff_tangent(&n)
+            orthogonalize(&duff_tangent(&n), &d)
         } else {
-            c
+            orthogonalize(&c, &d)
         };
-        let s = orthogonalize(&s_raw, &d);
         let p = d.cross(&s);
-        Ok(Self { x: s, y: p, k: d })
+        Self { x: s, y: p, k: d }
     }
 
     /// x̂.
@@ -356,7 +368,9 @@ fn change<T: Real>(from: &Frame<T>, to: &Frame<T>) -> Change<T> {
         (a + d, c - b)
     };
     // φ = atan2(y, x); identical frames give (x, y) = (2, 0) and so exactly cos φ = 1, sin φ = 0.
-    let r = x.hypot(y);
+    // |x|, |y| ≤ 2 and r = σ₁ ± σ₂ ≥ 1 − 256 ε (P's singular values are 1 and |k̂·k̂′|), so
+    // √(x² + y²) neither over- nor underflows.
+    let r = (x * x + y * y).sqrt();
     Change {
         cos: x / r,
         sin: y / r,

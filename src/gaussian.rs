@@ -126,6 +126,23 @@ pub(crate) fn solve_lower<T: Real, const N: usize>(
     y
 }
 
+/// `ln|Σ| = 2 ln ∏ Lᵢᵢ` for a Cholesky factor with positive diagonal: one logarithm of the
+/// product when it lies in `[10⁻³⁰, 10³⁰]` (normal in f32 and f64, so exact to rounding), the
+/// sum of logarithms otherwise (where the product could over- or underflow).
+#[inline]
+pub(crate) fn log_det_from_cholesky<T: Real, const N: usize>(l: &SMatrix<T, N, N>) -> T {
+    let mut prod = T::one();
+    for i in 0..N {
+        prod *= l[(i, i)];
+    }
+    let two = T::lit(2.0);
+    if prod >= T::lit(1e-30) && prod <= T::lit(1e30) {
+        two * prod.ln()
+    } else {
+        (0..N).fold(T::zero(), |acc, i| acc + l[(i, i)].ln()) * two
+    }
+}
+
 /// `L⁻¹` of a lower-triangular `L`, column by column.
 fn lower_inverse<T: Real, const N: usize>(l: &SMatrix<T, N, N>) -> SMatrix<T, N, N> {
     let mut inv = SMatrix::<T, N, N>::zeros();
@@ -196,12 +213,20 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
             what: "Gaussian covariance",
             min_eigenvalue: pivot.to_f64(),
         })?;
-        let mut log_det = T::zero();
-        for i in 0..N {
-            log_det += chol[(i, i)].ln();
-        }
-        log_det *= T::lit(2.0);
+        let log_det = log_det_from_cholesky(&chol);
         Ok(Self { cov, chol, log_det })
+    }
+
+    /// A Gaussian from a covariance the crate built itself, symmetric up to rounding by
+    /// construction: `None` unless it is numerically positive definite. Skips the finiteness
+    /// and asymmetry checks of [`Gaussian::new`] (the hot path of the interaction kernel); a
+    /// NaN or infinite diagonal still fails the Cholesky pivot test.
+    #[inline]
+    pub(crate) fn from_symmetric(cov: SMatrix<T, N, N>) -> Option<Self> {
+        let cov = (cov + cov.transpose()) * T::lit(0.5);
+        let chol = cholesky(&cov).ok()?;
+        let log_det = log_det_from_cholesky(&chol);
+        Some(Self { cov, chol, log_det })
     }
 
     /// The isotropic Gaussian `g^{s² I}` of standard deviation `s`.

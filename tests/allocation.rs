@@ -137,6 +137,21 @@ fn run_level<T, Pol, Coh, P, B>(
     });
     assert!(sum.is_finite(), "{name}: finite results");
     assert_eq!(n, 0, "{name}: {n} heap allocations in 1000 evaluations");
+    // The prepared path: one `prepare`, then the exits.
+    let (n, sum) = count(|| {
+        let prepared = kernel.prepare(black_box(&s.packet), &s.surface).unwrap();
+        let mut acc = T::zero();
+        for g in &geometries {
+            let r = kernel.evaluate_prepared(black_box(material), black_box(&prepared), g);
+            acc += r.total().s0();
+        }
+        acc
+    });
+    assert!(sum.is_finite(), "{name}: finite prepared results");
+    assert_eq!(
+        n, 0,
+        "{name}: {n} heap allocations in prepare + 50 evaluations"
+    );
 }
 
 fn all_levels<T: Real>() {

@@ -73,8 +73,9 @@ impl<T: Real> Geometry<T> {
         }
         let h = (r + s) * k;
         let h_t = Vector2::new(h.dot(&surface.x()), h.dot(&surface.y()));
-        let incident_sp = Frame::sp(-s, n)?;
-        let exit_sp = Frame::sp(r, n)?;
+        // ŝ and r̂ are unit vectors, and so is n̂ (of a validated frame).
+        let incident_sp = Frame::sp_unit(-s, n);
+        let exit_sp = Frame::sp_unit(r, n);
         Ok(Self {
             k,
             surface: *surface,
@@ -128,7 +129,7 @@ impl<T: Real> Geometry<T> {
 
 /// `v/|v|`, rescaled by the largest component first: `|v|` itself over- or underflows for
 /// components beyond ~1e±154 (f64) or ~1e±19 (f32), which rejected valid directions as zero.
-fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
+pub(crate) fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
     crate::error::ensure_finite(what, v.iter().copied())?;
     let m = v.amax();
     if m == T::zero() {

@@ -43,7 +43,7 @@ pub mod sampling;
 
 use core::marker::PhantomData;
 
-use nalgebra::{Matrix2, Vector2, Vector3, Vector4};
+use nalgebra::{Matrix2, Matrix4, Vector2, Vector3, Vector4};
 
 pub use exitant::{exitant_packet, exitant_shape};
 pub use geometry::Geometry;
@@ -287,7 +287,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
     /// Evaluates S2.20 for `packet` leaving along `g.exit` (see the module formula).
     ///
     /// `g` must have been built for this packet: `g.k` its wavenumber and `g.to_source` its
-    /// reversed propagation direction (e.g. by [`Geometry::for_packet`]).
+    /// reversed propagation direction (e.g. by [`Geometry::for_packet`]). For several exit
+    /// directions of one packet, [`Kernel::prepare`] once and [`Kernel::evaluate_prepared`]
+    /// per direction give the same result without repeating the per-packet work.
     #[must_use]
     pub fn evaluate<T, P, Sp, Sc>(
         &self,
@@ -302,26 +304,104 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
+        let prepared = PreparedPacket::new(packet, &g.surface, &g.incident_sp);
+        self.evaluate_prepared(material, &prepared, g)
+    }
+
+    /// The per-packet part of the kernel at this model level — the sections `Ξ_α` of the
+    /// packet's coherence by the surface (Cholesky-factored) and the rotation `T` from the
+    /// packet frame to the incident s/p frame — computed once for any number of exit
+    /// directions ([`Kernel::evaluate_prepared`]).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] when the packet does not travel toward the surface
+    /// (`k̂ · n̂ ≥ 0`), as [`Geometry::for_packet`] would report for every exit direction.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, PhaseScreen, RoughSurface};
+    /// use gmueller::packet::{CoherenceShape, WavePacket};
+    /// use gmueller::psd::{ClosedForm, GaussianPsd};
+    /// use gmueller::stokes::Stokes;
+    /// use nalgebra::Vector3;
+    ///
+    /// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    /// let travel = Vector3::new(0.5_f64, 0.0, -(0.75_f64).sqrt());
+    /// let packet = WavePacket::from_stokes(
+    ///     Stokes::unpolarized(1.0).unwrap(), CoherenceShape::isotropic(3.0).unwrap(),
+    ///     Frame::sp(travel, Vector3::z()).unwrap(), 0.5).unwrap();
+    /// let material = RoughSurface {
+    ///     psd: GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap(),
+    ///     specular: PhaseScreen::new(0.04).unwrap(),
+    ///     scatter: PhaseScreen::new(0.04).unwrap(),
+    /// };
+    /// let kernel = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm);
+    /// let prepared = kernel.prepare(&packet, &surface).unwrap();
+    /// for exit in [Vector3::new(0.5, 0.0, 0.87), Vector3::new(0.3, 0.2, 0.93)] {
+    ///     let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+    ///     let once = kernel.evaluate(&material, &packet, &g).total().s0();
+    ///     let many = kernel.evaluate_prepared(&material, &prepared, &g).total().s0();
+    ///     assert!((once - many).abs() <= 1e-12 * once);
+    /// }
+    /// ```
+    pub fn prepare<T: Real>(
+        &self,
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+    ) -> Result<PreparedPacket<T, Pol, Coh>, Error> {
+        let to_source = geometry::unit(-packet.direction(), "direction to the source")?;
+        let n = surface.k();
+        let cos_i = to_source.dot(&n);
+        if cos_i <= T::zero() {
+            return Err(Error::OutOfRange {
+                what: "cos θ_i (packet travelling away from the surface)",
+                value: cos_i.to_f64(),
+                expected: "> 0",
+            });
+        }
+        // The incident s/p frame exactly as `Geometry::new` builds it.
+        let incident_sp = Frame::sp_unit(-to_source, n);
+        Ok(PreparedPacket::new(packet, surface, &incident_sp))
+    }
+
+    /// [`Kernel::evaluate`] with the per-packet work done by [`Kernel::prepare`]; `g` must be
+    /// a geometry of that packet on that surface (e.g. [`Geometry::for_packet`]).
+    #[must_use]
+    pub fn evaluate_prepared<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Pol, Coh>,
+        g: &Geometry<T>,
+    ) -> Response<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        B: BlurMethod<T, 2, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
         let lambda = g.wavelength();
         let attenuation = roughness_attenuation(&material.psd, g);
         let front = g.cos_o / (lambda * lambda) * attenuation;
         let psd = &material.psd;
-        let weights = |channel: Channel| {
-            let xi = if Coh::USES_SHAPE {
-                surface_inverse_coherence(packet, channel, &g.surface)
-            } else {
-                None
-            };
+        let weights = |xi: &Option<Gaussian<T, 2>>| {
             (
                 Coh::specular_weight(xi.as_ref(), &g.h_t),
                 Coh::scatter_weight(psd, &self.blur, xi.as_ref(), &g.h_t),
             )
         };
-        let s = packet.stokes().0;
+        let s = prepared.stokes;
+        let [xi_x, xi_y, xi_half] = &prepared.sections;
         match Pol::LEVEL {
             PolarizationLevel::Scalar => {
-                let (ks, kd) = weights(Channel::Half);
-                let spec = front * ks * material.specular.m00(g) * s[0];
+                let (ks, kd) = weights(xi_half);
+                // Off the specular lobe (and always for a plane wave) its weight is exactly 0.
+                let spec = if ks == T::zero() {
+                    T::zero()
+                } else {
+                    front * ks * material.specular.m00(g) * s[0]
+                };
                 let scat = front * kd * material.scatter.m00(g) * s[0];
                 Response {
                     specular: Stokes(Vector4::new(spec, T::zero(), T::zero(), T::zero())),
@@ -330,16 +410,16 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
                 }
             }
             PolarizationLevel::OneShape => {
-                let (ks, kd) = weights(Channel::Half);
-                let t = frame_change_mueller(packet.frame(), &g.incident_sp).0 * s;
+                let (ks, kd) = weights(xi_half);
+                let t = prepared.t_stokes;
                 self.finish(material, g, (t, front * ks), (t, front * kd), attenuation)
             }
             PolarizationLevel::Full => {
-                let (xs, xd) = weights(Channel::X);
-                let (ys, yd) = weights(Channel::Y);
-                let (hs, hd) = weights(Channel::Half);
-                let (sx, sy) = (packet.sx(), packet.sy());
-                let t_mat = frame_change_mueller(packet.frame(), &g.incident_sp).0;
+                let (xs, xd) = weights(xi_x);
+                let (ys, yd) = weights(xi_y);
+                let (hs, hd) = weights(xi_half);
+                let (sx, sy) = (prepared.sx, prepared.sy);
+                let t_mat = &prepared.t;
                 // The effective Stokes vector with the weights divided by their largest, and
                 // that largest weight (times `front`) as a separate scale applied last.
                 let eff = |kx: T, ky: T, kh: T| {
@@ -383,6 +463,58 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
             specular: Stokes(specular),
             scattered: Stokes(material.scatter.mueller(g).0 * scat_in * scat_scale),
             attenuation,
+        }
+    }
+}
+
+/// The per-packet part of a [`Kernel`] at model level (`Pol`, `Coh`), from [`Kernel::prepare`].
+///
+/// Holds the packet's Stokes parameters (`S`, `S_x`, `S_y`), the rotation `T` (S2.4) from the
+/// packet frame to the incident s/p frame, and the surface sections `Ξ_α` of the channels the
+/// level uses (none for [`PlaneWave`]; `Ξ_½` only below [`Full`]), each with its Cholesky
+/// factor. No heap allocation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedPacket<T: Real, Pol, Coh> {
+    stokes: Vector4<T>,
+    sx: T,
+    sy: T,
+    t: Matrix4<T>,
+    t_stokes: Vector4<T>,
+    /// `Ξ_x`, `Ξ_y`, `Ξ_½` (`None` where unused or not positive definite).
+    sections: [Option<Gaussian<T, 2>>; 3],
+    _levels: PhantomData<(Pol, Coh)>,
+}
+
+impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol, Coh> {
+    fn new(packet: &WavePacket<T>, surface: &Frame<T>, incident_sp: &Frame<T>) -> Self {
+        let section = |channel| {
+            if Coh::USES_SHAPE {
+                surface_inverse_coherence(packet, channel, surface)
+            } else {
+                None
+            }
+        };
+        let sections = match Pol::LEVEL {
+            PolarizationLevel::Full => [
+                section(Channel::X),
+                section(Channel::Y),
+                section(Channel::Half),
+            ],
+            _ => [None, None, section(Channel::Half)],
+        };
+        let stokes = packet.stokes().0;
+        let t = match Pol::LEVEL {
+            PolarizationLevel::Scalar => Matrix4::identity(),
+            _ => frame_change_mueller(packet.frame(), incident_sp).0,
+        };
+        Self {
+            stokes,
+            sx: packet.sx(),
+            sy: packet.sy(),
+            t,
+            t_stokes: t * stokes,
+            sections,
+            _levels: PhantomData,
         }
     }
 }
@@ -439,7 +571,7 @@ pub fn surface_inverse_coherence<T: Real>(
     let b = Vector2::new(f.k().dot(&t1), f.k().dot(&t2));
     let p = inverse2(&packet.shape(channel));
     let xi = a.transpose() * p * a + b * b.transpose() * packet.inverse_longitudinal_variance();
-    Gaussian::new(xi).ok()
+    Gaussian::from_symmetric(xi)
 }
 
 /// The surface coherence term of S2.17 for one packet channel, partially coherent:

@@ -151,11 +151,7 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
             // Only reachable by overflow of the sum at extreme scales.
             return T::min_value().unwrap_or(T::zero());
         };
-        let mut log_det_sum = T::zero();
-        for i in 0..N {
-            log_det_sum += l[(i, i)].ln();
-        }
-        log_det_sum *= T::lit(2.0);
+        let log_det_sum = crate::gaussian::log_det_from_cholesky(&l);
         let m = solve_lower(&l, h).norm_squared();
         self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() - log_det_sum - m)
     }
