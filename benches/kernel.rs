@@ -3,8 +3,11 @@
 //! blur, Partial with a K-correlation PSD through Gauss–Hermite (orders 3, 5, 8) and through a
 //! Gaussian-mixture fit (8 and 16 components), f32 and f64; a classical incoherent polarized
 //! baseline (Fresnel Mueller × PSD at the half vector × Stokes, geometry precomputed the same
-//! way); and `Geometry` construction alone. Inputs are seeded (an LCG) and pass through
-//! `black_box`; each group also times one degenerate case (normal incidence, exact specular).
+//! way); and `Geometry` construction alone. Each level is timed per evaluation (`seeded`), per
+//! exit direction of a prepared packet (`prepared`: `Kernel::prepare` outside the loop) and
+//! from direction cosines (`with-geometry`: `Geometry::for_packet` inside the loop). Inputs are
+//! seeded (an LCG) and pass through `black_box`; each group also times one degenerate case
+//! (normal incidence, exact specular).
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -125,6 +128,34 @@ fn bench_level<T, Pol, Coh, P, B>(
                 black_box(&s.packet),
                 black_box(&s.geometry),
             ))
+        });
+    });
+    // Per exit direction once the packet is prepared (`Kernel::prepare` outside the loop).
+    let prepared: Vec<_> = sc
+        .iter()
+        .map(|s| kernel.prepare(&s.packet, &surface()).unwrap())
+        .collect();
+    g.bench_function(BenchmarkId::new(name, "prepared"), |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i = (i + 1) & (N - 1);
+            black_box(kernel.evaluate_prepared(
+                black_box(material),
+                black_box(&prepared[i]),
+                black_box(&sc[i].geometry),
+            ))
+        });
+    });
+    // From direction cosines: the geometry built inside the loop too.
+    g.bench_function(BenchmarkId::new(name, "with-geometry"), |b| {
+        let mut i = 0;
+        let surf = surface::<T>();
+        b.iter(|| {
+            i = (i + 1) & (N - 1);
+            let s = &sc[i];
+            let geo = Geometry::for_packet(black_box(&s.packet), &surf, black_box(s.geometry.exit))
+                .unwrap();
+            black_box(kernel.evaluate(black_box(material), black_box(&s.packet), &geo))
         });
     });
     let d = degenerate::<T>();

@@ -424,14 +424,20 @@ mod tests {
             let m = 10f64.powi(e);
             for (a, b) in [(3.0 * m, 4.0 * m), (m, 1e-3 * m), (-m, 0.0), (0.0, -m)] {
                 let (fast, lib) = (hypot(a, b), a.hypot(b));
-                assert!((fast - lib).abs() <= 4.0 * f64::EPSILON * lib, "f64 {a:e} {b:e}");
+                assert!(
+                    (fast - lib).abs() <= 4.0 * f64::EPSILON * lib,
+                    "f64 {a:e} {b:e}"
+                );
             }
         }
         for e in -36..=36 {
             let m = 10f32.powi(e);
             for (a, b) in [(3.0 * m, 4.0 * m), (m, 1e-3 * m)] {
                 let (fast, lib) = (hypot(a, b), a.hypot(b));
-                assert!((fast - lib).abs() <= 4.0 * f32::EPSILON * lib, "f32 {a:e} {b:e}");
+                assert!(
+                    (fast - lib).abs() <= 4.0 * f32::EPSILON * lib,
+                    "f32 {a:e} {b:e}"
+                );
             }
         }
         assert_eq!(hypot(0.0_f64, 0.0), 0.0);

@@ -1,8 +1,9 @@
 //! Verifies `gmueller::psd`: normalisation `∫p = (2π)^{n/2} R(0)` of every model by independent
 //! quadrature, the unitary-transform definition of the Gaussian PSD, SCATMECH's Gaussian and ABC
 //! PSDs after the change of variables, the S2.17 constant (numerically, against the direct
-//! integral S2.15), Bessel efficiencies against Abramowitz & Stegun, and an accuracy sweep of every
-//! blur method against the adaptive reference.
+//! integral S2.15), Bessel efficiencies against Abramowitz & Stegun, an accuracy sweep of every
+//! blur method against the adaptive reference, and the Gaussian PSD's log-free blur path against
+//! its log-space form.
 
 mod common;
 
@@ -681,4 +682,63 @@ fn adaptive_finds_sharp_off_centre_peak() {
             assert_close("adaptive, sharp peak", v, exact, Tol::new(1e-300, tol));
         }
     }
+}
+
+/// `GaussianPsd::normalized_blur_value` (the log-free fast path of the closed-form blur)
+/// against the exponential of `log_normalized_blur` over scales that cross its switches
+/// (`∏Lᵢᵢ`, `σ²` outside `[1e-30, 1e30]`, `|L⁻¹h|² > 100`), in f64 and f32.
+#[test]
+fn normalized_blur_value_is_exp_of_log_form() {
+    let mut worst = [0.0f64; 2];
+    for &rms in &[0.0, 1e-20, 1e-3, 0.02, 1e10] {
+        for &len in &[1e-12, 1e-3, 0.5, 2.0, 50.0, 1e12] {
+            for &w in &[1e-9, 0.1, 3.0, 1e4, 1e9] {
+                for &hs in &[0.0, 0.3, 3.0, 30.0] {
+                    let p = GaussianPsd::<f64, 2>::isotropic(rms, len).unwrap();
+                    let cov = Matrix2::new(1.0, 0.3, 0.3, 2.0) / (w * w);
+                    let cov = Gaussian::new(cov).unwrap();
+                    // h in units of the combined spectral width.
+                    let h =
+                        Vector2::new(0.7, -0.4) * (hs * (1.0 / (len * len) + 1.0 / (w * w)).sqrt());
+                    let (fast, log) = (
+                        p.normalized_blur_value(&cov, &h),
+                        p.log_normalized_blur(&cov, &h).exp(),
+                    );
+                    assert_close("normalized blur f64", fast, log, Tol::new(0.0, 1e-13));
+                    worst[0] = worst[0].max(if log > 0.0 {
+                        (fast / log - 1.0).abs()
+                    } else {
+                        0.0
+                    });
+                    // f32 where the parameters are representable.
+                    if rms < 1e15 && (1e-15..1e15).contains(&len) && (1e-15..1e15).contains(&w) {
+                        let p = GaussianPsd::<f32, 2>::isotropic(rms as f32, len as f32).unwrap();
+                        let cov =
+                            Gaussian::new(Matrix2::new(1.0f32, 0.3, 0.3, 2.0) / (w * w) as f32);
+                        let Ok(cov) = cov else { continue };
+                        let h = h.map(|v| v as f32);
+                        let (fast, log) = (
+                            p.normalized_blur_value(&cov, &h),
+                            p.log_normalized_blur(&cov, &h).exp(),
+                        );
+                        assert_close(
+                            "normalized blur f32",
+                            fast.into(),
+                            log.into(),
+                            Tol::new(0.0, 2e-5),
+                        );
+                        worst[1] = worst[1].max(if log > 0.0 {
+                            f64::from((fast / log - 1.0).abs())
+                        } else {
+                            0.0
+                        });
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "normalized_blur_value vs exp(log form): worst relative difference f64 {:.1e}, f32 {:.1e}",
+        worst[0], worst[1]
+    );
 }

@@ -155,6 +155,38 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
         let m = solve_lower(&l, h).norm_squared();
         self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() - log_det_sum - m)
     }
+
+    /// `∫ p(ζ) 𝒩_Σ(h − ζ) dⁿζ` ([`BlurMethod::normalized_blur`]), without logarithms where
+    /// nothing can over- or underflow.
+    ///
+    /// # Formula
+    /// ```text
+    /// ∫ p 𝒩_Σ(h − ·) = σ² / ∏ᵢ Lᵢᵢ · exp(−½ |L⁻¹h|²),    L Lᵀ = Λ⁻¹ + Σ
+    /// ```
+    /// (the exponential of [`Self::log_normalized_blur`], whose `ln|Λ|` terms cancel). Used
+    /// when `σ²` and `∏ Lᵢᵢ` lie in `[10⁻³⁰, 10³⁰]` and `|L⁻¹h|² ≤ 100`, so every
+    /// intermediate is a normal number in f32 and f64; otherwise the log-space form is used.
+    #[inline]
+    #[must_use]
+    pub fn normalized_blur_value(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
+        let Ok(l) = cholesky(&sum) else {
+            return T::zero();
+        };
+        let mut prod = T::one();
+        for i in 0..N {
+            prod *= l[(i, i)];
+        }
+        let m = solve_lower(&l, h).norm_squared();
+        let (lo, hi) = (T::lit(1e-30), T::lit(1e30));
+        let v = self.variance;
+        if prod >= lo && prod <= hi && v >= lo && v <= hi && m <= T::lit(100.0) {
+            v / prod * (T::lit(-0.5) * m).exp()
+        } else {
+            let log_det_sum = crate::gaussian::log_det_from_cholesky(&l);
+            (self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() - log_det_sum - m)).exp()
+        }
+    }
 }
 
 impl<T: Real, const N: usize> Psd<T, N> for GaussianPsd<T, N> {
@@ -186,7 +218,7 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianPsd<T, N>> for ClosedForm
         cov: &Gaussian<T, N>,
         h: &SVector<T, N>,
     ) -> T {
-        psd.log_normalized_blur(cov, h).exp()
+        psd.normalized_blur_value(cov, h)
     }
 }
 
