@@ -226,6 +226,9 @@ impl<T: Real> FresnelCoefficients<T> {
 /// let f = coefficients(1.0_f64, Complex::new(1.5, 0.0));
 /// assert!((f.rs.re + 0.2).abs() < 1e-15 && (f.rp.re - 0.2).abs() < 1e-15);
 /// ```
+// Inlined so that callers needing only r_s, r_p (e.g. `reflection`) drop the transmission
+// divisions.
+#[inline]
 #[must_use]
 pub fn coefficients<T: Real>(cos_theta_i: T, eta: Complex<T>) -> FresnelCoefficients<T> {
     // Clamp into [0, 1]; NaN falls through both comparisons and propagates.
