@@ -86,6 +86,7 @@ EOF
 echo "g++ $(g++ -dumpfullversion)" | tee -a "$OUT/versions.txt"
 
 # --- Python peers -----------------------------------------------------------------------------
+echo "== timing starts; load average: $(cut -d' ' -f1-3 /proc/loadavg) (other jobs on this machine inflate the medians)"
 run_py() {
     echo "== $1"
     # OPENBLAS_CORETYPE / OPENBLAS_L2_SIZE (set on some machines here) slow numpy: unset them for
@@ -136,4 +137,5 @@ for line in open(sys.argv[1]):
         f[4], f[5] = num(f[4]), num(f[5])
         print("| " + " | ".join(f[:6] + ["|".join(f[6:])]) + " |")
 EOF
+echo "load average after timing: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "(table also in $OUT/results.md)"
