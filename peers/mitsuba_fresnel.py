@@ -14,7 +14,6 @@ Run by peers/run.sh.
 """
 
 import cmath
-import math
 import sys
 
 import numpy as np
