@@ -35,6 +35,16 @@
 //! - Coherence: [`PlaneWave`] · [`Partial`] · [`Incoherent`].
 //! - Blur: any [`BlurMethod`] for the PSD (closed form, mixture fit, Gauss–Hermite, adaptive).
 //! - Precision: `T = f32` or `f64`.
+//!
+//! # Cost
+//! A call splits into per-packet work — the sections `Ξ_α` (one 2×2 Cholesky each: three at
+//! [`Full`], one below, none for [`PlaneWave`]) and the rotation `T` to the incident s/p frame —
+//! and per-exit work: per channel one blur and one specular-lobe exponential, the Debye–Waller
+//! factor, and the two pBSDFs (the specular one skipped where its weight underflows to 0).
+//! [`Kernel::evaluate`] does both; for one packet and many exit directions (a lobe, a grid, a
+//! light sample and a BSDF sample) [`Kernel::prepare`] the packet once and call
+//! [`Kernel::evaluate_prepared`] per direction: the results are bit for bit the same. Measured
+//! costs per level are in the README ("Accuracy and speed") and `benches/kernel.rs`.
 
 pub mod exitant;
 pub mod geometry;
