@@ -133,12 +133,16 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
     };
     let kernel = Kernel::<Scalar, Partial, B>::new(blur);
     let once = || -> Vec<Prediction> {
+        // One packet, many exit directions: the per-packet work once.
+        let prepared = kernel
+            .prepare(&packet, &surface)
+            .expect("packet toward the surface");
         exits
             .iter()
             .map(|r| {
                 let g = Geometry::for_packet(&packet, &surface, Vector3::new(r[0], r[1], r[2]))
                     .expect("geometry");
-                let resp: Response<f64> = kernel.evaluate(&material, &packet, &g);
+                let resp: Response<f64> = kernel.evaluate_prepared(&material, &prepared, &g);
                 Prediction {
                     specular: resp.specular.s0(),
                     scattered: resp.scattered.s0(),
