@@ -165,31 +165,30 @@ fn bench_precision<T: Real>(c: &mut Criterion, name: &str) {
     g.finish();
 }
 
-/// The structure-of-arrays batch path: 1024 matrices per iteration (time per matrix = time / 1024;
-/// criterion also prints the rate), and 7 matrices (shorter than one SIMD vector in f32: the
-/// masked remainder only, the degenerate case).
+/// The structure-of-arrays batch path, per iteration one call on `n` matrices (time per matrix =
+/// time / n; criterion also prints the rate). Inputs and outputs each live in one buffer, slices
+/// `padded_stride(n)` apart: `soa/1024` (the figure of merit: 1024 matrices, in L2), `soa/128`
+/// (all 24 slices in L1), `soa/7` (shorter than one f32 vector: the masked remainder only, the
+/// degenerate case), and `soa_stride_n/1024` (slices exactly `n` apart, so all start at one
+/// address modulo 4 KiB: the layout `padded_stride` avoids).
 fn bench_batch<T: Real>(c: &mut Criterion, name: &str) {
-    use gmueller::mueller::batch::{JonesSoa, MuellerSoa, mueller_from_jones_soa};
-    const N: usize = 1024;
+    use gmueller::mueller::batch::{JonesSoa, MuellerSoa, mueller_from_jones_soa, padded_stride};
     let mut rng = SplitMix(0xBA7C);
-    let re: Vec<Vec<T>> = (0..4)
-        .map(|_| (0..N).map(|_| T::lit(rng.next_f64())).collect())
-        .collect();
-    let im: Vec<Vec<T>> = (0..4)
-        .map(|_| (0..N).map(|_| T::lit(rng.next_f64())).collect())
-        .collect();
-    let mut buf: Vec<T> = std::iter::repeat_n(T::zero(), 16 * N).collect();
     let mut g = c.benchmark_group(format!("jones_to_mueller_batch/{name}"));
-    for n in [N, 7] {
+    for (label, n, stride) in [
+        ("soa", 1024, padded_stride::<T>(1024)),
+        ("soa", 128, padded_stride::<T>(128)),
+        ("soa", 7, padded_stride::<T>(7)),
+        ("soa_stride_n", 1024, 1024),
+    ] {
+        let inputs: Vec<T> = (0..8 * stride).map(|_| T::lit(rng.next_f64())).collect();
+        let mut buf: Vec<T> = std::iter::repeat_n(T::zero(), 16 * stride).collect();
         g.throughput(criterion::Throughput::Elements(n as u64));
-        g.bench_function(BenchmarkId::new("soa", n), |b| {
+        g.bench_function(BenchmarkId::new(label, n), |b| {
             b.iter(|| {
-                let soa = JonesSoa {
-                    re: [&re[0][..n], &re[1][..n], &re[2][..n], &re[3][..n]],
-                    im: [&im[0][..n], &im[1][..n], &im[2][..n], &im[3][..n]],
-                };
-                let mut out = MuellerSoa::from_contiguous(&mut buf[..16 * n]).expect("16 n");
-                mueller_from_jones_soa(black_box(&soa), &mut out).expect("equal lengths");
+                let soa = JonesSoa::from_strided(black_box(&inputs), n, stride).expect("fits");
+                let mut out = MuellerSoa::from_strided(&mut buf, n, stride).expect("fits");
+                mueller_from_jones_soa(&soa, &mut out).expect("equal lengths");
                 black_box(&mut out);
             })
         });

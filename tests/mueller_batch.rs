@@ -3,8 +3,8 @@
 //! form `Mueller::from_jones` (itself tested against the literal S1.7 formula in tests/mueller.rs)
 //! in f64 and f32, relative to the matrix scale `N = ½‖J‖²_F`: random inputs, lengths that are
 //! not multiples of the SIMD width, zero and huge / tiny magnitudes; the f32 path also against the
-//! literal S1.7 formula evaluated in f64; plus the layout of `MuellerSoa::from_contiguous` and the
-//! length validation.
+//! literal S1.7 formula evaluated in f64; plus the strided layouts (`from_strided`, `padded_stride`)
+//! and the length validation.
 //!
 //! Tolerance: each entry `M_kl` is a sum of four products (or of eight squares times ½) whose
 //! absolute values add up to at most `N`; computed with at most four roundings it is within
@@ -18,7 +18,7 @@ use common::{Tol, assert_close, complex_matrix2};
 use gmueller::Error;
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
-use gmueller::mueller::batch::{JonesSoa, MuellerSoa, mueller_from_jones_soa};
+use gmueller::mueller::batch::{JonesSoa, MuellerSoa, mueller_from_jones_soa, padded_stride};
 use gmueller::real::Real;
 use gmueller::stack::kron;
 use gmueller::stokes::{a_mul, a_mul_inv};
@@ -71,8 +71,9 @@ fn run_batch<T: Real>(ms: &[Matrix2<Complex<T>>]) -> Vec<Vec<f64>> {
         im: [&im[0], &im[1], &im[2], &im[3]],
     };
     // Poison the buffer so an entry left unwritten cannot pass.
-    let mut buf = vec![T::lit(f64::NAN); 16 * n];
-    let mut out = MuellerSoa::from_contiguous(&mut buf).unwrap();
+    let stride = padded_stride::<T>(n);
+    let mut buf = vec![T::lit(f64::NAN); 16 * stride];
+    let mut out = MuellerSoa::from_strided(&mut buf, n, stride).unwrap();
     mueller_from_jones_soa(&soa, &mut out).unwrap();
     out.m
         .iter()
@@ -203,36 +204,87 @@ fn zero_matrices_and_zero_entries() {
 }
 
 #[test]
-fn from_contiguous_layout() {
-    // Entry M_kl of matrix i is buf[(4 k + l) n + i].
-    let ms = seeded(5, 0x1A, &[1.0]);
-    let re: Vec<Vec<f64>> = (0..4)
-        .map(|e| ms.iter().map(|m| m[(e / 2, e % 2)].re).collect())
-        .collect();
-    let im: Vec<Vec<f64>> = (0..4)
-        .map(|e| ms.iter().map(|m| m[(e / 2, e % 2)].im).collect())
-        .collect();
-    let soa = JonesSoa {
-        re: [&re[0], &re[1], &re[2], &re[3]],
-        im: [&im[0], &im[1], &im[2], &im[3]],
-    };
-    let mut buf = vec![0.0; 16 * 5];
-    let mut out = MuellerSoa::from_contiguous(&mut buf).unwrap();
-    assert_eq!(out.len(), 5);
+fn strided_layout() {
+    // One input buffer (Re a..d, Im a..d, `stride` apart) and one output buffer: entry M_kl of
+    // matrix i is at out_buf[(4 k + l) stride + i]; the padding is left untouched.
+    let (n, stride) = (5, 9);
+    let ms = seeded(n, 0x1A, &[1.0]);
+    let mut in_buf = vec![0.0; 8 * stride];
+    for (i, m) in ms.iter().enumerate() {
+        for e in 0..4 {
+            in_buf[e * stride + i] = m[(e / 2, e % 2)].re;
+            in_buf[(4 + e) * stride + i] = m[(e / 2, e % 2)].im;
+        }
+    }
+    let soa = JonesSoa::from_strided(&in_buf, n, stride).unwrap();
+    let mut buf = vec![-7.0; 16 * stride];
+    let mut out = MuellerSoa::from_strided(&mut buf, n, stride).unwrap();
+    assert_eq!(out.len(), n);
     mueller_from_jones_soa(&soa, &mut out).unwrap();
     for (i, m) in ms.iter().enumerate() {
         let single = Mueller::from_jones(&JonesMatrix::from_matrix(*m).unwrap()).matrix();
         let want: Vec<f64> = (0..16).map(|k| single[(k / 4, k % 4)]).collect();
-        let got: Vec<f64> = (0..16).map(|k| buf[k * 5 + i]).collect();
-        assert_entries("contiguous layout", i, &got, &want, scale(m), tol::<f64>());
+        let got: Vec<f64> = (0..16).map(|k| buf[k * stride + i]).collect();
+        assert_entries("strided layout", i, &got, &want, scale(m), tol::<f64>());
     }
+    for k in 0..16 {
+        assert!(
+            buf[k * stride + n..(k + 1) * stride]
+                .iter()
+                .all(|&x| x == -7.0)
+        );
+    }
+    // Shortest buffers accepted: (slices − 1) · stride + n.
+    assert!(JonesSoa::from_strided(&in_buf[..7 * stride + n], n, stride).is_ok());
+    assert!(MuellerSoa::from_strided(&mut buf[..15 * stride + n], n, stride).is_ok());
     let mut empty: [f64; 0] = [];
-    assert!(MuellerSoa::from_contiguous(&mut empty).unwrap().is_empty());
-    let mut bad = vec![0.0; 16 * 2 + 3];
-    assert!(matches!(
-        MuellerSoa::from_contiguous(&mut bad),
-        Err(Error::OutOfRange { .. })
-    ));
+    assert!(
+        MuellerSoa::from_strided(&mut empty, 0, 0)
+            .unwrap()
+            .is_empty()
+    );
+    // Errors: a buffer one element short, a stride below n.
+    for (len, st) in [(15 * stride + n - 1, stride), (16 * stride, n - 1)] {
+        assert!(matches!(
+            MuellerSoa::from_strided(&mut buf[..len], n, st),
+            Err(Error::OutOfRange { .. })
+        ));
+    }
+    for (len, st) in [(7 * stride + n - 1, stride), (8 * stride, n - 1)] {
+        assert!(matches!(
+            JonesSoa::from_strided(&in_buf[..len], n, st),
+            Err(Error::OutOfRange { .. })
+        ));
+    }
+}
+
+/// `padded_stride`: at least `n`, whole 64-byte lines, at most 4 KiB of padding, and 16 slices
+/// `s` apart start at least 192 bytes apart modulo 4 KiB (circular distance).
+fn check_padded_stride<T>(n: usize) {
+    let size = std::mem::size_of::<T>();
+    let s = padded_stride::<T>(n);
+    assert!(s >= n && (s * size).is_multiple_of(64), "n {n}: stride {s}");
+    assert!(
+        (s - n) * size <= 4096 + 64,
+        "n {n}: stride {s} pads too much"
+    );
+    for k in 1..16 {
+        let x = (k * s * size) % 4096;
+        assert!(
+            x.min(4096 - x) >= 192,
+            "n {n}: stride {s}, slice {k} at {x} B mod 4 KiB"
+        );
+    }
+}
+
+#[test]
+fn padded_stride_spreads_slices_over_the_cache() {
+    for n in (0..3000).chain([4096, 8192, 1 << 16, (1 << 20) + 3]) {
+        check_padded_stride::<f64>(n);
+        check_padded_stride::<f32>(n);
+    }
+    // The case that motivated it: 1024 · 8 B = 8 KiB.
+    assert_ne!(padded_stride::<f64>(1024), 1024);
 }
 
 #[test]
@@ -247,7 +299,7 @@ fn mismatched_lengths_are_rejected() {
             im: [pick(4), pick(5), pick(6), pick(7)],
         };
         let mut buf = vec![0.0; 16 * 5];
-        let mut out = MuellerSoa::from_contiguous(&mut buf).unwrap();
+        let mut out = MuellerSoa::from_strided(&mut buf, 5, 5).unwrap();
         let err = mueller_from_jones_soa(&soa, &mut out);
         assert!(
             matches!(err, Err(Error::OutOfRange { .. })),
