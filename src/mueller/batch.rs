@@ -327,6 +327,8 @@ pub(crate) trait Lanes: Real {
     /// Whole vectors first, then the remainder.
     fn vsplit<S: Simd>(x: &[Self]) -> (&[Self::V<S>], &[Self]);
     fn vsplit_mut<S: Simd>(x: &mut [Self]) -> (&mut [Self::V<S>], &mut [Self]);
+    /// The number of lanes of `V<S>`.
+    fn lanes<S: Simd>() -> usize;
     /// Loads a remainder shorter than a vector (other lanes zero).
     fn load_partial<S: Simd>(s: S, x: &[Self]) -> Self::V<S>;
     /// Stores the first `x.len()` lanes.
@@ -335,7 +337,7 @@ pub(crate) trait Lanes: Real {
 
 macro_rules! impl_lanes {
     ($t:ty, $v:ident, $splat:ident, $add:ident, $sub:ident, $mul:ident, $fma:ident, $fnma:ident,
-     $split:ident, $split_mut:ident, $load:ident, $store:ident) => {
+     $split:ident, $split_mut:ident, $lanes:ident, $load:ident, $store:ident) => {
         impl Lanes for $t {
             type V<S: Simd> = S::$v;
             #[inline(always)]
@@ -376,6 +378,10 @@ macro_rules! impl_lanes {
                 S::$split_mut(x)
             }
             #[inline(always)]
+            fn lanes<S: Simd>() -> usize {
+                S::$lanes
+            }
+            #[inline(always)]
             fn load_partial<S: Simd>(s: S, x: &[Self]) -> Self::V<S> {
                 s.$load(x)
             }
@@ -400,6 +406,7 @@ impl_lanes!(
     negate_mul_add_e_f32s,
     as_simd_f32s,
     as_mut_simd_f32s,
+    F32_LANES,
     partial_load_f32s,
     partial_store_f32s
 );
@@ -414,6 +421,7 @@ impl_lanes!(
     negate_mul_add_e_f64s,
     as_simd_f64s,
     as_mut_simd_f64s,
+    F64_LANES,
     partial_load_f64s,
     partial_store_f64s
 );
@@ -489,20 +497,16 @@ impl<F: Lanes> WithSimd for Kernel<'_, '_, '_, F> {
             j.re[0], j.re[1], j.re[2], j.re[3], j.im[0], j.im[1], j.im[2], j.im[3],
         ];
         let mut heads: [&[F::V<S>]; 8] = [&[]; 8];
-        let mut tails: [&[F]; 8] = [&[]; 8];
         for k in 0..8 {
-            (heads[k], tails[k]) = F::vsplit::<S>(&inputs[k][..n]);
+            heads[k] = F::vsplit::<S>(&inputs[k][..n]).0;
         }
         let nv = heads[0].len();
         let [h0, h1, h2, h3, h4, h5, h6, h7] = heads;
         let (h0, h1, h2, h3) = (&h0[..nv], &h1[..nv], &h2[..nv], &h3[..nv]);
         let (h4, h5, h6, h7) = (&h4[..nv], &h5[..nv], &h6[..nv], &h7[..nv]);
         let mut out_heads: [&mut [F::V<S>]; 16] = Default::default();
-        let mut out_tails: [&mut [F]; 16] = Default::default();
         for (k, o) in out.m.iter_mut().enumerate() {
-            let (h, t) = F::vsplit_mut::<S>(&mut o[..n]);
-            out_heads[k] = h;
-            out_tails[k] = t;
+            out_heads[k] = F::vsplit_mut::<S>(&mut o[..n]).0;
         }
         for i in 0..nv {
             let x = [h0[i], h1[i], h2[i], h3[i], h4[i], h5[i], h6[i], h7[i]];
@@ -511,14 +515,32 @@ impl<F: Lanes> WithSimd for Kernel<'_, '_, '_, F> {
                 out_heads[k][i] = m[k];
             }
         }
-        if !tails[0].is_empty() {
-            let mut x = [F::vsplat(s, F::zero()); 8];
-            for k in 0..8 {
-                x[k] = F::load_partial(s, tails[k]);
-            }
-            let m = mueller_lanes::<S, F>(s, x);
-            for k in 0..16 {
-                F::store_partial(s, out_tails[k], m[k]);
+        let lanes = F::lanes::<S>();
+        let done = nv * lanes;
+        if done == n {
+            return;
+        }
+        // The remainder. With at least one whole vector, recompute the last whole vector of the
+        // batch, `n − lanes .. n`: the matrices it shares with the loop get the same values
+        // again, and no masked store is needed (those are slow on AMD processors). Shorter
+        // batches go through masked loads and stores.
+        let start = if nv > 0 { n - lanes } else { 0 };
+        let mut x = [F::vsplat(s, F::zero()); 8];
+        for k in 0..8 {
+            let t = &inputs[k][start..n];
+            x[k] = if nv > 0 {
+                F::vsplit::<S>(t).0[0]
+            } else {
+                F::load_partial(s, t)
+            };
+        }
+        let m = mueller_lanes::<S, F>(s, x);
+        for (o, mk) in out.m.iter_mut().zip(m) {
+            let t = &mut o[start..n];
+            if nv > 0 {
+                F::vsplit_mut::<S>(t).0[0] = mk;
+            } else {
+                F::store_partial(s, t, mk);
             }
         }
     }
