@@ -126,9 +126,10 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
 /// 4 KiB (one buffer with `stride = n` and `n · size_of::<T>()` a multiple of 4 KiB, e.g.
 /// `n = 1024`; or separately allocated page-aligned slices) they all map to the same set of the
 /// 8-way L1 data cache and the loop runs several times slower (measured on AMD EPYC, 1024
-/// matrices in `f64`: 27–38 µs instead of 2.6–4.2 µs, over several runs). This returns the smallest `s ≥ n`, a whole
-/// number of 64-byte cache lines, for which slices `s` elements apart start at least three cache
-/// lines apart modulo 4 KiB (for up to 16 slices); it wastes at most 4 KiB per slice.
+/// matrices in `f64`: 27–38 µs instead of 2.6–4.2 µs, over several runs). This returns the
+/// smallest `s ≥ n`, a whole number of 64-byte cache lines, for which slices `s` elements apart
+/// start at least three cache lines apart modulo 4 KiB (for up to 16 slices); it wastes at most
+/// about 4 KiB per slice.
 ///
 /// # Examples
 /// ```
