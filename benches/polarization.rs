@@ -165,30 +165,34 @@ fn bench_precision<T: Real>(c: &mut Criterion, name: &str) {
     g.finish();
 }
 
-/// The structure-of-arrays batch path, 1024 matrices per iteration (time per matrix = time / 1024).
+/// The structure-of-arrays batch path, per iteration one call on `n` matrices (time per matrix =
+/// time / n; criterion also prints the rate). Inputs and outputs each live in one buffer, slices
+/// `padded_stride(n)` apart: `soa/1024` (the figure of merit: 1024 matrices, in L2), `soa/128`
+/// (all 24 slices in L1), `soa/7` (shorter than one f32 vector: the masked remainder only, the
+/// degenerate case), and `soa_stride_n/1024` (slices exactly `n` apart, so all start at one
+/// address modulo 4 KiB: the layout `padded_stride` avoids).
 fn bench_batch<T: Real>(c: &mut Criterion, name: &str) {
-    use gmueller::mueller::batch::{JonesSoa, mueller_from_jones_soa};
-    const N: usize = 1024;
+    use gmueller::mueller::batch::{JonesSoa, MuellerSoa, mueller_from_jones_soa, padded_stride};
     let mut rng = SplitMix(0xBA7C);
-    let re: Vec<Vec<T>> = (0..4)
-        .map(|_| (0..N).map(|_| T::lit(rng.next_f64())).collect())
-        .collect();
-    let im: Vec<Vec<T>> = (0..4)
-        .map(|_| (0..N).map(|_| T::lit(rng.next_f64())).collect())
-        .collect();
-    let mut out = vec![vec![T::zero(); N]; 16];
     let mut g = c.benchmark_group(format!("jones_to_mueller_batch/{name}"));
-    g.throughput(criterion::Throughput::Elements(N as u64));
-    g.bench_function(BenchmarkId::new("soa", N), |b| {
-        b.iter(|| {
-            let soa = JonesSoa {
-                re: [&re[0], &re[1], &re[2], &re[3]],
-                im: [&im[0], &im[1], &im[2], &im[3]],
-            };
-            let mut slices: Vec<&mut [T]> = out.iter_mut().map(Vec::as_mut_slice).collect();
-            mueller_from_jones_soa(black_box(&soa), &mut slices).expect("equal lengths");
-        })
-    });
+    for (label, n, stride) in [
+        ("soa", 1024, padded_stride::<T>(1024)),
+        ("soa", 128, padded_stride::<T>(128)),
+        ("soa", 7, padded_stride::<T>(7)),
+        ("soa_stride_n", 1024, 1024),
+    ] {
+        let inputs: Vec<T> = (0..8 * stride).map(|_| T::lit(rng.next_f64())).collect();
+        let mut buf: Vec<T> = std::iter::repeat_n(T::zero(), 16 * stride).collect();
+        g.throughput(criterion::Throughput::Elements(n as u64));
+        let soa = JonesSoa::from_strided(&inputs, n, stride).expect("fits");
+        let mut out = MuellerSoa::from_strided(&mut buf, n, stride).expect("fits");
+        g.bench_function(BenchmarkId::new(label, n), |b| {
+            b.iter(|| {
+                mueller_from_jones_soa(black_box(&soa), black_box(&mut out))
+                    .expect("equal lengths");
+            })
+        });
+    }
     g.finish();
 }
 

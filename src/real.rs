@@ -36,10 +36,28 @@ pub trait Real: RealField + Copy + Default + Send + Sync + 'static {
     fn cplx(re: Self, im: Self) -> Complex<Self> {
         Complex::new(re, im)
     }
+
+    /// The loop behind [`crate::mueller::batch::mueller_from_jones_soa`] (lengths already
+    /// checked): a portable scalar loop by default, run-time-dispatched SIMD for `f32` and `f64`.
+    /// Not public API; call `mueller_from_jones_soa`.
+    #[doc(hidden)]
+    fn mueller_from_jones_soa_kernel(
+        j: &crate::mueller::batch::JonesSoa<'_, Self>,
+        out: &mut crate::mueller::batch::MuellerSoa<'_, Self>,
+    ) {
+        crate::mueller::batch::kernel_portable(j, out);
+    }
 }
 
 impl Real for f32 {
     const EPSILON: Self = f32::EPSILON;
+    #[inline]
+    fn mueller_from_jones_soa_kernel(
+        j: &crate::mueller::batch::JonesSoa<'_, Self>,
+        out: &mut crate::mueller::batch::MuellerSoa<'_, Self>,
+    ) {
+        crate::mueller::batch::kernel_simd(j, out);
+    }
     #[inline]
     fn lit(x: f64) -> Self {
         x as f32
@@ -52,6 +70,13 @@ impl Real for f32 {
 
 impl Real for f64 {
     const EPSILON: Self = f64::EPSILON;
+    #[inline]
+    fn mueller_from_jones_soa_kernel(
+        j: &crate::mueller::batch::JonesSoa<'_, Self>,
+        out: &mut crate::mueller::batch::MuellerSoa<'_, Self>,
+    ) {
+        crate::mueller::batch::kernel_simd(j, out);
+    }
     #[inline]
     fn lit(x: f64) -> Self {
         x
