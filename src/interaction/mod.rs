@@ -425,9 +425,13 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
                 self.finish(material, g, (t, front * ks), (t, front * kd), attenuation)
             }
             PolarizationLevel::Full => {
-                let (xs, xd) = weights(xi_x);
-                let (ys, yd) = weights(xi_y);
-                let (hs, hd) = weights(xi_half);
+                let ((xs, xd), (ys, yd), (hs, hd)) = if Coh::USES_SHAPE {
+                    (weights(xi_x), weights(xi_y), weights(xi_half))
+                } else {
+                    // Without shapes the three channels' weights are one and the same.
+                    let w = weights(xi_half);
+                    (w, w, w)
+                };
                 let (sx, sy) = (prepared.sx, prepared.sy);
                 let t_mat = &prepared.t;
                 // The effective Stokes vector with the weights divided by their largest, and
