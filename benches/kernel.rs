@@ -297,7 +297,10 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
     let surf = surface::<T>();
     let mut g = c.benchmark_group(format!("kernel_batch/{prec}"));
     g.throughput(criterion::Throughput::Elements(M as u64));
-    for (case, theta_i, spread) in [("lobe-1024", 30f64.to_radians(), 0.26), ("normal-1024", 0.0, 0.14)] {
+    for (case, theta_i, spread) in [
+        ("lobe-1024", 30f64.to_radians(), 0.26),
+        ("normal-1024", 0.0, 0.14),
+    ] {
         let packet = scene::<T>(theta_i, theta_i, 0.0, 0.7, 5.0).packet;
         let mut rng = Lcg(0xba7c);
         let exits: Vec<Vector3<T>> = (0..M)
@@ -335,7 +338,11 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
             b.iter(|| {
                 for e in &exits {
                     let geo = Geometry::for_packet(black_box(&packet), &surf, *e).unwrap();
-                    black_box(kernel.evaluate(black_box(&material), &packet, &geo).scattered);
+                    black_box(
+                        kernel
+                            .evaluate(black_box(&material), &packet, &geo)
+                            .scattered,
+                    );
                 }
             });
         });

@@ -10,11 +10,14 @@
 //! written.
 //!
 //! Tolerance, per Stokes parameter of each exit: `|batch − scalar| ≤ abs + rel · S0_scalar` with
-//! `rel = base + 4 ε |E|` — `base` = 1e-12 (f64) or 1e-5 (f32), `E` the sum of the magnitudes of
-//! the exponents (PSD, Debye–Waller, prefactor) that the batch path adds before one exponential
-//! (the condition number of `exp` is `|E|`) — and `abs` = the type's smallest normal number times
-//! the output scale `2π cos θ_o/λ² · M₀₀ · S0_in · max(1, σ²|Λ|^{1/2})`, for results the scalar
-//! path rounds through subnormal numbers.
+//! `rel = 4 ε (4 + |E|)`, `E` the sum of the magnitudes of the exponents (PSD amplitude and
+//! value, Debye–Waller, prefactor) that the batch path adds before one exponential while the
+//! scalar path exponentiates them separately (the condition number of `exp` is `|E|`): at most
+//! 3.6e-15 + 8.9e-16 |E| ≤ 7e-13 in f64 (|E| ≤ 745 before underflow) and 1.9e-6 + 4.8e-7 |E| in
+//! f32 (≤ 1e-5 for |E| ≤ 17, the lobe; up to 5e-5 at the f32 underflow threshold |E| ≈ 104).
+//! Measured: at most 0.7 ε (1 + |E|) in both precisions. `abs` = the type's smallest normal
+//! number times the output scale `2π cos θ_o/λ² · M₀₀ · S0_in · max(1, σ²|Λ|^{1/2})`, for results
+//! the scalar path rounds through subnormal numbers.
 
 mod common;
 
@@ -91,7 +94,8 @@ impl<T: Real> Built<T> {
         }
     }
 
-    /// Exit direction `(θ_o, φ_o, scale)` in world coordinates of this surface.
+    /// The material of the scalar reference (the specular part does not enter the plane-wave
+    /// scattered output).
     fn material(&self) -> RoughSurface<GaussianPsd<T, 2>, FresnelReflection<T>, RayleighRice<T>> {
         RoughSurface {
             psd: self.psd,
@@ -126,7 +130,7 @@ impl<T: Real> Built<T> {
 
     /// Compares the batch with the scalar kernel exit by exit; returns the number of exits where
     /// the scalar result is exactly 0.
-    fn compare(&self, base: f64, what: &str) -> usize {
+    fn compare(&self, what: &str) -> usize {
         let got = self.batch().unwrap();
         let material = self.material();
         let full = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
@@ -139,7 +143,11 @@ impl<T: Real> Built<T> {
             let g = Geometry::for_packet(&self.packet, &self.surface, e).unwrap();
             let want = full.evaluate(&material, &self.packet, &g);
             let want1 = one.evaluate(&material, &self.packet, &g).scattered.vector();
-            assert_eq!(want.specular.s0(), T::zero(), "plane wave: no specular part");
+            assert_eq!(
+                want.specular.s0(),
+                T::zero(),
+                "plane wave: no specular part"
+            );
             let want = want.scattered.vector().map(|v| v.to_f64());
             if want[0] == 0.0 {
                 zeros += 1;
@@ -152,7 +160,7 @@ impl<T: Real> Built<T> {
             let log_alpha = -(k * (ci + co)).powi(2) * var;
             let log_pre = (std::f64::consts::TAU * (2.0 * k * ci).powi(2) / (lam * lam)).ln();
             let big_e = log_p.abs() + log_amp.abs() + log_alpha.abs() + log_pre.abs();
-            let rel = base + 4.0 * eps * big_e;
+            let rel = 4.0 * eps * (4.0 + big_e);
             let m00 = material.scatter.m00(&g).to_f64();
             let scale = std::f64::consts::TAU * co / (lam * lam) * m00 * s0_in;
             let abs = tiny * scale * log_amp.exp().max(1.0);
@@ -187,9 +195,6 @@ fn min_positive<T: Real>() -> f64 {
     }
 }
 
-const BASE_F64: f64 = 1e-12;
-const BASE_F32: f64 = 1e-5;
-
 /// An LCG for exit directions derived from a proptest-drawn seed.
 struct Lcg(u64);
 impl Lcg {
@@ -203,7 +208,7 @@ impl Lcg {
 }
 
 /// `n` exit directions: half within ~12° of the specular direction, half uniform over the
-/// hemisphere (cos θ_o ≥ 0.002), each scaled by a factor in [0.1, 10], in world coordinates.
+/// hemisphere (`cos θ_o ≥ 0.002`), each scaled by a factor in [0.1, 10], in world coordinates.
 fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
     let (t1, t2, nn) = surface_axes(sc);
     let mut rng = Lcg(seed);
@@ -284,12 +289,12 @@ proptest! {
 
     #[test]
     fn batch_matches_the_scalar_kernel_f64(sc in scene_strategy()) {
-        Built::<f64>::new(&sc).compare(BASE_F64, "f64");
+        Built::<f64>::new(&sc).compare("f64");
     }
 
     #[test]
     fn batch_matches_the_scalar_kernel_f32(sc in scene_strategy()) {
-        Built::<f32>::new(&sc).compare(BASE_F32, "f32");
+        Built::<f32>::new(&sc).compare("f32");
     }
 }
 
@@ -297,11 +302,11 @@ proptest! {
 fn a_thousand_exits_match_f64_and_f32() {
     let mut sc = base_scene();
     sc.exits = exit_set(&sc, 1000, 17);
-    Built::<f64>::new(&sc).compare(BASE_F64, "f64, n = 1000");
-    Built::<f32>::new(&sc).compare(BASE_F32, "f32, n = 1000");
+    Built::<f64>::new(&sc).compare("f64, n = 1000");
+    Built::<f32>::new(&sc).compare("f32, n = 1000");
     sc.eta = Complex::new(0.2, 3.5); // a metal
-    Built::<f64>::new(&sc).compare(BASE_F64, "f64 metal, n = 1000");
-    Built::<f32>::new(&sc).compare(BASE_F32, "f32 metal, n = 1000");
+    Built::<f64>::new(&sc).compare("f64 metal, n = 1000");
+    Built::<f32>::new(&sc).compare("f32 metal, n = 1000");
 }
 
 /// Exits exactly along the normal (any length), within √ε of it (the tangent fallback of
@@ -325,8 +330,8 @@ fn normal_incidence_and_normal_exit() {
             // Pad to a length that is not a multiple of the SIMD width.
             exits.push(n);
             sc.exits = exits;
-            Built::<f64>::new(&sc).compare(BASE_F64, "f64 normal");
-            Built::<f32>::new(&sc).compare(BASE_F32, "f32 normal");
+            Built::<f64>::new(&sc).compare("f64 normal");
+            Built::<f32>::new(&sc).compare("f32 normal");
         }
     }
 }
@@ -339,15 +344,19 @@ fn grazing_incidence_and_exit() {
         let (t1, t2, n) = surface_axes(&sc);
         sc.exits = (0..23)
             .map(|i| {
-                let to = 1.5707 - 1e-4 * f64::from(i * i);
+                let to = std::f64::consts::FRAC_PI_2 - 1e-4 * (1.0 + f64::from(i * i));
                 let phi = 0.3 * f64::from(i);
                 t1 * (to.sin() * phi.cos()) + t2 * (to.sin() * phi.sin()) + n * to.cos()
             })
             .collect();
-        for eta in [Complex::new(1.5, 0.0), Complex::new(0.3, 8.0), Complex::new(0.5, 0.0)] {
+        for eta in [
+            Complex::new(1.5, 0.0),
+            Complex::new(0.3, 8.0),
+            Complex::new(0.5, 0.0),
+        ] {
             sc.eta = eta;
-            Built::<f64>::new(&sc).compare(BASE_F64, "f64 grazing");
-            Built::<f32>::new(&sc).compare(BASE_F32, "f32 grazing");
+            Built::<f64>::new(&sc).compare("f64 grazing");
+            Built::<f32>::new(&sc).compare("f32 grazing");
         }
     }
 }
@@ -376,8 +385,8 @@ fn far_off_specular_underflow() {
         sc.sigma = 0.002;
         sc.wavelength = wavelength;
         sc.exits = exit_set(&sc, 301, 11);
-        let z64 = Built::<f64>::new(&sc).compare(BASE_F64, "f64 underflow");
-        let z32 = Built::<f32>::new(&sc).compare(BASE_F32, "f32 underflow");
+        let z64 = Built::<f64>::new(&sc).compare("f64 underflow");
+        let z32 = Built::<f32>::new(&sc).compare("f32 underflow");
         assert!(z64 > 60 && z32 > 60, "zeros: f64 {z64}, f32 {z32} of 301");
         // Exactly zero in the batch where the exponent is far below the underflow threshold.
         let b = Built::<f64>::new(&sc);
@@ -419,7 +428,7 @@ fn extreme_index_takes_the_scalar_fallback() {
             assert_eq!(got[k][i], want[k], "exit {i}, S{k}");
         }
     }
-    b.compare(BASE_F64, "f64 extreme index");
+    b.compare("f64 extreme index");
 }
 
 #[test]
@@ -496,9 +505,15 @@ fn errors_write_nothing() {
         assert!(untouched);
     }
     let (r, untouched) = run_raw(&b, &x, &y[..n - 1], &z, [n; 4]);
-    assert!(matches!(r, Err(Error::OutOfRange { .. })) && untouched, "{r:?}");
+    assert!(
+        matches!(r, Err(Error::OutOfRange { .. })) && untouched,
+        "{r:?}"
+    );
     let (r, untouched) = run_raw(&b, &x, &y, &z[..n - 1], [n; 4]);
-    assert!(matches!(r, Err(Error::OutOfRange { .. })) && untouched, "{r:?}");
+    assert!(
+        matches!(r, Err(Error::OutOfRange { .. })) && untouched,
+        "{r:?}"
+    );
     // One bad exit, in a whole vector (index 2) and in the remainder (index n − 1).
     for at in [2, n - 1] {
         for (bad, want) in [
@@ -528,7 +543,11 @@ fn errors_write_nothing() {
         }
     }
     // Tiny, huge and barely-above-the-surface exits are valid (the exact check decides).
-    for good in [[1e-300, 0.0, 1e-300], [1e300, 1e300, 1e300], [1.0, 0.0, 1e-12]] {
+    for good in [
+        [1e-300, 0.0, 1e-300],
+        [1e300, 1e300, 1e300],
+        [1.0, 0.0, 1e-12],
+    ] {
         let (mut x, mut y, mut z) = (x.clone(), y.clone(), z.clone());
         x[4] = good[0];
         y[4] = good[1];
@@ -552,7 +571,10 @@ fn errors_write_nothing() {
         ..b_away
     };
     let (r, untouched) = run_raw(&b_rev, &x, &y, &z, [n; 4]);
-    assert!(matches!(r, Err(Error::OutOfRange { .. })) && untouched, "{r:?}");
+    assert!(
+        matches!(r, Err(Error::OutOfRange { .. })) && untouched,
+        "{r:?}"
+    );
     // An invalid index.
     let bad_eta = Built {
         eta: Complex::new(-1.0, 0.0),
