@@ -187,6 +187,11 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
 /// where the scalar path rounds through subnormal numbers; exactly 0 where the PSD underflows
 /// (`tests/interaction_batch.rs`).
 ///
+/// Speed (AMD EPYC, AVX2 + FMA, 1024 exits within 15° of specular, `benches/kernel.rs` group
+/// `kernel_batch`, one run): 23 ns per exit in `f64` and 11 ns in `f32`; 29 and 13 ns at normal
+/// incidence, where every exit lies in the re-orthogonalised band of `Frame::sp`. The same exits
+/// through `Geometry::for_packet` + [`Kernel::evaluate`] took 255 and 219 ns each.
+///
 /// Instruction sets: for `f32` and `f64` the CPU is detected at run time ([`pulp::Arch`]); with
 /// AVX2 + FMA the loop handles 4 (`f64`) or 8 (`f32`) directions per instruction, elsewhere a
 /// scalar instantiation of the same loop runs. Other [`Real`] types, and indices so extreme
