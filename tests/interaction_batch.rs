@@ -361,16 +361,32 @@ fn grazing_incidence_and_exit() {
     }
 }
 
-/// η = 1 scatters nothing: the scalar kernel gives exactly 0 and so must the batch.
+/// η = 1 and a smooth surface (σ = 0, `ln p = −∞`) scatter nothing: the scalar kernel gives
+/// exactly 0 and so must the batch.
 #[test]
-fn index_one_gives_zero() {
+fn index_one_and_smooth_surface_give_zero() {
     let mut sc = base_scene();
     sc.eta = Complex::new(1.0, 0.0);
     sc.exits = exit_set(&sc, 9, 3);
-    let b = Built::<f64>::new(&sc);
-    let got = b.batch().unwrap();
-    for s in &got {
-        assert!(s.iter().all(|&v| v == 0.0), "{s:?}");
+    let mut smooth = sc.clone();
+    smooth.eta = Complex::new(1.5, 0.2);
+    smooth.sigma = 0.0;
+    for sc in [sc, smooth] {
+        let got = Built::<f64>::new(&sc).batch().unwrap();
+        for s in &got {
+            assert!(s.iter().all(|&v| v == 0.0), "{s:?}");
+        }
+        let got = Built::<f32>::new(&sc).batch().unwrap();
+        for s in &got {
+            assert!(s.iter().all(|&v| v == 0.0), "{s:?}");
+        }
+        let b = Built::<f64>::new(&sc);
+        let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
+        for &e in &b.exits {
+            let g = Geometry::for_packet(&b.packet, &b.surface, e).unwrap();
+            let want = kernel.evaluate(&b.material(), &b.packet, &g).scattered;
+            assert_eq!(want.s0(), 0.0, "the scalar kernel scatters nothing too");
+        }
     }
 }
 
