@@ -4,8 +4,8 @@
 //! hemisphere (not unit length), dielectric and absorbing η (Im η up to 8), anisotropic PSDs,
 //! tilted surfaces, turned packet frames and polarized input, f32 and f64, batch lengths 0, 1,
 //! 3, 7, 17 and 1000; exactly normal incidence and exit (the s/p tangent fallback) and the band
-//! near the normal; grazing; exits far off specular where the PSD underflows; indices that
-//! take the scalar fallback; the strided layouts; and the errors (mismatched lengths, exits
+//! near the normal; grazing; exits far off specular where the PSD underflows (exact zeros);
+//! η = 1 and a smooth surface (exact zeros); indices that take the scalar fallback (bit for bit); the strided layouts; and the errors (mismatched lengths, exits
 //! below the surface, NaN/∞/zero exits, a packet travelling away), after which nothing was
 //! written.
 //!
