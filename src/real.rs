@@ -47,10 +47,30 @@ pub trait Real: RealField + Copy + Default + Send + Sync + 'static {
     ) {
         crate::mueller::batch::kernel_portable(j, out);
     }
+
+    /// The loop behind [`crate::interaction::batch::plane_wave_rayleigh_rice`] (lengths already
+    /// checked): `None` by default (the caller then runs the scalar kernel per direction),
+    /// run-time-dispatched SIMD for `f32` and `f64`. Not public API.
+    #[doc(hidden)]
+    fn plane_wave_rayleigh_rice_kernel(
+        _prep: &crate::interaction::batch::PlaneWavePrep<Self>,
+        _exits: &crate::interaction::batch::DirectionsSoa<'_, Self>,
+        _out: &mut crate::interaction::batch::StokesSoa<'_, Self>,
+    ) -> Option<Result<(), crate::error::Error>> {
+        None
+    }
 }
 
 impl Real for f32 {
     const EPSILON: Self = f32::EPSILON;
+    #[inline]
+    fn plane_wave_rayleigh_rice_kernel(
+        prep: &crate::interaction::batch::PlaneWavePrep<Self>,
+        exits: &crate::interaction::batch::DirectionsSoa<'_, Self>,
+        out: &mut crate::interaction::batch::StokesSoa<'_, Self>,
+    ) -> Option<Result<(), crate::error::Error>> {
+        Some(crate::interaction::batch::kernel_simd(prep, exits, out))
+    }
     #[inline]
     fn mueller_from_jones_soa_kernel(
         j: &crate::mueller::batch::JonesSoa<'_, Self>,
@@ -70,6 +90,14 @@ impl Real for f32 {
 
 impl Real for f64 {
     const EPSILON: Self = f64::EPSILON;
+    #[inline]
+    fn plane_wave_rayleigh_rice_kernel(
+        prep: &crate::interaction::batch::PlaneWavePrep<Self>,
+        exits: &crate::interaction::batch::DirectionsSoa<'_, Self>,
+        out: &mut crate::interaction::batch::StokesSoa<'_, Self>,
+    ) -> Option<Result<(), crate::error::Error>> {
+        Some(crate::interaction::batch::kernel_simd(prep, exits, out))
+    }
     #[inline]
     fn mueller_from_jones_soa_kernel(
         j: &crate::mueller::batch::JonesSoa<'_, Self>,

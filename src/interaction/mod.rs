@@ -46,6 +46,7 @@
 //! [`Kernel::evaluate_prepared`] per direction: the results are bit for bit the same. Measured
 //! costs per level are in the README ("Accuracy and speed") and `benches/kernel.rs`.
 
+pub mod batch;
 pub mod exitant;
 pub mod geometry;
 pub mod pbsdf;
