@@ -291,7 +291,6 @@ fn geometry_for<T: Real>(c: &mut Criterion, prec: &str) {
 fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
     const M: usize = 1024;
     let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
-    let eta = Complex::new(T::lit(1.5), T::zero());
     let material = glass::<T, _>(psd);
     let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
     let surf = surface::<T>();
@@ -323,8 +322,7 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
         g.bench_function(BenchmarkId::new("batch", case), |b| {
             b.iter(|| {
                 plane_wave_rayleigh_rice(
-                    black_box(&psd),
-                    black_box(eta),
+                    black_box(&material),
                     black_box(&packet),
                     black_box(&surf),
                     black_box(&soa),
@@ -332,6 +330,19 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
                 )
                 .unwrap();
                 black_box(out.s[0][M - 1])
+            });
+        });
+        g.bench_function(BenchmarkId::new("scalar-prepared", case), |b| {
+            b.iter(|| {
+                let prepared = kernel.prepare(black_box(&packet), &surf).unwrap();
+                for e in &exits {
+                    let geo = Geometry::for_packet(&packet, &surf, *e).unwrap();
+                    black_box(
+                        kernel
+                            .evaluate_prepared(black_box(&material), &prepared, &geo)
+                            .scattered,
+                    );
+                }
             });
         });
         g.bench_function(BenchmarkId::new("scalar-evaluate", case), |b| {

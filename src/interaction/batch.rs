@@ -147,8 +147,9 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
 }
 
 /// Writes the scattered Stokes radiance of the plane-wave polarized kernel for every exit
-/// direction of `exits` into `out`: the classical Rayleigh–Rice Mueller BRDF of a surface with a
-/// Gaussian height PSD and substrate index `eta`, applied to `packet`.
+/// direction of `exits` into `out`: the classical Rayleigh–Rice Mueller BRDF of `material` (a
+/// Gaussian height PSD, a [`RayleighRice`] scatterer of permittivity ε = η²), applied to
+/// `packet`.
 ///
 /// # Formula
 /// ```text
@@ -164,14 +165,13 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
 /// M′ the Mueller matrix of the unscaled factors, one exponential per direction.
 /// ```
 /// This is `Kernel::<Full, PlaneWave, ClosedForm>::evaluate(&material, packet, &g).scattered`
-/// (equal to the [`super::OneShape`] level) with `material = RoughSurface { psd, specular: any,
-/// scatter: RayleighRice::new(eta) }` and `g = Geometry::for_packet(packet, surface, exit)`,
+/// (equal to the [`super::OneShape`] level) with `g = Geometry::for_packet(packet, surface, exit)`,
 /// for each exit direction; the specular part of that kernel is a Dirac delta and not returned.
 /// Stokes vectors are in the exit s/p frame ([`Geometry::exit_sp`]), per unit incident
 /// irradiance across the beam; lengths in the units of the wavelength.
 ///
-/// The index is passed as `eta` because [`RayleighRice`] does not expose its permittivity; it is
-/// validated as [`RayleighRice::new`] does.
+/// The material's specular pBSDF is not used: in the plane-wave limit the specular lobe is a
+/// delta (the kernel's `specular` part, 0 off the exact specular direction).
 ///
 /// Accuracy: the geometry (r̂, `cos θ_o`, the exit s vector, the azimuth, `h_t`), `q_o`, the
 /// four Rayleigh–Rice factors and the PSD's exponent are computed with the same operations in
@@ -205,7 +205,6 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
 ///   from the surface, or when an exit direction has `cos θ_o ≤ 0`;
 /// - [`Error::NonFinite`] for a NaN or infinite component of an exit direction;
 /// - [`Error::InvalidBasis`] for a zero exit direction;
-/// - errors of [`RayleighRice::new`] for an invalid `eta`.
 ///
 /// The direction errors are those of [`Geometry::for_packet`] for the first offending exit.
 ///
@@ -233,13 +232,13 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
 /// let mut s = [vec![0.0; 3], vec![0.0; 3], vec![0.0; 3], vec![0.0; 3]];
 /// let [s0, s1, s2, s3] = &mut s;
 /// let mut out = StokesSoa { s: [s0, s1, s2, s3] };
-/// plane_wave_rayleigh_rice(&psd, eta, &packet, &surface, &exits, &mut out).unwrap();
-///
 /// let material = RoughSurface {
 ///     psd,
 ///     specular: FresnelReflection::new(eta).unwrap(),
 ///     scatter: RayleighRice::new(eta).unwrap(),
 /// };
+/// plane_wave_rayleigh_rice(&material, &packet, &surface, &exits, &mut out).unwrap();
+///
 /// let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
 /// for i in 0..3 {
 ///     let g = Geometry::for_packet(&packet, &surface, Vector3::new(x[i], y[i], z[i])).unwrap();
@@ -249,9 +248,8 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
 ///     }
 /// }
 /// ```
-pub fn plane_wave_rayleigh_rice<T: Real>(
-    psd: &GaussianPsd<T, 2>,
-    eta: Complex<T>,
+pub fn plane_wave_rayleigh_rice<T: Real, Sp>(
+    material: &RoughSurface<GaussianPsd<T, 2>, Sp, RayleighRice<T>>,
     packet: &WavePacket<T>,
     surface: &Frame<T>,
     exits: &DirectionsSoa<'_, T>,
@@ -266,8 +264,8 @@ pub fn plane_wave_rayleigh_rice<T: Real>(
             expected: "3 direction slices and 4 Stokes slices of one common length",
         });
     }
-    let scatter = RayleighRice::new(eta)?;
-    let prep = PlaneWavePrep::new(psd, eta, packet, surface)?;
+    let (psd, scatter) = (&material.psd, material.scatter);
+    let prep = PlaneWavePrep::new(psd, scatter.permittivity(), packet, surface)?;
     if prep.vectorizable
         && let Some(result) = T::plane_wave_rayleigh_rice_kernel(&prep, exits, out)
     {
@@ -357,7 +355,7 @@ pub struct PlaneWavePrep<T: Real> {
 impl<T: Real> PlaneWavePrep<T> {
     fn new(
         psd: &GaussianPsd<T, 2>,
-        eta: Complex<T>,
+        epsilon: Complex<T>,
         packet: &WavePacket<T>,
         surface: &Frame<T>,
     ) -> Result<Self, Error> {
@@ -381,7 +379,7 @@ impl<T: Real> PlaneWavePrep<T> {
         let u_az = n.cross(&incident_sp.x());
         let v_az = n.cross(&u_az);
         // RayleighRice::factors' per-packet part, with the same operations.
-        let e = eta * eta;
+        let e = epsilon;
         let one = Complex::new(T::one(), T::zero());
         let si2 = (T::one() - cos_i * cos_i).max(T::zero());
         let qi = principal_sqrt(e - one * si2);
@@ -1253,7 +1251,7 @@ mod tests {
                 F::lit(0.5),
             )
             .unwrap();
-            let prep = PlaneWavePrep::new(&psd, eta, &packet, &surface).unwrap();
+            let prep = PlaneWavePrep::new(&psd, eta * eta, &packet, &surface).unwrap();
             assert!(prep.vectorizable);
             let scatter = RayleighRice::new(eta).unwrap();
             for n in 0..42 {

@@ -127,6 +127,13 @@ impl<T: Real> RayleighRice<T> {
         Ok(Self { epsilon: eta * eta })
     }
 
+    /// The substrate's relative permittivity `ε = η²`.
+    #[inline]
+    #[must_use]
+    pub fn permittivity(&self) -> Complex<T> {
+        self.epsilon
+    }
+
     /// The polarization factors `[[ss, ps], [sp, pp]]` (without `2k cos θ_i`).
     #[must_use]
     pub fn factors(&self, g: &Geometry<T>) -> Matrix2<Complex<T>> {
