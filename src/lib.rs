@@ -11,12 +11,14 @@
 //! - [`fresnel`]: Fresnel coefficients of dielectric and conducting interfaces as Jones matrices.
 //! - [`stack`]: the stack operator and Kronecker product, Lemma S1.1.
 //! - [`stokes`]: `A_mül` (S1.3), CSD matrices, Stokes and generalized Stokes vectors (S1.2).
-//! - [`mueller`]: classical and generalized Mueller matrices (S1.7) and their analysis.
+//! - [`mueller`]: classical and generalized Mueller matrices (S1.7) and their analysis;
+//!   [`mueller::batch`], Jones → Mueller over structure-of-arrays batches with run-time SIMD.
 //! - [`frame`]: transverse frames, τ (S2.3) and the rotation Mueller matrix T(φ) (S2.4).
 //! - [`gaussian`]: anisotropic Gaussians and their Fourier transforms (Lemma S2.1, Corollary S2.2).
 //! - [`psd`]: power spectral densities of random matter and their Gaussian blur (S2.14–S2.17).
 //! - [`packet`]: the canonical wave packet (Definition 3.1): Stokes vector, coherence shapes, sources.
-//! - [`interaction`]: the S2.20 kernel, pBSDFs (S2.19), model levels, the exitant packet.
+//! - [`interaction`]: the S2.20 kernel, pBSDFs (S2.19), model levels, the exitant packet;
+//!   [`interaction::batch`], the plane-wave Rayleigh–Rice kernel over batches of directions.
 //!
 //! ## Quick start
 //! ```
