@@ -3,7 +3,7 @@
 //! blur, Partial with a K-correlation PSD through Gauss–Hermite (orders 3, 5, 8) and through a
 //! Gaussian-mixture fit (8 and 16 components), f32 and f64; a classical incoherent polarized
 //! baseline (Fresnel Mueller × PSD at the half vector × Stokes, geometry precomputed the same
-//! way); and `Geometry` construction alone. Each level is timed per evaluation (`seeded`), per
+//! way); `Geometry` construction and `Kernel::prepare` alone. Each level is timed per evaluation (`seeded`), per
 //! exit direction of a prepared packet (`prepared`: `Kernel::prepare` outside the loop) and
 //! from direction cosines (`with-geometry`: `Geometry::for_packet` inside the loop). Inputs are
 //! seeded (an LCG) and pass through `black_box`; each group also times one degenerate case
@@ -258,6 +258,26 @@ fn geometry_for<T: Real>(c: &mut Criterion, prec: &str) {
     let sc = scenes::<T>();
     let surf = surface::<T>();
     let mut g = c.benchmark_group(format!("geometry/{prec}"));
+    // The per-packet work of the kernel (`Kernel::prepare`): three sections at `Full`, one
+    // below, none for a plane wave.
+    macro_rules! prepare {
+        ($pol:ty, $coh:ty) => {{
+            let kernel = Kernel::<$pol, $coh, ClosedForm>::new(ClosedForm);
+            g.bench_function(
+                BenchmarkId::new("prepare", concat!(stringify!($pol), "x", stringify!($coh))),
+                |b| {
+                    let mut i = 0;
+                    b.iter(|| {
+                        i = (i + 1) & (N - 1);
+                        black_box(kernel.prepare(black_box(&sc[i].packet), &surf))
+                    });
+                },
+            );
+        }};
+    }
+    prepare!(Full, Partial);
+    prepare!(OneShape, Partial);
+    prepare!(Full, PlaneWave);
     g.bench_function(BenchmarkId::new("for_packet", "seeded"), |b| {
         let mut i = 0;
         b.iter(|| {
