@@ -49,11 +49,10 @@ impl<'a, T> JonesSoa<'a, T> {
     /// assert_eq!(JonesSoa::from_strided(&buf, n, s).unwrap().im[3].len(), 3);
     /// ```
     pub fn from_strided(buf: &'a [T], n: usize, stride: usize) -> Result<Self, Error> {
-        check_strided(buf.len(), 8, n, stride)?;
-        let at = |k: usize| &buf[k * stride..k * stride + n];
+        let [ar, br, cr, dr, ai, bi, ci, di] = strided(buf, n, stride)?;
         Ok(Self {
-            re: [at(0), at(1), at(2), at(3)],
-            im: [at(4), at(5), at(6), at(7)],
+            re: [ar, br, cr, dr],
+            im: [ai, bi, ci, di],
         })
     }
 }
@@ -76,13 +75,8 @@ impl<'a, T> MuellerSoa<'a, T> {
     /// assert_eq!(out.len(), 3);
     /// ```
     pub fn from_strided(buf: &'a mut [T], n: usize, stride: usize) -> Result<Self, Error> {
-        check_strided(buf.len(), 16, n, stride)?;
-        let mut chunks = buf.chunks_mut(stride.max(1));
         Ok(Self {
-            m: core::array::from_fn(|_| match chunks.next() {
-                Some(c) => &mut c[..n],
-                None => &mut [],
-            }),
+            m: strided_mut(buf, n, stride)?,
         })
     }
 
@@ -105,7 +99,7 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
         return Err(Error::OutOfRange {
             what: "batch stride",
             value: stride as f64,
-            expected: "at least the number of matrices n",
+            expected: "at least the number of elements n",
         });
     }
     let need = (count - 1).saturating_mul(stride).saturating_add(n);
@@ -117,6 +111,30 @@ fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<()
         });
     }
     Ok(())
+}
+
+/// `K` slices of `n` elements of `buf`, `stride` apart (the layout of every `from_strided`).
+pub(crate) fn strided<T, const K: usize>(
+    buf: &[T],
+    n: usize,
+    stride: usize,
+) -> Result<[&[T]; K], Error> {
+    check_strided(buf.len(), K, n, stride)?;
+    Ok(core::array::from_fn(|k| &buf[k * stride..k * stride + n]))
+}
+
+/// [`strided`] for mutable slices.
+pub(crate) fn strided_mut<T, const K: usize>(
+    buf: &mut [T],
+    n: usize,
+    stride: usize,
+) -> Result<[&mut [T]; K], Error> {
+    check_strided(buf.len(), K, n, stride)?;
+    let mut chunks = buf.chunks_mut(stride.max(1));
+    Ok(core::array::from_fn(|_| match chunks.next() {
+        Some(c) => &mut c[..n],
+        None => &mut [],
+    }))
 }
 
 /// A stride (in elements of `T`) for the slices of a batch of `n` matrices in one buffer, chosen

@@ -21,6 +21,7 @@ use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::fresnel::principal_sqrt;
 use crate::mueller::Mueller;
+use crate::mueller::batch::{strided, strided_mut};
 use crate::packet::WavePacket;
 use crate::psd::{ClosedForm, GaussianPsd, Psd};
 use crate::real::Real;
@@ -65,13 +66,8 @@ impl<'a, T> DirectionsSoa<'a, T> {
     /// assert_eq!(DirectionsSoa::from_strided(&buf, n, s).unwrap().len(), 3);
     /// ```
     pub fn from_strided(buf: &'a [T], n: usize, stride: usize) -> Result<Self, Error> {
-        check_strided(buf.len(), 3, n, stride)?;
-        let at = |k: usize| &buf[k * stride..k * stride + n];
-        Ok(Self {
-            x: at(0),
-            y: at(1),
-            z: at(2),
-        })
+        let [x, y, z] = strided(buf, n, stride)?;
+        Ok(Self { x, y, z })
     }
 
     /// The number of directions (the length of `x`).
@@ -105,13 +101,8 @@ impl<'a, T> StokesSoa<'a, T> {
     /// assert_eq!(StokesSoa::from_strided(&mut buf, n, s).unwrap().len(), 3);
     /// ```
     pub fn from_strided(buf: &'a mut [T], n: usize, stride: usize) -> Result<Self, Error> {
-        check_strided(buf.len(), 4, n, stride)?;
-        let mut chunks = buf.chunks_mut(stride.max(1));
         Ok(Self {
-            s: core::array::from_fn(|_| match chunks.next() {
-                Some(c) => &mut c[..n],
-                None => &mut [],
-            }),
+            s: strided_mut(buf, n, stride)?,
         })
     }
 
@@ -126,26 +117,6 @@ impl<'a, T> StokesSoa<'a, T> {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
-}
-
-/// `Ok` when `count` slices of `n` elements, `stride` apart, fit in `len` elements.
-fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<(), Error> {
-    if stride < n {
-        return Err(Error::OutOfRange {
-            what: "batch stride",
-            value: stride as f64,
-            expected: "at least the number of elements n",
-        });
-    }
-    let need = (count - 1).saturating_mul(stride).saturating_add(n);
-    if len < need {
-        return Err(Error::OutOfRange {
-            what: "batch buffer length",
-            value: len as f64,
-            expected: "at least (slices − 1) · stride + n",
-        });
-    }
-    Ok(())
 }
 
 /// Writes the scattered Stokes radiance of the plane-wave polarized kernel for every exit
