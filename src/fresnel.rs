@@ -272,13 +272,16 @@ pub fn coefficients<T: Real>(cos_theta_i: T, eta: Complex<T>) -> FresnelCoeffici
     }
 }
 
+/// The range of `max(|a|, |b|)` in which [`hypot`] uses the plain formula.
+pub(crate) const HYPOT_PLAIN: (f64, f64) = (1e-18, 1e18);
+
 /// `√(a² + b²)` without spurious over- or underflow: the plain formula when `max(|a|, |b|)`
 /// lies in `[10⁻¹⁸, 10¹⁸]` (where `a² + b²` is a normal number in f32 and f64, so the result is
 /// accurate to an ulp or two), the library `hypot` — several times slower — otherwise.
 #[inline]
 pub(crate) fn hypot<T: Real>(a: T, b: T) -> T {
     let m = a.abs().max(b.abs());
-    if m >= T::lit(1e-18) && m <= T::lit(1e18) {
+    if m >= T::lit(HYPOT_PLAIN.0) && m <= T::lit(HYPOT_PLAIN.1) {
         (a * a + b * b).sqrt()
     } else {
         a.hypot(b)

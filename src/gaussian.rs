@@ -126,6 +126,13 @@ pub(crate) fn solve_lower<T: Real, const N: usize>(
     y
 }
 
+/// `x ∈ [10⁻³⁰, 10³⁰]`: safely inside the normal numbers of f32 and f64, so products and
+/// quotients of two such values neither over- nor underflow.
+#[inline]
+pub(crate) fn in_normal_range<T: Real>(x: T) -> bool {
+    x >= T::lit(1e-30) && x <= T::lit(1e30)
+}
+
 /// `ln|Σ| = 2 ln ∏ Lᵢᵢ` for a Cholesky factor with positive diagonal: one logarithm of the
 /// product when it lies in `[10⁻³⁰, 10³⁰]` (normal in f32 and f64, so exact to rounding), the
 /// sum of logarithms otherwise (where the product could over- or underflow).
@@ -136,7 +143,7 @@ pub(crate) fn log_det_from_cholesky<T: Real, const N: usize>(l: &SMatrix<T, N, N
         prod *= l[(i, i)];
     }
     let two = T::lit(2.0);
-    if prod >= T::lit(1e-30) && prod <= T::lit(1e30) {
+    if in_normal_range(prod) {
         two * prod.ln()
     } else {
         (0..N).fold(T::zero(), |acc, i| acc + l[(i, i)].ln()) * two

@@ -56,14 +56,8 @@ impl<T: Real> Geometry<T> {
         let s = unit(to_source, "direction to the source")?;
         let r = unit(exit, "exit direction")?;
         let n = surface.k();
-        let (cos_i, cos_o) = (s.dot(&n), r.dot(&n));
-        if cos_i <= T::zero() {
-            return Err(Error::OutOfRange {
-                what: "cos θ_i (source below the surface)",
-                value: cos_i.to_f64(),
-                expected: "> 0",
-            });
-        }
+        let (cos_i, incident_sp) = incidence(&s, surface)?;
+        let cos_o = r.dot(&n);
         if cos_o <= T::zero() {
             return Err(Error::OutOfRange {
                 what: "cos θ_o (exit direction below the surface)",
@@ -73,8 +67,7 @@ impl<T: Real> Geometry<T> {
         }
         let h = (r + s) * k;
         let h_t = Vector2::new(h.dot(&surface.x()), h.dot(&surface.y()));
-        // ŝ and r̂ are unit vectors, and so is n̂ (of a validated frame).
-        let incident_sp = Frame::sp_unit(-s, n);
+        // r̂ is a unit vector, and so is n̂ (of a validated frame).
         let exit_sp = Frame::sp_unit(r, n);
         Ok(Self {
             k,
@@ -125,6 +118,29 @@ impl<T: Real> Geometry<T> {
         let s_out = self.exit_sp.x();
         (-s_out.dot(&v), s_out.dot(&u))
     }
+}
+
+/// The incident side of every geometry for a unit ŝ: `cos θ_i = ŝ·n̂` and the incident beam's
+/// s/p frame ([`Frame::sp`] of −ŝ); the kernel's per-packet work and the batch path build it
+/// here too, so all of them agree bit for bit.
+///
+/// # Errors
+/// [`Error::OutOfRange`] when `cos θ_i ≤ 0` (the source below the surface).
+pub(crate) fn incidence<T: Real>(
+    s: &Vector3<T>,
+    surface: &Frame<T>,
+) -> Result<(T, Frame<T>), Error> {
+    let n = surface.k();
+    let cos_i = s.dot(&n);
+    if cos_i <= T::zero() {
+        return Err(Error::OutOfRange {
+            what: "cos θ_i (source below the surface)",
+            value: cos_i.to_f64(),
+            expected: "> 0",
+        });
+    }
+    // ŝ is a unit vector, and so is n̂ (of a validated frame).
+    Ok((cos_i, Frame::sp_unit(-*s, n)))
 }
 
 /// `v/|v|`, rescaled by the largest component first: `|v|` itself over- or underflows for

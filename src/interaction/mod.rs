@@ -362,17 +362,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         surface: &Frame<T>,
     ) -> Result<PreparedPacket<T, Pol, Coh>, Error> {
         let to_source = geometry::unit(-packet.direction(), "direction to the source")?;
-        let n = surface.k();
-        let cos_i = to_source.dot(&n);
-        if cos_i <= T::zero() {
-            return Err(Error::OutOfRange {
-                what: "cos θ_i (packet travelling away from the surface)",
-                value: cos_i.to_f64(),
-                expected: "> 0",
-            });
-        }
-        // The incident s/p frame exactly as `Geometry::new` builds it.
-        let incident_sp = Frame::sp_unit(-to_source, n);
+        let (_, incident_sp) = geometry::incidence(&to_source, surface)?;
         Ok(PreparedPacket::new(packet, surface, &incident_sp))
     }
 

@@ -4,7 +4,7 @@ use nalgebra::{SMatrix, SVector};
 
 use super::{BlurMethod, ClosedForm, Psd};
 use crate::error::Error;
-use crate::gaussian::{Gaussian, cholesky, solve_lower};
+use crate::gaussian::{Gaussian, cholesky, in_normal_range, solve_lower};
 use crate::real::Real;
 
 /// The PSD of a Gaussian-correlated random field: `R(x) = σ² g^Λ(x)`, `p(ζ) = σ² |Λ|^{1/2} g^{Λ⁻¹}(ζ)`.
@@ -146,13 +146,26 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     #[inline]
     #[must_use]
     pub fn log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
-        let Ok(l) = cholesky(&sum) else {
+        match self.blur_parts(cov, h) {
+            Some((l, m)) => self.log_normalized_from_parts(&l, m),
             // Only reachable by overflow of the sum at extreme scales.
-            return T::min_value().unwrap_or(T::zero());
-        };
-        let log_det_sum = crate::gaussian::log_det_from_cholesky(&l);
+            None => T::min_value().unwrap_or(T::zero()),
+        }
+    }
+
+    /// The Cholesky factor `L` of `Λ⁻¹ + Σ` and `|L⁻¹h|²` (`None` when the sum overflows).
+    #[inline]
+    fn blur_parts(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> Option<(SMatrix<T, N, N>, T)> {
+        let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
+        let l = cholesky(&sum).ok()?;
         let m = solve_lower(&l, h).norm_squared();
+        Some((l, m))
+    }
+
+    /// [`Self::log_normalized_blur`] from [`Self::blur_parts`].
+    #[inline]
+    fn log_normalized_from_parts(&self, l: &SMatrix<T, N, N>, m: T) -> T {
+        let log_det_sum = crate::gaussian::log_det_from_cholesky(l);
         self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() - log_det_sum - m)
     }
 
@@ -169,22 +182,15 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     #[inline]
     #[must_use]
     pub fn normalized_blur_value(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
-        let Ok(l) = cholesky(&sum) else {
+        let Some((l, m)) = self.blur_parts(cov, h) else {
             return T::zero();
         };
-        let mut prod = T::one();
-        for i in 0..N {
-            prod *= l[(i, i)];
-        }
-        let m = solve_lower(&l, h).norm_squared();
-        let (lo, hi) = (T::lit(1e-30), T::lit(1e30));
+        let prod = (0..N).fold(T::one(), |p, i| p * l[(i, i)]);
         let v = self.variance;
-        if prod >= lo && prod <= hi && v >= lo && v <= hi && m <= T::lit(100.0) {
+        if in_normal_range(prod) && in_normal_range(v) && m <= T::lit(100.0) {
             v / prod * (T::lit(-0.5) * m).exp()
         } else {
-            let log_det_sum = crate::gaussian::log_det_from_cholesky(&l);
-            (self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() - log_det_sum - m)).exp()
+            self.log_normalized_from_parts(&l, m).exp()
         }
     }
 }

@@ -19,7 +19,7 @@ use super::geometry::{self, Geometry};
 use super::{ConstantMueller, Full, Kernel, PlaneWave, RayleighRice, RoughSurface};
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
-use crate::fresnel::principal_sqrt;
+use crate::fresnel::{HYPOT_PLAIN, principal_sqrt};
 use crate::mueller::Mueller;
 use crate::mueller::batch::{strided, strided_mut};
 use crate::packet::WavePacket;
@@ -332,19 +332,10 @@ impl<T: Real> PlaneWavePrep<T> {
         packet: &WavePacket<T>,
         surface: &Frame<T>,
     ) -> Result<Self, Error> {
-        let to_source_raw = -packet.direction();
-        let s = geometry::unit(to_source_raw, "direction to the source")?;
+        let s = geometry::unit(-packet.direction(), "direction to the source")?;
         let n = surface.k();
-        let cos_i = s.dot(&n);
-        if cos_i <= T::zero() {
-            return Err(Error::OutOfRange {
-                what: "cos θ_i (source below the surface)",
-                value: cos_i.to_f64(),
-                expected: "> 0",
-            });
-        }
         // The incident s/p frame, T and the effective Stokes vector exactly as the Full level.
-        let incident_sp = Frame::sp_unit(-s, n);
+        let (cos_i, incident_sp) = geometry::incidence(&s, surface)?;
         let t = frame_change_mueller(packet.frame(), &incident_sp).0;
         let st = packet.stokes().0;
         let (sx, sy) = (packet.sx(), packet.sy());
@@ -362,7 +353,7 @@ impl<T: Real> PlaneWavePrep<T> {
         let neg_em1_qi = -em1 * qi;
         // `hypot(Re ε − sin²θ_o, Im ε)` takes its plain branch for every θ_o when Im ε ≠ 0 lies
         // in [1e-18, 1e18] and |Re ε| + 1 ≤ 1e18; with Im ε = 0 it is |Re ε − sin²θ_o| exactly.
-        let (lo, hi) = (T::lit(1e-18), T::lit(1e18));
+        let (lo, hi) = (T::lit(HYPOT_PLAIN.0), T::lit(HYPOT_PLAIN.1));
         let real_eps = e.im == T::zero();
         let plain = e.im.abs() >= lo && e.im.abs() <= hi && e.re.abs() + T::one() <= hi;
         let k = packet.wavenumber();
@@ -375,7 +366,7 @@ impl<T: Real> PlaneWavePrep<T> {
         Ok(Self {
             vectorizable,
             surface: *surface,
-            to_source_raw,
+            to_source_raw: -packet.direction(),
             s,
             n,
             t1: surface.x(),
