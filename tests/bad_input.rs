@@ -621,7 +621,7 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+    #![proptest_config(common::proptest_config(512))]
 
     /// Arbitrary finite values into every public constructor and function: no panic
     /// (Result-returning constructors return `Err` or `Ok`; infallible functions return).
@@ -636,10 +636,7 @@ proptest! {
 /// actually reached; asserts that it was, in at least 5 % of 512 cases.
 #[test]
 fn nothing_panics_and_kernel_is_reached() {
-    let mut runner = proptest::test_runner::TestRunner::new(ProptestConfig {
-        cases: 512,
-        ..ProptestConfig::default()
-    });
+    let mut runner = proptest::test_runner::TestRunner::new(common::proptest_config(512));
     let strat = prop::collection::vec(
         prop_oneof![8 => -10.0..10.0f64, 1 => prop::sample::select(vec![0.0, -0.0, 1e-300, 1e300, -1e300])],
         32,

@@ -292,7 +292,7 @@ fn realizability<T: Real>(s: &Scene) -> Result<(), TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 1024, ..ProptestConfig::default() })]
+    #![proptest_config(common::proptest_config(1024))]
 
     #[test]
     fn kernel_finite_nonnegative_valid_stokes_f64(s in scene(1e6)) {
@@ -320,7 +320,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 10_000, ..ProptestConfig::default() })]
+    #![proptest_config(common::proptest_config(10_000))]
     #[test]
     #[ignore = "heavy sweep: cargo test --test extremes -- --ignored"]
     fn heavy_kernel_sweep(s in scene(1e6)) {

@@ -5,6 +5,8 @@
 //! every sample is a finite unit direction above the
 //! horizon whose `pdf(direction)` equals `sample.pdf`, finite and positive.
 
+mod common;
+
 use gmueller::frame::Frame;
 use gmueller::interaction::sampling::LobeSampler;
 use gmueller::psd::{GaussianPsd, KCorrelation};
@@ -42,7 +44,7 @@ fn check(sampler: &LobeSampler<f64>, us: &[(f64, f64)]) -> Result<(), TestCaseEr
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(96))]
+    #![proptest_config(common::proptest_config(96))]
     #[test]
     fn samplers_at_the_extremes(
         lambda in log_uniform(0.1, 100.0),

@@ -213,7 +213,7 @@ fn check_composition<T: Real>(a: f64, b: f64) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(128))]
+    #![proptest_config(common::proptest_config(128))]
 
     #[test]
     fn rotation_mueller_is_literal_a_mul_tau_kron_tau(psi in angle()) {
@@ -354,7 +354,7 @@ fn check_same_k_world_field<T: Real>(f: &Frame<f64>, psi: f64, j: &Vector2<Compl
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(128))]
+    #![proptest_config(common::proptest_config(128))]
 
     #[test]
     fn stokes_by_t_equals_jones_by_tau_random_frames(
@@ -498,7 +498,7 @@ fn check_reversed<T: Real>(f: &Frame<f64>, j: &Vector2<Complex<f64>>) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(128))]
+    #![proptest_config(common::proptest_config(128))]
 
     #[test]
     fn reversed_frame_flips_s2_s3(f in frame(), j in jones_vector()) {
@@ -557,7 +557,7 @@ fn check_operator_changes<T: Real>(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(common::proptest_config(64))]
 
     #[test]
     fn operator_basis_changes_agree(
@@ -573,7 +573,7 @@ proptest! {
 // ------------------------------------------------------------------ s/p frames and validation
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(common::proptest_config(256))]
 
     #[test]
     fn sp_frame_is_right_handed_and_s_is_normal_to_plane_of_incidence(
@@ -825,7 +825,7 @@ fn check_converters<T: Real>(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(128))]
+    #![proptest_config(common::proptest_config(128))]
 
     #[test]
     fn converters_are_consistent(j in complex_matrix2(1.0), v in jones_vector(), n in 0.1..4.0f64, k in 0.0..8.0f64) {

@@ -350,6 +350,7 @@ fn try_coefficients_validates() {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn lossless_dielectric_conserves_energy_and_matches_textbook(
         theta_i in 0.0..std::f64::consts::FRAC_PI_2, n in 1.01..4.0f64, inverse in any::<bool>()

@@ -73,6 +73,7 @@ fn rejects_invalid_covariances() {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn value_logdet_precision_match_literal(cov in common::spd2(), x in common::real(3.0), y in common::real(3.0)) {
         let g = Gaussian::new(cov).unwrap();

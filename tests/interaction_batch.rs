@@ -284,7 +284,7 @@ prop_compose! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(96))]
+    #![proptest_config(common::proptest_config(96))]
 
     #[test]
     fn batch_matches_the_scalar_kernel_f64(sc in scene_strategy()) {

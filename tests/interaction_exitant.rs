@@ -44,6 +44,7 @@ fn shape() -> impl Strategy<Value = Matrix2<f64>> {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn coherence_area_is_conserved(
         theta_i in 0.0..1.4f64, az in -3.0..3.0f64, theta_o in 0.0..1.4f64, phi_o in -3.1..3.1f64,

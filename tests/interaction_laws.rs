@@ -570,7 +570,7 @@ fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), T
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(common::proptest_config(256))]
 
     /// f64: `S0 ≥ |S|` within 1e-9 relative (abs 1e-300 for underflowed outputs).
     #[test]

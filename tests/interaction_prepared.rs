@@ -163,6 +163,7 @@ fn geometry(theta_i: f64, theta_o: f64, phi_o: f64) -> Geometry<f64> {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     /// `RayleighRice::m00` (½ Σ|J_ij|²) against `M₀₀` of `Mueller::from_jones(J)`.
     #[test]
     fn rayleigh_rice_m00_is_m00_of_its_mueller(

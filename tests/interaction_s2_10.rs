@@ -626,7 +626,7 @@ fn surface_term_f32() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(common::proptest_config(64))]
     /// `I(r̂, r̂) = |P| K` over incidence, azimuths, frame rotation ψ, anisotropy and σ_zz.
     #[test]
     fn surface_term_proptest(

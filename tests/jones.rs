@@ -413,6 +413,7 @@ fn mueller_keeps_stokes_valid<T: Real>(j: Matrix2<Complex<f64>>, s: Vector4<f64>
 // ------------------------------------------------------------------ instantiations
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn malus_law_and_polarizer_uses_two_theta(theta in angle(), theta0 in angle()) {
         malus::<f64>(theta, theta0);

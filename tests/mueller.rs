@@ -92,6 +92,7 @@ fn is_valid_stokes(v: &Vector4<f64>, rel: f64) -> bool {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn from_jones_equals_literal_s1_7(j in complex_matrix2(1.0)) {
         from_jones_vs_literal::<f64>(&j, F64);

@@ -140,6 +140,7 @@ fn literal(m: &Matrix2<Complex<f64>>) -> Matrix4<f64> {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn batch_equals_single(ms in proptest::collection::vec(complex_matrix2(2.0), 0..40)) {
         check_against_single::<f64>(&ms);

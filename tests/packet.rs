@@ -142,6 +142,7 @@ fn coords(f: &Frame<f64>, v: &Vector3<f64>) -> Vector2<f64> {
 // ------------------------------------------------------------------ 1. Stokes relations
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     /// stokes() returns the input; S_x, S_y, χ, ς, μ satisfy their defining relations.
     #[test]
     fn stokes_round_trip_and_mu_relations(v in common::stokes_vector()) {
@@ -333,6 +334,7 @@ fn distinct_shapes() -> impl Strategy<Value = (Matrix2<f64>, Matrix2<f64>)> {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     /// With Θx ≠ Θy, |μ| = √B (1 ∓ 1e-6) is accepted / rejected with `Error::Unrealizable`.
     #[test]
     fn realizability_bound_is_sharp(
@@ -583,6 +585,7 @@ fn rotate_stokes_via_csd(v: &Vector4<f64>, psi: f64) -> Vector4<f64> {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     /// Θx = Θy: Stokes rotated as the CSD and as rotation_mueller(−ψ); ψ then −ψ is the identity;
     /// the rotated Gaussian describes the same physical separation; world precision invariant.
     #[test]
@@ -657,6 +660,7 @@ fn mixed_hessian(
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     /// Θx ≠ Θy: each new channel's Gaussian has the curvature at 0 of the true mixed coherence
     /// function (precision × S′ = −Hessian), or falls back to Θ½ where that is not positive definite.
     #[test]
@@ -876,6 +880,7 @@ fn validation_errors() {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     /// shape_3d = blockdiag(Θ⊥, σ_zz²); world_precision = Q blockdiag(Θ⊥⁻¹, σ_zz⁻²) Qᵀ with
     /// Q = [x̂ ŷ k̂], both by nalgebra.
     #[test]

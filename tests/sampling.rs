@@ -540,6 +540,7 @@ fn chi_square_rejects_pdfs_missing_a_jacobian_or_the_truncation_mass() {
 // ------------------------------------------------------------------ pdf agreement, weights
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn prop_sample_pdf_equals_pdf_of_direction(
         deg in 0.0..85.0f64,

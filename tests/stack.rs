@@ -79,6 +79,7 @@ fn mixed_product<T: Real>(
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn lemma_s1_1_column_stacking(a in complex_matrix2(1.0), d in complex_matrix2(1.0), b in complex_matrix2(1.0)) {
         lemma_column::<f64>(&a, &d, &b, F64);

@@ -108,6 +108,7 @@ fn sample_average_matches<T: Real>(seed: u64, mix: f64, tol: Tol) {
 }
 
 proptest! {
+    #![proptest_config(common::proptest_config(256))]
     #[test]
     fn s1_2_a_mul_of_sample_csd_equals_sample_stokes(seed in any::<u64>(), mix in 0.0..2.0f64) {
         sample_average_matches::<f64>(seed, mix, F64);

@@ -10,6 +10,7 @@
 use nalgebra::{Matrix2, Matrix4, Vector3, Vector4};
 use num_complex::Complex;
 use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 
 /// An absolute and a relative tolerance.
 #[derive(Debug, Clone, Copy)]
@@ -98,6 +99,40 @@ pub fn entries4(m: &Matrix4<f64>) -> Vec<f64> {
 pub fn matrix4_from_rows(rows: &[Vec<f64>]) -> Matrix4<f64> {
     assert_eq!(rows.len(), 4);
     Matrix4::from_fn(|r, c| rows[r][c])
+}
+
+// ---------------------------------------------------------------- proptest configuration
+
+/// The seed every property test starts from in a normal run (`cargo test`, CI): the same inputs
+/// on every machine and every run, so a submission never passes or fails by chance.
+pub const PROPTEST_SEED: u64 = 0x6d75_656c_6c65_7221;
+
+/// The environment variable that turns every property test into a randomized search:
+/// `GMUELLER_PROPTEST_SEARCH=20 cargo test --release` runs each property with fresh random seeds
+/// and 20× its usual number of cases (any positive integer factor). A failure is shrunk and
+/// written to the test's `*.proptest-regressions` file, which every later run (CI included)
+/// replays first: commit it.
+pub const PROPTEST_SEARCH_VAR: &str = "GMUELLER_PROPTEST_SEARCH";
+
+/// The configuration of every property test: `cases` cases from [`PROPTEST_SEED`], or — when
+/// [`PROPTEST_SEARCH_VAR`] holds a factor `f` — `f · cases` cases from a random seed.
+pub fn proptest_config(cases: u32) -> ProptestConfig {
+    let factor = std::env::var(PROPTEST_SEARCH_VAR)
+        .ok()
+        .and_then(|v| v.trim().parse::<u32>().ok())
+        .filter(|&f| f > 0);
+    match factor {
+        Some(f) => ProptestConfig {
+            cases: cases.saturating_mul(f),
+            rng_seed: RngSeed::Random,
+            ..ProptestConfig::default()
+        },
+        None => ProptestConfig {
+            cases,
+            rng_seed: RngSeed::Fixed(PROPTEST_SEED),
+            ..ProptestConfig::default()
+        },
+    }
 }
 
 // ---------------------------------------------------------------- strategies
