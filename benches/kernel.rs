@@ -156,8 +156,9 @@ fn bench_level<T, Pol, Coh, P, B>(
         b.iter(|| {
             i = (i + 1) & (N - 1);
             let s = &sc[i];
-            let geo = Geometry::for_packet(black_box(&s.packet), &surf, black_box(s.geometry.exit))
-                .unwrap();
+            let geo =
+                Geometry::for_packet(black_box(&s.packet), &surf, black_box(s.geometry.exit()))
+                    .unwrap();
             black_box(kernel.evaluate(black_box(material), black_box(&s.packet), &geo))
         });
     });
@@ -234,9 +235,9 @@ fn baseline_for<T: Real>(c: &mut Criterion, prec: &str) {
     let mut g = c.benchmark_group(format!("baseline/{prec}"));
     let eval = |s: &Scene<T>| {
         let geo = &s.geometry;
-        let m = Mueller::from_jones(&fresnel::reflection(geo.cos_i, eta));
+        let m = Mueller::from_jones(&fresnel::reflection(geo.cos_i(), eta));
         let lambda = geo.wavelength();
-        let f = geo.cos_o / (lambda * lambda) * T::two_pi() * psd.value(&geo.h_t);
+        let f = geo.cos_o() / (lambda * lambda) * T::two_pi() * psd.value(&geo.h_t());
         (m * s.packet.stokes()).vector() * f
     };
     g.bench_function(BenchmarkId::new("classical_fresnel_psd", "seeded"), |b| {
@@ -286,7 +287,7 @@ fn geometry_for<T: Real>(c: &mut Criterion, prec: &str) {
             black_box(Geometry::for_packet(
                 black_box(&s.packet),
                 black_box(&surf),
-                black_box(s.geometry.exit),
+                black_box(s.geometry.exit()),
             ))
         });
     });
@@ -296,7 +297,7 @@ fn geometry_for<T: Real>(c: &mut Criterion, prec: &str) {
             black_box(Geometry::for_packet(
                 black_box(&d.packet),
                 black_box(&surf),
-                black_box(d.geometry.exit),
+                black_box(d.geometry.exit()),
             ))
         });
     });

@@ -109,6 +109,56 @@ pub(crate) fn cholesky<T: Real, const N: usize>(
     Ok(l)
 }
 
+/// The Cholesky factor of `A + B` from the Cholesky factors `L_a`, `L_b` of `A` and `B`,
+/// without forming the sum where that loses digits; `None` unless it is positive definite.
+///
+/// # Formula (N = 2)
+/// ```text
+/// A + B = M Mᵀ,   M = [L_a  L_b]  (2×4, columns c₁ … c₄)
+/// ℓ₁₁ = |M₁|,   ℓ₂₁ = M₁·M₂ / ℓ₁₁,   ℓ₂₂ = √|A + B| / ℓ₁₁,   |A + B| = Σ_{i<j} det[cᵢ cⱼ]²
+/// ```
+/// (`M₁`, `M₂` the rows of `M`; Cauchy–Binet for the determinant, each minor by
+/// [`Real::diff_of_products`]). Why: the section of the coherence by the surface at grazing
+/// incidence has a condition number of `1/cos²θ_i` ≈ 3·10⁷ at 89.99°, beyond `1/ε₃₂`; adding
+/// it to the PSD's spectral covariance as matrices and factoring the sum lost the small
+/// eigenvalue in `f32` (the blur came out 0). Other `N`: the sum is formed and factored.
+pub(crate) fn cholesky_of_sum<T: Real, const N: usize>(
+    la: &SMatrix<T, N, N>,
+    lb: &SMatrix<T, N, N>,
+) -> Option<SMatrix<T, N, N>> {
+    if N != 2 {
+        return cholesky(&(la * la.transpose() + lb * lb.transpose())).ok();
+    }
+    let (r1, r2) = (
+        [la[(0, 0)], la[(0, 1)], lb[(0, 0)], lb[(0, 1)]],
+        [la[(1, 0)], la[(1, 1)], lb[(1, 0)], lb[(1, 1)]],
+    );
+    let mut det = T::zero();
+    for i in 0..4 {
+        for j in (i + 1)..4 {
+            let m = T::diff_of_products(r1[i], r2[j], r1[j], r2[i]);
+            det += m * m;
+        }
+    }
+    let dot = |a: &[T; 4], b: &[T; 4]| (0..4).fold(T::zero(), |s, k| s + a[k] * b[k]);
+    let l11 = dot(&r1, &r1).sqrt();
+    let l21 = dot(&r1, &r2) / l11;
+    let l22 = det.sqrt() / l11;
+    if !(l11 > T::zero()
+        && l22 > T::zero()
+        && l11.is_finite()
+        && l22.is_finite()
+        && l21.is_finite())
+    {
+        return None;
+    }
+    let mut l = SMatrix::<T, N, N>::zeros();
+    l[(0, 0)] = l11;
+    l[(1, 0)] = l21;
+    l[(1, 1)] = l22;
+    Some(l)
+}
+
 /// Solves `L y = x` for lower-triangular `L` (forward substitution).
 #[inline]
 pub(crate) fn solve_lower<T: Real, const N: usize>(
@@ -224,16 +274,26 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
         Ok(Self { cov, chol, log_det })
     }
 
-    /// A Gaussian from a covariance the crate built itself, symmetric up to rounding by
-    /// construction: `None` unless it is numerically positive definite. Skips the finiteness
-    /// and asymmetry checks of [`Gaussian::new`] (the hot path of the interaction kernel); a
-    /// NaN or infinite diagonal still fails the Cholesky pivot test.
+    /// A Gaussian from the lower-triangular Cholesky factor `L` of its covariance (`Σ = L Lᵀ`),
+    /// built by the caller in a numerically careful way: `None` unless every diagonal entry is
+    /// positive and finite and `L Lᵀ` is finite. Skips every other check (the kernel's hot path).
     #[inline]
-    pub(crate) fn from_symmetric(cov: SMatrix<T, N, N>) -> Option<Self> {
-        let cov = (cov + cov.transpose()) * T::lit(0.5);
-        let chol = cholesky(&cov).ok()?;
-        let log_det = log_det_from_cholesky(&chol);
-        Some(Self { cov, chol, log_det })
+    pub(crate) fn from_cholesky(l: SMatrix<T, N, N>) -> Option<Self> {
+        for i in 0..N {
+            if !(l[(i, i)] > T::zero() && l[(i, i)].is_finite()) {
+                return None;
+            }
+        }
+        let cov = l * l.transpose();
+        if !cov.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        let log_det = log_det_from_cholesky(&l);
+        Some(Self {
+            cov,
+            chol: l,
+            log_det,
+        })
     }
 
     /// The isotropic Gaussian `g^{s² I}` of standard deviation `s`.

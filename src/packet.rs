@@ -703,9 +703,12 @@ fn wavenumber<T: Real>(wavelength: T) -> Result<T, Error> {
     Ok(T::two_pi() / wavelength)
 }
 
+/// `|m| = m₁₁ m₂₂ − m₁₂ m₂₁` by [`Real::diff_of_products`] (accurate under cancellation in `f32`:
+/// a rotated shape of anisotropy 10⁶ has `m₁₁ m₂₂ ≈ m₁₂²`, and the plain `f32` determinant — with
+/// it the inverse, the Cholesky factor and the realizability bound — came out about 10 % off).
 #[inline]
-fn det2<T: Real>(m: &Matrix2<T>) -> T {
-    m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)]
+pub(crate) fn det2<T: Real>(m: &Matrix2<T>) -> T {
+    T::diff_of_products(m[(0, 0)], m[(1, 1)], m[(0, 1)], m[(1, 0)])
 }
 
 /// Inverse of a 2×2 matrix by its adjugate (the callers pass SPD matrices).
@@ -718,4 +721,27 @@ pub(crate) fn inverse2<T: Real>(m: &Matrix2<T>) -> Matrix2<T> {
     let n = m / s;
     let d = det2(&n);
     Matrix2::new(n[(1, 1)], -n[(0, 1)], -n[(1, 0)], n[(0, 0)]) / (d * s)
+}
+
+/// The inverse `L⁻¹` of the lower Cholesky factor of a symmetric positive-definite 2×2 `m`
+/// (`m = L Lᵀ`, so `m⁻¹ = L⁻ᵀ L⁻¹`), with `L₂₂ = √(|m|/m₁₁)` from [`det2`] (not from the
+/// cancelling `m₂₂ − L₂₁²`). `None` unless the result is finite with a positive diagonal.
+#[inline]
+pub(crate) fn inverse_cholesky2<T: Real>(m: &Matrix2<T>) -> Option<Matrix2<T>> {
+    let s = m.amax();
+    if !(s > T::zero() && s.is_finite()) {
+        return None;
+    }
+    let n = m / s;
+    let (a, b) = (n[(0, 0)], (n[(0, 1)] + n[(1, 0)]) * T::lit(0.5));
+    let d = det2(&n);
+    if !(a > T::zero() && d > T::zero()) {
+        return None;
+    }
+    // L of n: l11 = √a, l21 = b/√a, l22 = √(d/a); L of m = √s · L of n.
+    let (l11, l22) = (a.sqrt(), (d / a).sqrt());
+    let l21 = b / l11;
+    let rs = s.sqrt().recip();
+    let inv = Matrix2::new(rs / l11, T::zero(), -l21 * rs / (l11 * l22), rs / l22);
+    inv.iter().all(|x| x.is_finite()).then_some(inv)
 }

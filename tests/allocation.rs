@@ -201,9 +201,9 @@ fn all_levels<T: Real>() {
         let mut ok = true;
         for e in &s.exits {
             ok &= Geometry::for_packet(black_box(&s.packet), &s.surface, *e).is_ok();
-            let m = Mueller::from_jones(&fresnel::reflection(black_box(g0.cos_i), eta));
-            let t = frame_change_mueller(s.packet.frame(), black_box(&g0.incident_sp));
-            let st = stokes_to_frame(&s.packet.stokes(), s.packet.frame(), &g0.incident_sp);
+            let m = Mueller::from_jones(&fresnel::reflection(black_box(g0.cos_i()), eta));
+            let t = frame_change_mueller(s.packet.frame(), black_box(g0.incident_sp()));
+            let st = stokes_to_frame(&s.packet.stokes(), s.packet.frame(), g0.incident_sp());
             ok &= (m * t).matrix()[(0, 0)].is_finite() && st.s0().is_finite();
             ok &= s.packet.rotated(black_box(T::lit(0.3))).sx().is_finite();
         }

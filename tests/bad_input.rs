@@ -607,7 +607,7 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
             &packet,
             Channel::Half,
             &surface,
-            &g.h_t,
+            &g.h_t(),
         );
         let _ = exitant_packet(&packet, &g, stokes);
         if let (Ok(p3), Ok(pk)) = (

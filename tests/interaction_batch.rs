@@ -151,10 +151,10 @@ impl<T: Real> Built<T> {
             if want[0] == 0.0 {
                 zeros += 1;
             }
-            let (k, ci, co) = (g.k.to_f64(), g.cos_i.to_f64(), g.cos_o.to_f64());
+            let (k, ci, co) = (g.k().to_f64(), g.cos_i().to_f64(), g.cos_o().to_f64());
             let lam = std::f64::consts::TAU / k;
             let var = self.psd.variance().to_f64();
-            let log_p = self.psd.log_value(&g.h_t).to_f64();
+            let log_p = self.psd.log_value(&g.h_t()).to_f64();
             let log_amp = self.psd.log_value(&Vector2::zeros()).to_f64();
             let log_alpha = -(k * (ci + co)).powi(2) * var;
             let log_pre = (std::f64::consts::TAU * (2.0 * k * ci).powi(2) / (lam * lam)).ln();
@@ -412,7 +412,7 @@ fn far_off_specular_underflow() {
             .enumerate()
             .filter(|(_, e)| {
                 let g = Geometry::for_packet(&b.packet, &b.surface, **e).unwrap();
-                b.psd.log_value(&g.h_t) < -800.0
+                b.psd.log_value(&g.h_t()) < -800.0
             })
             .map(|(i, _)| i)
             .collect::<Vec<_>>();

@@ -94,7 +94,7 @@ fn exitant_packet_carries_the_stokes_vector_in_the_exit_frame() {
     let s = Stokes::new(0.5, 0.1, 0.2, -0.1).unwrap();
     let out = exitant_packet(&packet, &g, s).unwrap();
     assert_eq!(out.stokes(), s);
-    assert_eq!(out.frame(), &g.exit_sp);
+    assert_eq!(out.frame(), g.exit_sp());
     assert!(out.has_single_shape());
     assert_close("wavelength", out.wavelength(), 0.55, Tol::new(0.0, 1e-14));
 }

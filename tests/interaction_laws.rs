@@ -135,7 +135,7 @@ fn plane_wave_level_equals_classical_evaluation() {
         let alpha = (-(k * sigma * (ci + co)).powi(2)).exp();
         let p = sigma * sigma * ell * ell * (-0.5 * ell * ell * ht.norm_squared()).exp();
         let m = Mueller::from_jones(&rr.jones(&g)).matrix();
-        let t = frame_change_mueller(pk.frame(), &g.incident_sp).matrix();
+        let t = frame_change_mueller(pk.frame(), g.incident_sp()).matrix();
         let sv = Vector4::from(s);
         let expected = m * t * sv * (co / (lambda * lambda) * alpha * TAU * p);
         let what = format!("θi={ti:.3} θo={to:.3} φo={po:.3}");
@@ -352,9 +352,9 @@ fn diffraction_term_is_centred_on_the_specular_direction() {
                 &pk,
                 Channel::Half,
                 &surface(),
-                &g.h_t,
+                &g.h_t(),
             );
-            let spec = Partial::specular_weight(Some(&xi), &g.h_t);
+            let spec = Partial::specular_weight(Some(&xi), &g.h_t());
             let full = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm)
                 .evaluate(&material, &pk, &g)
                 .total()
@@ -393,7 +393,7 @@ fn diffraction_term_is_centred_on_the_specular_direction() {
                 let g = Geometry::for_packet(&pk, &surface(), exit).unwrap();
                 assert_close(
                     "h_t.x",
-                    g.h_t.x,
+                    g.h_t().x,
                     (sin_o - ti.sin()) * k,
                     Tol::new(1e-12 * k, 0.0),
                 );
@@ -403,7 +403,7 @@ fn diffraction_term_is_centred_on_the_specular_direction() {
                     &pk,
                     Channel::Half,
                     &surface(),
-                    &g.h_t,
+                    &g.h_t(),
                 )
             };
             assert_close(
@@ -874,7 +874,7 @@ fn frame_rotation_is_identity_for_identical_frames() {
     let pk = packet([1.0, 0.4, -0.3, 0.5], 5.0, ti, 0.0, lambda);
     let g = Geometry::for_packet(&pk, &surface(), exit).unwrap();
     assert_eq!(
-        frame_change_mueller(pk.frame(), &g.incident_sp).matrix(),
+        frame_change_mueller(pk.frame(), g.incident_sp()).matrix(),
         nalgebra::Matrix4::identity(),
         "T between the packet's s/p frame and the geometry's incident s/p frame"
     );
@@ -882,8 +882,9 @@ fn frame_rotation_is_identity_for_identical_frames() {
     // Independent: without T, L = (cos θ_o/λ²) α K M S.
     let m = material.scatter.mueller(&g).matrix();
     let xi = surface_inverse_coherence(&pk, Channel::Half, &surface()).unwrap();
-    let kd = Partial::scatter_weight(&material.psd, &ClosedForm, Some(&xi), &g.h_t);
-    let expected = m * pk.stokes().vector() * (g.cos_o / (lambda * lambda) * base.attenuation * kd);
+    let kd = Partial::scatter_weight(&material.psd, &ClosedForm, Some(&xi), &g.h_t());
+    let expected =
+        m * pk.stokes().vector() * (g.cos_o() / (lambda * lambda) * base.attenuation * kd);
     assert_all_close(
         "no rotation in the s/p frame",
         base.scattered.vector().iter().copied(),

@@ -503,7 +503,7 @@ fn kernel_equals_seed_prefactor_times_double_integral() {
                 &packet,
                 Channel::X,
                 &surface,
-                &g.h_t,
+                &g.h_t(),
             );
             let l_kernel = resp.scattered.s0() / resp.attenuation;
             assert_close(
@@ -521,7 +521,7 @@ fn kernel_equals_seed_prefactor_times_double_integral() {
             assert_close("kernel vs cos²θ_o/(λ²A)·I·S0", l_kernel, seed, EXACT);
             // The geometry's h_t is the test's.
             let ht = h_t(&m, &l, &r);
-            assert_close("h_t", (g.h_t - ht).norm(), 0.0, Tol::new(1e-12, 0.0));
+            assert_close("h_t", (g.h_t() - ht).norm(), 0.0, Tol::new(1e-12, 0.0));
         }
     }
 }

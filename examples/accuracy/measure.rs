@@ -176,7 +176,7 @@ where
     // once per pass and counted in the time per evaluation (amortised over the grid).
     let t0 = Instant::now();
     let prepared = kernel
-        .prepare(&s.packet, &s.geoms[0].surface)
+        .prepare(&s.packet, s.geoms[0].surface())
         .expect("the scene's packet travels toward the surface");
     let stokes: Vec<[f64; 4]> = s
         .geoms
@@ -199,7 +199,7 @@ where
     {
         let t = Instant::now();
         let prepared = kernel
-            .prepare(black_box(&s.packet), &s.geoms[0].surface)
+            .prepare(black_box(&s.packet), s.geoms[0].surface())
             .expect("the scene's packet travels toward the surface");
         for g in &s.geoms {
             black_box(kernel.evaluate_prepared(black_box(m), black_box(&prepared), black_box(g)));

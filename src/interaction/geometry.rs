@@ -8,6 +8,9 @@ use crate::real::Real;
 
 /// Everything about the directions of one interaction that the kernel and the pBSDFs need.
 ///
+/// Built only by [`Geometry::new`] (or [`Geometry::for_packet`]), which validates every input;
+/// the fields are read through accessors, so the invariants below cannot be bypassed.
+///
 /// The surface frame is a [`Frame`] whose k̂ is the surface normal n̂ and whose (x̂, ŷ) = (t̂₁, t̂₂)
 /// span the tangent plane; light arrives from and leaves into the side n̂ points to.
 ///
@@ -20,23 +23,23 @@ use crate::real::Real;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Geometry<T: Real> {
     /// Wavenumber `k = 2π/λ`.
-    pub k: T,
+    pub(crate) k: T,
     /// The surface frame (t̂₁, t̂₂, n̂).
-    pub surface: Frame<T>,
+    pub(crate) surface: Frame<T>,
     /// ŝ: unit vector from the surface toward the source.
-    pub to_source: Vector3<T>,
+    pub(crate) to_source: Vector3<T>,
     /// r̂: the exit direction (unit).
-    pub exit: Vector3<T>,
+    pub(crate) exit: Vector3<T>,
     /// `cos θ_i = ŝ·n̂` (> 0).
-    pub cos_i: T,
+    pub(crate) cos_i: T,
     /// `cos θ_o = r̂·n̂` (> 0).
-    pub cos_o: T,
+    pub(crate) cos_o: T,
     /// The tangential part of `h = k(r̂ + ŝ)` in (t̂₁, t̂₂), rad/length.
-    pub h_t: Vector2<T>,
+    pub(crate) h_t: Vector2<T>,
     /// The incident beam's s/p frame ([`Frame::sp`] of the propagation direction −ŝ).
-    pub incident_sp: Frame<T>,
+    pub(crate) incident_sp: Frame<T>,
     /// The exit beam's s/p frame ([`Frame::sp`] of r̂): the frame of the kernel's output.
-    pub exit_sp: Frame<T>,
+    pub(crate) exit_sp: Frame<T>,
 }
 
 impl<T: Real> Geometry<T> {
@@ -44,15 +47,23 @@ impl<T: Real> Geometry<T> {
     /// surface with frame `surface` (k̂ = n̂), at wavenumber `k`. Both directions are normalised.
     ///
     /// # Errors
-    /// [`Error::NonFinite`] or [`Error::InvalidBasis`] for zero or non-finite directions;
-    /// [`Error::OutOfRange`] when either direction is not strictly above the surface
-    /// (`cos θ ≤ 0`): the surface kernel describes reflection only.
+    /// [`Error::OutOfRange`] unless `k` is finite, positive and not subnormal (a wavelength
+    /// whose `2π/λ` is a normal number); [`Error::NonFinite`] or [`Error::InvalidBasis`] for
+    /// zero or non-finite directions; [`Error::OutOfRange`] when either direction is not
+    /// strictly above the surface (`cos θ ≤ 0`): the surface kernel describes reflection only.
     pub fn new(
         k: T,
         surface: &Frame<T>,
         to_source: Vector3<T>,
         exit: Vector3<T>,
     ) -> Result<Self, Error> {
+        if !(k.is_finite() && k >= T::MIN_POSITIVE) {
+            return Err(Error::OutOfRange {
+                what: "wavenumber k",
+                value: k.to_f64(),
+                expected: "finite and ≥ the smallest normal number",
+            });
+        }
         let s = unit(to_source, "direction to the source")?;
         let r = unit(exit, "exit direction")?;
         let n = surface.k();
@@ -80,6 +91,70 @@ impl<T: Real> Geometry<T> {
             incident_sp,
             exit_sp,
         })
+    }
+
+    /// The wavenumber `k = 2π/λ` (rad/length).
+    #[inline]
+    #[must_use]
+    pub fn k(&self) -> T {
+        self.k
+    }
+
+    /// The surface frame (t̂₁, t̂₂, n̂).
+    #[inline]
+    #[must_use]
+    pub fn surface(&self) -> &Frame<T> {
+        &self.surface
+    }
+
+    /// ŝ: the unit vector from the surface toward the source.
+    #[inline]
+    #[must_use]
+    pub fn to_source(&self) -> Vector3<T> {
+        self.to_source
+    }
+
+    /// r̂: the unit exit direction.
+    #[inline]
+    #[must_use]
+    pub fn exit(&self) -> Vector3<T> {
+        self.exit
+    }
+
+    /// `cos θ_i = ŝ·n̂` (> 0).
+    #[inline]
+    #[must_use]
+    pub fn cos_i(&self) -> T {
+        self.cos_i
+    }
+
+    /// `cos θ_o = r̂·n̂` (> 0).
+    #[inline]
+    #[must_use]
+    pub fn cos_o(&self) -> T {
+        self.cos_o
+    }
+
+    /// The tangential part of `h = k(r̂ + ŝ)` in (t̂₁, t̂₂), rad/length (0 at the specular
+    /// direction).
+    #[inline]
+    #[must_use]
+    pub fn h_t(&self) -> Vector2<T> {
+        self.h_t
+    }
+
+    /// The incident beam's s/p frame ([`Frame::sp`] of the propagation direction −ŝ).
+    #[inline]
+    #[must_use]
+    pub fn incident_sp(&self) -> &Frame<T> {
+        &self.incident_sp
+    }
+
+    /// The exit beam's s/p frame ([`Frame::sp`] of r̂): the frame of the kernel's output.
+    #[inline]
+    #[must_use]
+    pub fn exit_sp(&self) -> &Frame<T> {
+        &self.exit_sp
     }
 
     /// The wavelength `λ = 2π/k`.

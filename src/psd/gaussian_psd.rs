@@ -4,7 +4,7 @@ use nalgebra::{SMatrix, SVector};
 
 use super::{BlurMethod, ClosedForm, Psd};
 use crate::error::Error;
-use crate::gaussian::{Gaussian, cholesky, in_normal_range, solve_lower};
+use crate::gaussian::{Gaussian, cholesky_of_sum, in_normal_range, solve_lower};
 use crate::real::Real;
 
 /// The PSD of a Gaussian-correlated random field: `R(x) = σ² g^Λ(x)`, `p(ζ) = σ² |Λ|^{1/2} g^{Λ⁻¹}(ζ)`.
@@ -153,11 +153,11 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
         }
     }
 
-    /// The Cholesky factor `L` of `Λ⁻¹ + Σ` and `|L⁻¹h|²` (`None` when the sum overflows).
+    /// The Cholesky factor `L` of `Λ⁻¹ + Σ` (from the two factors, see
+    /// [`crate::gaussian::cholesky_of_sum`]) and `|L⁻¹h|²` (`None` when the sum overflows).
     #[inline]
     fn blur_parts(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> Option<(SMatrix<T, N, N>, T)> {
-        let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
-        let l = cholesky(&sum).ok()?;
+        let l = cholesky_of_sum(self.spectral.cholesky_factor(), cov.cholesky_factor())?;
         let m = solve_lower(&l, h).norm_squared();
         Some((l, m))
     }
