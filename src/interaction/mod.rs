@@ -115,22 +115,46 @@ impl PolarizationModel for Full {
 }
 
 /// How the kernel treats spatial coherence (a model level).
+///
+/// The weights are computed as logarithms (`ln K`, `ln K^spec`): the kernel combines them with
+/// the Stokes vector's own magnitude before anything is exponentiated, so a weight far below
+/// the smallest number of the type still weighs a bright packet (see [`Kernel`], "Numerics").
 pub trait CoherenceModel: sealed::Sealed + Copy + Default {
     /// Whether the packet's shape matrices enter at all.
     const USES_SHAPE: bool;
 
-    /// The scattered-channel weight `K` (see the module formula).
+    /// `ln K` of the scattered-channel weight `K` (see the module formula); `−∞` where `K = 0`.
     #[must_use]
-    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+    fn log_scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
         psd: &P,
         blur: &B,
         xi: Option<&Gaussian<T, 2>>,
         h_t: &Vector2<T>,
     ) -> T;
 
-    /// The specular-channel weight `K^spec` (0 for a plane wave, whose lobe is a delta).
+    /// `ln K^spec` of the specular-channel weight (`−∞` for a plane wave, whose lobe is a
+    /// delta).
     #[must_use]
-    fn specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T;
+    fn log_specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T;
+
+    /// The scattered-channel weight `K = exp(ln K)`.
+    #[inline]
+    #[must_use]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        blur: &B,
+        xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T {
+        Self::log_scatter_weight(psd, blur, xi, h_t).exp()
+    }
+
+    /// The specular-channel weight `K^spec = exp(ln K^spec)` (0 for a plane wave).
+    #[inline]
+    #[must_use]
+    fn specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
+        Self::log_specular_weight(xi, h_t).exp()
+    }
 }
 
 /// The fully coherent (plane-wave) limit: `K = 2π p(h_t)`; the classical BRDF.
@@ -147,33 +171,45 @@ impl sealed::Sealed for PlaneWave {}
 impl sealed::Sealed for Partial {}
 impl sealed::Sealed for Incoherent {}
 
-/// `2π |Σ|^{1/2} g^Ξ(h) = 2π g^Ξ(h)/√|Ξ|`, in log space.
+/// `ln 2π`.
 #[inline]
-fn smooth_lobe<T: Real>(xi: &Gaussian<T, 2>, h_t: &Vector2<T>) -> T {
-    (T::two_pi().ln() + xi.log_value(h_t) - T::lit(0.5) * xi.log_det()).exp()
+fn ln_two_pi<T: Real>() -> T {
+    T::lit(core::f64::consts::TAU.ln())
+}
+
+/// `−∞` (the logarithm of a zero weight).
+#[inline]
+fn neg_infinity<T: Real>() -> T {
+    -T::MAX * T::lit(2.0)
+}
+
+/// `ln(2π |Σ|^{1/2} g^Ξ(h)) = ln 2π + ln g^Ξ(h) − ½ ln|Ξ|` (the smooth-surface lobe).
+#[inline]
+fn log_smooth_lobe<T: Real>(xi: &Gaussian<T, 2>, h_t: &Vector2<T>) -> T {
+    ln_two_pi::<T>() + xi.log_value(h_t) - T::lit(0.5) * xi.log_det()
 }
 
 impl CoherenceModel for PlaneWave {
     const USES_SHAPE: bool = false;
     #[inline]
-    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+    fn log_scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
         psd: &P,
         _blur: &B,
         _xi: Option<&Gaussian<T, 2>>,
         h_t: &Vector2<T>,
     ) -> T {
-        T::two_pi() * psd.value(h_t)
+        ln_two_pi::<T>() + psd.log_value(h_t)
     }
     #[inline]
-    fn specular_weight<T: Real>(_xi: Option<&Gaussian<T, 2>>, _h_t: &Vector2<T>) -> T {
-        T::zero()
+    fn log_specular_weight<T: Real>(_xi: Option<&Gaussian<T, 2>>, _h_t: &Vector2<T>) -> T {
+        neg_infinity()
     }
 }
 
 impl CoherenceModel for Partial {
     const USES_SHAPE: bool = true;
     #[inline]
-    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+    fn log_scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
         psd: &P,
         blur: &B,
         xi: Option<&Gaussian<T, 2>>,
@@ -182,33 +218,33 @@ impl CoherenceModel for Partial {
         match xi {
             // K = 2π |Σ|^{1/2} (p * g^Ξ)(h) with |Σ| = 1/|Ξ|: 2π times the normalised blur,
             // which never forms the tiny (p * g^Ξ) of a wide coherence area.
-            Some(xi) => T::two_pi() * blur.normalized_blur(psd, xi, h_t),
-            None => T::two_pi() * psd.value(h_t),
+            Some(xi) => ln_two_pi::<T>() + blur.log_normalized_blur(psd, xi, h_t),
+            None => ln_two_pi::<T>() + psd.log_value(h_t),
         }
     }
     #[inline]
-    fn specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
-        xi.map_or(T::zero(), |xi| smooth_lobe(xi, h_t))
+    fn log_specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
+        xi.map_or(neg_infinity(), |xi| log_smooth_lobe(xi, h_t))
     }
 }
 
 impl CoherenceModel for Incoherent {
     const USES_SHAPE: bool = true;
     #[inline]
-    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+    fn log_scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
         psd: &P,
         _blur: &B,
         xi: Option<&Gaussian<T, 2>>,
         h_t: &Vector2<T>,
     ) -> T {
         match xi {
-            Some(xi) => smooth_lobe(xi, h_t) * psd.integral() / T::two_pi(),
-            None => T::two_pi() * psd.value(h_t),
+            Some(xi) => log_smooth_lobe(xi, h_t) + psd.integral().ln() - ln_two_pi::<T>(),
+            None => ln_two_pi::<T>() + psd.log_value(h_t),
         }
     }
     #[inline]
-    fn specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
-        xi.map_or(T::zero(), |xi| smooth_lobe(xi, h_t))
+    fn log_specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
+        xi.map_or(neg_infinity(), |xi| log_smooth_lobe(xi, h_t))
     }
 }
 
@@ -382,91 +418,96 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
-        let lambda = g.wavelength();
-        let attenuation = roughness_attenuation(&material.psd, g);
-        let front = g.cos_o / (lambda * lambda) * attenuation;
         let psd = &material.psd;
-        let weights = |xi: &Option<Gaussian<T, 2>>| {
+        // ln(cos θ_o/λ² · α), λ = 2π/k: ln cos θ_o + 2 ln k − 2 ln 2π − (vσ)².
+        let v = g.k * (g.cos_i + g.cos_o);
+        let ln_alpha = -(v * v) * psd.variance();
+        let attenuation = ln_alpha.exp();
+        let ln_front = g.cos_o.ln() + prepared.two_ln_k_over_2pi + ln_alpha;
+        let log_weights = |xi: &Option<Gaussian<T, 2>>| {
             (
-                Coh::specular_weight(xi.as_ref(), &g.h_t),
-                Coh::scatter_weight(psd, &self.blur, xi.as_ref(), &g.h_t),
+                Coh::log_specular_weight(xi.as_ref(), &g.h_t),
+                Coh::log_scatter_weight(psd, &self.blur, xi.as_ref(), &g.h_t),
             )
         };
-        let s = prepared.stokes;
         let [xi_x, xi_y, xi_half] = &prepared.sections;
+        let zero = Stokes(Vector4::zeros());
         match Pol::LEVEL {
             PolarizationLevel::Scalar => {
-                let (ks, kd) = weights(xi_half);
-                // Off the specular lobe (and always for a plane wave) its weight is exactly 0.
-                let spec = if ks == T::zero() {
-                    T::zero()
-                } else {
-                    front * ks * material.specular.m00(g) * s[0]
+                let (ls, ld) = log_weights(xi_half);
+                // Off the specular lobe (and always for a plane wave) its weight is 0.
+                let scalar = |ln_e: T, m00: T| {
+                    Stokes(prepared.scaled(Vector4::new(m00, T::zero(), T::zero(), T::zero()), ln_e))
                 };
-                let scat = front * kd * material.scatter.m00(g) * s[0];
+                let (ls, ld) = (ln_front + ls, ln_front + ld);
                 Response {
-                    specular: Stokes(Vector4::new(spec, T::zero(), T::zero(), T::zero())),
-                    scattered: Stokes(Vector4::new(scat, T::zero(), T::zero(), T::zero())),
+                    specular: if prepared.is_dark(ls) {
+                        zero
+                    } else {
+                        scalar(ls, material.specular.m00(g))
+                    },
+                    scattered: if prepared.is_dark(ld) {
+                        zero
+                    } else {
+                        scalar(ld, material.scatter.m00(g))
+                    },
                     attenuation,
                 }
             }
             PolarizationLevel::OneShape => {
-                let (ks, kd) = weights(xi_half);
+                let (ls, ld) = log_weights(xi_half);
                 let t = prepared.t_stokes;
-                self.finish(material, g, (t, front * ks), (t, front * kd), attenuation)
+                self.finish(material, g, prepared, (t, ln_front + ls), (t, ln_front + ld), attenuation)
+            }
+            PolarizationLevel::Full if !Coh::USES_SHAPE => {
+                // Without shapes the three channels' weights are one and the same: M T S K.
+                let (ls, ld) = log_weights(xi_half);
+                let t = prepared.t_stokes;
+                self.finish(material, g, prepared, (t, ln_front + ls), (t, ln_front + ld), attenuation)
             }
             PolarizationLevel::Full => {
-                let ((xs, xd), (ys, yd), (hs, hd)) = if Coh::USES_SHAPE {
-                    (weights(xi_x), weights(xi_y), weights(xi_half))
-                } else {
-                    // Without shapes the three channels' weights are one and the same.
-                    let w = weights(xi_half);
-                    (w, w, w)
-                };
-                let (sx, sy) = (prepared.sx, prepared.sy);
-                let t_mat = &prepared.t;
-                // The effective Stokes vector with the weights divided by their largest, and
-                // that largest weight (times `front`) as a separate scale applied last.
-                let eff = |kx: T, ky: T, kh: T| {
-                    let m = kx.max(ky).max(kh);
-                    if m > T::zero() {
-                        let (kx, ky, kh) = (kx / m, ky / m, kh / m);
-                        let v = Vector4::new(
-                            kx * sx + ky * sy,
-                            kx * sx - ky * sy,
-                            kh * s[2],
-                            kh * s[3],
-                        );
-                        (t_mat * v, front * m)
-                    } else {
-                        (Vector4::zeros(), T::zero())
-                    }
-                };
-                self.finish(material, g, eff(xs, ys, hs), eff(xd, yd, hd), attenuation)
+                let ((xs, xd), (ys, yd), (hs, hd)) =
+                    (log_weights(xi_x), log_weights(xi_y), log_weights(xi_half));
+                let spec = prepared.channel_mix(xs, ys, hs);
+                let scat = prepared.channel_mix(xd, yd, hd);
+                self.finish(
+                    material,
+                    g,
+                    prepared,
+                    (spec.0, ln_front + spec.1),
+                    (scat.0, ln_front + scat.1),
+                    attenuation,
+                )
             }
         }
     }
 
-    /// `M (v · scale)` for the specular and scattered parts, with the scalar `scale` (which
-    /// may be tiny: `front · K`) applied last, so that the 4×4 products run on numbers of the
-    /// Stokes vector's own magnitude and the result is rounded once when it is subnormal.
+    /// `M · v · e^{ln_e} · S0` for the specular and scattered parts: `v` is the effective
+    /// (normalised, valid) Stokes vector in the incident s/p frame and `ln_e` the logarithm of
+    /// the remaining scalar factor, applied last ([`PreparedPacket::scaled`]).
     fn finish<T: Real, P, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
         &self,
         material: &RoughSurface<P, Sp, Sc>,
         g: &Geometry<T>,
-        (spec_in, spec_scale): (Vector4<T>, T),
-        (scat_in, scat_scale): (Vector4<T>, T),
+        prepared: &PreparedPacket<T, Pol, Coh>,
+        (spec_in, spec_ln): (Vector4<T>, T),
+        (scat_in, scat_ln): (Vector4<T>, T),
         attenuation: T,
     ) -> Response<T> {
-        // Off the specular lobe its weight underflows to exactly 0: skip the specular pBSDF.
-        let specular = if Coh::USES_SHAPE && spec_scale != T::zero() {
-            material.specular.mueller(g).0 * spec_in * spec_scale
+        // Off the specular lobe its weight underflows: skip the specular pBSDF there.
+        let specular = if Coh::USES_SHAPE && !prepared.is_dark(spec_ln) {
+            prepared.scaled(material.specular.mueller(g).0 * spec_in, spec_ln)
         } else {
             Vector4::zeros()
         };
+        let scattered = if prepared.is_dark(scat_ln) {
+            Vector4::zeros()
+        } else {
+            prepared.scaled(material.scatter.mueller(g).0 * scat_in, scat_ln)
+        };
         Response {
             specular: Stokes(specular),
-            scattered: Stokes(material.scatter.mueller(g).0 * scat_in * scat_scale),
+            scattered: Stokes(scattered),
             attenuation,
         }
     }
@@ -474,16 +515,29 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
 
 /// The per-packet part of a [`Kernel`] at model level (`Pol`, `Coh`), from [`Kernel::prepare`].
 ///
-/// Holds the packet's Stokes parameters (`S`, `S_x`, `S_y`), the rotation `T` (S2.4) from the
+/// Holds the packet's Stokes vector normalised by `S0` with the logarithms of its channel
+/// intensities (for the log-space channel mix of [`Full`]), the rotation `T` (S2.4) from the
 /// packet frame to the incident s/p frame, and the surface sections `Ξ_α` of the channels the
 /// level uses (none for [`PlaneWave`]; `Ξ_½` only below [`Full`]), each with its Cholesky
 /// factor. No heap allocation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedPacket<T: Real, Pol, Coh> {
-    stokes: Vector4<T>,
-    sx: T,
-    sy: T,
+    /// `S0` (the scale applied last).
+    s0: T,
+    /// `ln S0` (−∞ for a dark packet).
+    ln_s0: T,
+    /// `ln(smallest subnormal) − ln S0`: a part whose `ln_e` lies below is 0.
+    dark_below: T,
+    /// `2 ln(k/2π) = −2 ln λ`.
+    two_ln_k_over_2pi: T,
+    /// `ln(S_x/S0)`, `ln(S_y/S0)`, `ln(|S2 + iS3|/(2 S0))` (−∞ where 0).
+    ln_sx: T,
+    ln_sy: T,
+    ln_c: T,
+    /// `(S2, S3)/|S2 + iS3|`, the phase of `μ` (0 where `S2 = S3 = 0`).
+    phase: (T, T),
     t: Matrix4<T>,
+    /// `T S/S0`.
     t_stokes: Vector4<T>,
     /// `Ξ_x`, `Ξ_y`, `Ξ_½` (`None` where unused or not positive definite).
     sections: [Option<Gaussian<T, 2>>; 3],
@@ -500,7 +554,7 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
             }
         };
         let sections = match Pol::LEVEL {
-            PolarizationLevel::Full => [
+            PolarizationLevel::Full if Coh::USES_SHAPE => [
                 section(Channel::X),
                 section(Channel::Y),
                 section(Channel::Half),
@@ -508,18 +562,90 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
             _ => [None, None, section(Channel::Half)],
         };
         let stokes = packet.stokes().0;
+        let s0 = stokes[0];
+        let hat = if s0 > T::zero() {
+            stokes / s0
+        } else {
+            Vector4::zeros()
+        };
         let t = match Pol::LEVEL {
             PolarizationLevel::Scalar => Matrix4::identity(),
             _ => frame_change_mueller(packet.frame(), incident_sp).0,
         };
+        let half = T::lit(0.5);
+        let c = hat[2].hypot(hat[3]);
+        let phase = if c > T::zero() {
+            (hat[2] / c, hat[3] / c)
+        } else {
+            (T::zero(), T::zero())
+        };
+        let k = packet.wavenumber();
         Self {
-            stokes,
-            sx: packet.sx(),
-            sy: packet.sy(),
+            s0,
+            ln_s0: s0.ln(),
+            dark_below: (T::MIN_POSITIVE * T::EPSILON).ln() - s0.ln(),
+            two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
+            ln_sx: ((hat[0] + hat[1]) * half).ln(),
+            ln_sy: ((hat[0] - hat[1]) * half).ln(),
+            ln_c: (c * half).ln(),
+            phase,
             t,
-            t_stokes: t * stokes,
+            t_stokes: t * hat,
             sections,
             _levels: PhantomData,
+        }
+    }
+
+    /// The [`Full`] level's effective Stokes vector `T v̂` (normalised) and the logarithm of
+    /// its scale, from the channel weights `ln K_x`, `ln K_y`, `ln K_½`:
+    /// ```text
+    /// a_x = ln(K_x S_x/S0),  a_y = ln(K_y S_y/S0),  a_½ = min(ln(K_½ |S2+iS3|/(2S0)), ½(a_x + a_y))
+    /// m = max(a_x, a_y),     r_α = e^{a_α − m}
+    /// v̂ = (r_x + r_y, r_x − r_y, 2 r_½ cos arg μ, 2 r_½ sin arg μ),     v = S0 e^{m} v̂
+    /// ```
+    /// The `min` is the Cauchy–Schwarz inequality of the weights, `K_½² |μ|² ≤ K_x K_y`, which
+    /// the exact S2.20 satisfies for every realizable packet (module docs of
+    /// [`crate::packet`]: at every spatial frequency the spectral matrix is positive
+    /// semidefinite, and K is its average against `p ≥ 0`); it makes `v̂` a valid Stokes vector
+    /// by construction, `(r_x − r_y)² + 4 r_½² ≤ (r_x + r_y)²`. Where the computed weights
+    /// break the inequality — rounding of nearly proportional shapes in `f32`, or per-channel
+    /// quadrature errors of [`crate::psd::GaussHermite`] — it lowers `K_½` by no more than their
+    /// own error: the exact weights satisfy it.
+    #[inline]
+    fn channel_mix(&self, lx: T, ly: T, lh: T) -> (Vector4<T>, T) {
+        let ax = lx + self.ln_sx;
+        let ay = ly + self.ln_sy;
+        let ah = (lh + self.ln_c).min((ax + ay) * T::lit(0.5));
+        let m = ax.max(ay);
+        if !(m > neg_infinity()) {
+            return (Vector4::zeros(), neg_infinity());
+        }
+        let rel = |a: T| if a == m { T::one() } else { (a - m).exp() };
+        let (rx, ry, rh) = (rel(ax), rel(ay), rel(ah));
+        let two_rh = rh * T::lit(2.0);
+        let v = Vector4::new(rx + ry, rx - ry, two_rh * self.phase.0, two_rh * self.phase.1);
+        (self.t * v, m)
+    }
+
+    /// `true` when `S0 e^{ln_e}` is below the smallest subnormal number, so that the part is 0
+    /// (the pBSDF need not be evaluated).
+    #[inline]
+    fn is_dark(&self, ln_e: T) -> bool {
+        !(ln_e >= self.dark_below)
+    }
+
+    /// `u · S0 e^{ln_e}`, the scalar applied once at the end. When `S0 e^{ln_e}` is not a normal
+    /// number, the magnitude of `u` is folded into the exponent first, `(u/u₀) e^{ln_e + ln S0
+    /// + ln u₀}`: every entry then rounds once, so a result that underflows into the subnormal
+    /// range keeps its degree of polarization (`|u_pol|/u₀`), and one whose factors are below
+    /// the smallest number of the type (a far tail of a bright packet) is not lost.
+    #[inline]
+    fn scaled(&self, u: Vector4<T>, ln_e: T) -> Vector4<T> {
+        let e = ln_e.exp() * self.s0;
+        if (e >= T::MIN_POSITIVE && e <= T::MAX) || !(u[0] > T::zero()) {
+            u * e
+        } else {
+            (u / u[0]) * (ln_e + self.ln_s0 + u[0].ln()).exp()
         }
     }
 }

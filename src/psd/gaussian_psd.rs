@@ -2,7 +2,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::{BlurMethod, ClosedForm, Psd};
+use super::{BlurMethod, ClosedForm, Psd, log_sum_exp};
 use crate::error::Error;
 use crate::gaussian::{Gaussian, cholesky_of_sum, in_normal_range, solve_lower};
 use crate::real::Real;
@@ -201,6 +201,10 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianPsd<T, N> {
         self.log_value(zeta).exp()
     }
     #[inline]
+    fn log_value(&self, zeta: &SVector<T, N>) -> T {
+        GaussianPsd::log_value(self, zeta)
+    }
+    #[inline]
     fn variance(&self) -> T {
         self.variance
     }
@@ -225,6 +229,15 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianPsd<T, N>> for ClosedForm
         h: &SVector<T, N>,
     ) -> T {
         psd.normalized_blur_value(cov, h)
+    }
+    #[inline]
+    fn log_normalized_blur(
+        &self,
+        psd: &GaussianPsd<T, N>,
+        cov: &Gaussian<T, N>,
+        h: &SVector<T, N>,
+    ) -> T {
+        GaussianPsd::log_normalized_blur(psd, cov, h)
     }
 }
 
@@ -273,6 +286,11 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianMixturePsd<T, N> {
             .iter()
             .fold(T::zero(), |acc, c| acc + c.value(zeta))
     }
+    /// `ln Σⱼ pⱼ(ζ)` by log-sum-exp of the components' logarithms.
+    #[inline]
+    fn log_value(&self, zeta: &SVector<T, N>) -> T {
+        log_sum_exp(self.components.iter().map(|c| c.log_value(zeta)))
+    }
     #[inline]
     fn variance(&self) -> T {
         self.variance
@@ -305,6 +323,15 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianMixturePsd<T, N>> for Clo
         psd.components.iter().fold(T::zero(), |acc, c| {
             acc + ClosedForm.normalized_blur(c, cov, h)
         })
+    }
+    #[inline]
+    fn log_normalized_blur(
+        &self,
+        psd: &GaussianMixturePsd<T, N>,
+        cov: &Gaussian<T, N>,
+        h: &SVector<T, N>,
+    ) -> T {
+        log_sum_exp(psd.components.iter().map(|c| c.log_normalized_blur(cov, h)))
     }
 }
 
@@ -353,5 +380,9 @@ impl<T: Real, const N: usize> BlurMethod<T, N, Smooth<T>> for ClosedForm {
     #[inline]
     fn normalized_blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         psd.weight * (cov.log_value(h) - T::lit(0.5) * cov.log_det()).exp()
+    }
+    #[inline]
+    fn log_normalized_blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.weight.ln() + cov.log_value(h) - T::lit(0.5) * cov.log_det()
     }
 }

@@ -297,4 +297,19 @@ impl<T: Real, const N: usize> BlurMethod<T, N, Grating<T, N>> for ClosedForm {
             acc + *e * (cov.log_value(&(h - z)) - half_log_det).exp()
         })
     }
+    /// Log-sum-exp over the orders of `ln e_m + ln g^Σ(h − ζ_m) − ½ ln|Σ|`.
+    #[inline]
+    fn log_normalized_blur(
+        &self,
+        psd: &Grating<T, N>,
+        cov: &Gaussian<T, N>,
+        h: &SVector<T, N>,
+    ) -> T {
+        let half_log_det = T::lit(0.5) * cov.log_det();
+        super::log_sum_exp(
+            psd.orders
+                .iter()
+                .map(|(z, e)| e.ln() + cov.log_value(&(h - z)) - half_log_det),
+        )
+    }
 }

@@ -258,6 +258,10 @@ impl<T: Real, const N: usize> Psd<T, N> for KCorrelation<T, N> {
         self.peak_value * (-self.nu * (self.t * zeta.norm_squared()).ln_1p()).exp()
     }
     #[inline]
+    fn log_value(&self, zeta: &SVector<T, N>) -> T {
+        self.peak_value.ln() - self.nu * (self.t * zeta.norm_squared()).ln_1p()
+    }
+    #[inline]
     fn variance(&self) -> T {
         self.variance
     }

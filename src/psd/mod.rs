@@ -59,6 +59,15 @@ pub trait Psd<T: Real, const N: usize> {
     #[must_use]
     fn value(&self, zeta: &SVector<T, N>) -> T;
 
+    /// `ln p(ζ)` of the absolutely continuous part (`−∞` where it is 0). The default is
+    /// `ln(value)`; the closed-form PSDs override it with a form that stays accurate where
+    /// [`Psd::value`] underflows (the kernel's coherence weights are formed in log space).
+    #[inline]
+    #[must_use]
+    fn log_value(&self, zeta: &SVector<T, N>) -> T {
+        self.value(zeta).ln()
+    }
+
     /// The variance `σ² = R(0)` (squared rms height for a height field).
     #[must_use]
     fn variance(&self) -> T;
@@ -154,6 +163,26 @@ pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
     fn normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         self.blur(psd, cov, h) * (T::lit(-0.5) * cov.log_det()).exp()
     }
+
+    /// `ln` of [`BlurMethod::normalized_blur`] (`−∞` where it is 0), the form the kernel uses.
+    /// The default is `ln(normalized_blur)`, so it is `−∞` wherever the value underflows; the
+    /// closed forms of this crate override it with a log-space form that stays accurate far
+    /// below the smallest number of the type (a tail of `p` 10⁻⁵⁰ down, say, still weighs a
+    /// Stokes vector of 10⁴⁰ in `f32`). The quadrature methods keep the default.
+    #[inline]
+    #[must_use]
+    fn log_normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.normalized_blur(psd, cov, h).ln()
+    }
+}
+
+/// `ln Σᵢ e^{xᵢ}` without overflow or underflow (`−∞` for an empty or all-`−∞` list).
+#[inline]
+pub(crate) fn log_sum_exp<T: Real>(terms: impl Iterator<Item = T> + Clone) -> T {
+    // Start from the most negative finite number: with every term −∞ the sum is then 0 and
+    // the result −MAX + ln 0 = −∞, with no 0/0 or ∞ − ∞ on the way.
+    let m = terms.clone().fold(-T::MAX, |m, x| m.max(x));
+    m + terms.fold(T::zero(), |acc, x| acc + (x - m).exp()).ln()
 }
 
 /// The exact, closed-form blur (Gaussian, Gaussian-mixture, grating and smooth PSDs).
