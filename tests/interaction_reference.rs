@@ -37,7 +37,9 @@ fn f(c: &Value, key: &str) -> f64 {
 /// The substrate index `n + iκ` (κ ≥ 0 absorbing, SCATMECH's convention and ours); the original
 /// cases have no `kappa` field (real index).
 fn eta(c: &Value) -> Complex<f64> {
-    let kappa = c.get("kappa").map_or(0.0, |k| k.as_f64().expect("kappa is a number"));
+    let kappa = c
+        .get("kappa")
+        .map_or(0.0, |k| k.as_f64().expect("kappa is a number"));
     assert!(kappa >= 0.0, "kappa must be non-negative");
     Complex::new(f(c, "n"), kappa)
 }
@@ -51,7 +53,9 @@ fn label(c: &Value) -> String {
         f(c, "theta_i"),
         f(c, "theta_s"),
         f(c, "phi_s"),
-        c.get("material").and_then(Value::as_str).unwrap_or("original case")
+        c.get("material")
+            .and_then(Value::as_str)
+            .unwrap_or("original case")
     )
 }
 
@@ -136,7 +140,11 @@ fn plane_wave_limit_reproduces_scatmech_rayleigh_rice() {
     assert_eq!(cases.len(), 24, "expected the 24 SCATMECH cases");
     let absorbing = cases.iter().filter(|c| eta(c).im > 0.0).count();
     let in_lobe = cases.iter().filter(|c| c["lobe"] == "in").count();
-    assert_eq!((absorbing, in_lobe), (10, 13), "absorbing and in-lobe cases");
+    assert_eq!(
+        (absorbing, in_lobe),
+        (10, 13),
+        "absorbing and in-lobe cases"
+    );
     for c in &cases {
         // The width is ignored at the plane-wave level.
         let m = kernel_mueller_brdf::<Full, PlaneWave>(c, 1.0);
@@ -154,7 +162,11 @@ fn partial_coherence_tends_to_scatmech_as_coherence_grows() {
         for width in [1e2, 1e3, 1e4] {
             let m = kernel_mueller_brdf::<Full, Partial>(c, width);
             let dev = ((m[(0, 0)] - reference) / reference).abs();
-            assert!(dev.is_finite(), "finite deviation at w = {width}, {}", label(c));
+            assert!(
+                dev.is_finite(),
+                "finite deviation at w = {width}, {}",
+                label(c)
+            );
             assert!(
                 dev < last || dev < 1e-12,
                 "deviation must shrink: {dev} after {last} at w = {width}, {}",
