@@ -444,7 +444,11 @@ fn full_level_is_valid_at_the_realizability_bound() {
             for lambda in [0.1, 0.5, 1.0] {
                 for (prec, parts, eps) in [
                     ("f64", run::<f64>(lambda, phi, exit), f64::EPSILON),
-                    ("f32", run::<f32>(lambda, phi, exit), f64::from(f32::EPSILON)),
+                    (
+                        "f32",
+                        run::<f32>(lambda, phi, exit),
+                        f64::from(f32::EPSILON),
+                    ),
                 ] {
                     for ((s0, d), part) in parts.into_iter().zip(["specular", "scattered"]) {
                         if s0 > 0.0 {

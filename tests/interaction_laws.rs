@@ -15,6 +15,10 @@ mod common;
 
 use std::f64::consts::{PI, TAU};
 
+use common::oracle::{
+    coherence_integral, exit_azimuth, mueller_literal, rayleigh_rice_factors, rotation_literal,
+    section, sp_basis,
+};
 use common::{Tol, assert_all_close, assert_close, gauss_legendre};
 use gmueller::Real;
 use gmueller::error::Error;
@@ -106,15 +110,18 @@ fn fresnel_rs_rp(cos_i: f64, n: f64) -> (f64, f64) {
 
 // ------------------------------------------------------------------ 1. limits and levels
 
-/// The plane-wave level against `(cos θ_o/λ²) α M_scat T S 2π p(h_t)` computed here: directions,
-/// `h_t`, `α` and the Gaussian PSD in closed form; `M` from the pBSDF's Jones matrix; `T` from
-/// `frame_change_mueller` with a packet frame turned away from the s/p frame.
+/// The plane-wave level against `(cos θ_o/λ²) α M_scat T S 2π p(h_t)` computed here, without
+/// the crate: directions, `h_t`, `α` and the Gaussian PSD in closed form; `M` the literal S1.7
+/// `A_mül (J* ⊗ J) A_mül⁻¹` of Germer's Rayleigh–Rice Jones matrix `2k cos θ_i [[ss, ps], [sp,
+/// pp]]` (`tests/common/oracle.rs`); `T = A_mül (τ ⊗ τ) A_mül⁻¹` with S2.3's τ from dot products
+/// of the packet frame (turned away from s/p) with the incident s/p basis built here.
 #[test]
 fn plane_wave_level_equals_classical_evaluation() {
     let (lambda, sigma, ell) = (0.5, 0.03, 2.0);
     let k = TAU / lambda;
     let material = glass(sigma, ell);
-    let rr = material.scatter;
+    let eps = Complex::new(1.5 * 1.5, 0.0);
+    let n = Vector3::z();
     let cases = [
         (30.0, 35.0, 10.0, 0.4, [1.0, 0.3, -0.5, 0.2]),
         (0.0, 5.0, 80.0, -1.2, [2.0, 0.0, 0.0, 2.0]),
@@ -126,7 +133,6 @@ fn plane_wave_level_equals_classical_evaluation() {
         let (ti, to, po) = (ti * DEG, to * DEG, po * DEG);
         let pk = packet(s, 7.0, ti, psi, lambda);
         let exit = dir::<f64>(to, po);
-        let g = Geometry::for_packet(&pk, &surface(), exit).unwrap();
         // Independent quantities.
         let s_hat = -travel::<f64>(ti);
         let (ci, co) = (s_hat.z, exit.z);
@@ -134,8 +140,16 @@ fn plane_wave_level_equals_classical_evaluation() {
         let ht = Vector2::new(h.x, h.y);
         let alpha = (-(k * sigma * (ci + co)).powi(2)).exp();
         let p = sigma * sigma * ell * ell * (-0.5 * ell * ell * ht.norm_squared()).exp();
-        let m = Mueller::from_jones(&rr.jones(&g)).matrix();
-        let t = frame_change_mueller(pk.frame(), g.incident_sp()).matrix();
+        let (sp_in, sp_out) = (sp_basis(&-s_hat, &n), sp_basis(&exit, &n));
+        let (cphi, sphi) = exit_azimuth(&sp_in[0], &sp_out[0], &n);
+        if ti > 0.0 {
+            // Away from normal incidence φ is the plain azimuth difference (here φ_i = 0).
+            assert_close("cos φ", cphi, po.cos(), Tol::new(1e-14, 0.0));
+            assert_close("sin φ", sphi, po.sin(), Tol::new(1e-14, 0.0));
+        }
+        let j = rayleigh_rice_factors(eps, ci, co, cphi, sphi) * Complex::new(2.0 * k * ci, 0.0);
+        let m = mueller_literal(&j);
+        let t = rotation_literal([pk.frame().x(), pk.frame().y()], sp_in);
         let sv = Vector4::from(s);
         let expected = m * t * sv * (co / (lambda * lambda) * alpha * TAU * p);
         let what = format!("θi={ti:.3} θo={to:.3} φo={po:.3}");
@@ -864,7 +878,8 @@ fn energy_at_grazing_incidence() {
 // ------------------------------------------------------------------ 6. the authors' known bugs
 
 /// Frame identity: the kernel with the packet in the incident s/p frame applies no rotation
-/// (`T = I` exactly), and the same light described in a turned frame gives the same output.
+/// (`T = I` exactly; its output equals `(cos θ_o/λ²) α K M S` computed here without the crate),
+/// and the same light described in a turned frame gives the same output.
 #[test]
 fn frame_rotation_is_identity_for_identical_frames() {
     let lambda = 0.5;
@@ -879,12 +894,41 @@ fn frame_rotation_is_identity_for_identical_frames() {
         "T between the packet's s/p frame and the geometry's incident s/p frame"
     );
     let base = eval::<Full, Partial, _, _>(&material, &pk, exit);
-    // Independent: without T, L = (cos θ_o/λ²) α K M S.
-    let m = material.scatter.mueller(&g).matrix();
-    let xi = surface_inverse_coherence(&pk, Channel::Half, &surface()).unwrap();
-    let kd = Partial::scatter_weight(&material.psd, &ClosedForm, Some(&xi), &g.h_t());
-    let expected =
-        m * pk.stokes().vector() * (g.cos_o() / (lambda * lambda) * base.attenuation * kd);
+    // Independent (tests/common/oracle.rs): without T, L = (cos θ_o/λ²) α K M S, with the
+    // section Ξ = Bᵀ Q Θ⁻¹ Qᵀ B, the Gaussian-PSD blur K = σ² 2π |G|^{−1/2} exp(−½ h_tᵀ G⁻¹ h_t),
+    // G = I/ℓ² + Ξ, and M the literal S1.7 Mueller matrix of Germer's Jones matrix.
+    let (sigma, ell, w) = (0.02, 1.5, 5.0);
+    let k = TAU / lambda;
+    let n = Vector3::z();
+    let s_hat = -travel::<f64>(ti);
+    let (ci, co) = (s_hat.z, exit.z);
+    let h = (exit + s_hat) * k;
+    let ht = Vector2::new(h.x, h.y);
+    let f = pk.frame();
+    let q = nalgebra::Matrix3::from_columns(&[f.x(), f.y(), f.k()]);
+    let xi = section(
+        &q,
+        &(Matrix2::identity() * (w * w)),
+        0.0,
+        &Vector3::x(),
+        &Vector3::y(),
+    );
+    let kd = coherence_integral(
+        sigma * sigma,
+        &(Matrix2::identity() / (ell * ell)),
+        &xi,
+        &ht,
+    );
+    let alpha = (-(k * sigma * (ci + co)).powi(2)).exp();
+    assert_close("attenuation", base.attenuation, alpha, Tol::new(0.0, 1e-13));
+    let (sp_in, sp_out) = (sp_basis(&-s_hat, &n), sp_basis(&exit, &n));
+    let (cphi, sphi) = exit_azimuth(&sp_in[0], &sp_out[0], &n);
+    let eps = Complex::new(1.5 * 1.5, 0.0);
+    let m = mueller_literal(
+        &(rayleigh_rice_factors(eps, ci, co, cphi, sphi) * Complex::new(2.0 * k * ci, 0.0)),
+    );
+    let stokes = Vector4::new(1.0, 0.4, -0.3, 0.5);
+    let expected = m * stokes * (co / (lambda * lambda) * alpha * kd);
     assert_all_close(
         "no rotation in the s/p frame",
         base.scattered.vector().iter().copied(),
@@ -909,7 +953,8 @@ fn frame_rotation_is_identity_for_identical_frames() {
 }
 
 /// s-polarized light on a smooth Fresnel surface: the specular output is `∝ R_s` (and p light
-/// `∝ R_p`), with `R_s`, `R_p` from the textbook formulas; s stays s (S1 = S0) in the exit frame.
+/// `∝ R_p`), with `R_s`, `R_p` from the textbook formulas — relative to the unpolarized output and
+/// in absolute terms, the lobe constant computed here; s stays s (S1 = S0) in the exit frame.
 /// Near Brewster's angle the p output vanishes.
 #[test]
 fn fresnel_uses_rs_for_s_polarized_light() {
@@ -925,8 +970,35 @@ fn fresnel_uses_rs_for_s_polarized_light() {
         let rp_out = eval::<Full, Partial, _, _>(&material, &p_light, exit).specular;
         let un = eval::<Full, Partial, _, _>(&material, &unpol, exit).specular;
         let (rs, rp) = fresnel_rs_rp(ti.cos(), 1.5);
-        // Unpolarized output S0 ∝ (R_s + R_p)/2: the common factor.
+        // Unpolarized output S0 ∝ (R_s + R_p)/2: the common factor, also computed here —
+        // (cos θ_o/λ²) α K_spec with the lobe K_spec = 2π |Ξ|^{−1/2} at h_t = 0 (the S2.10
+        // integral with R ≡ 1, tests/common/oracle.rs) and α = exp(−(2kσ cos θ_i)²).
         let scale = un.s0() / ((rs + rp) * 0.5);
+        let f = s_light.frame();
+        let q = nalgebra::Matrix3::from_columns(&[f.x(), f.y(), f.k()]);
+        let xi = section(
+            &q,
+            &(Matrix2::identity() * 100.0),
+            0.0,
+            &Vector3::x(),
+            &Vector3::y(),
+        );
+        let lobe = coherence_integral(1.0, &Matrix2::zeros(), &xi, &Vector2::zeros());
+        let k = TAU / lambda;
+        let alpha = (-(2.0 * k * 1e-4 * ti.cos()).powi(2)).exp();
+        let front = ti.cos() / (lambda * lambda) * alpha * lobe;
+        assert_close(
+            "s light, absolute",
+            rs_out.s0(),
+            front * rs,
+            Tol::new(0.0, 1e-12),
+        );
+        assert_close(
+            "p light, absolute",
+            rp_out.s0(),
+            front * rp,
+            Tol::new(1e-14 * front, 1e-12),
+        );
         assert_close(
             &format!("s light at {ti_deg}°"),
             rs_out.s0() / scale,

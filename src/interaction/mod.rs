@@ -437,7 +437,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
                 let (ls, ld) = log_weights(xi_half);
                 // Off the specular lobe (and always for a plane wave) its weight is 0.
                 let scalar = |ln_e: T, m00: T| {
-                    Stokes(prepared.scaled(Vector4::new(m00, T::zero(), T::zero(), T::zero()), ln_e))
+                    Stokes(
+                        prepared.scaled(Vector4::new(m00, T::zero(), T::zero(), T::zero()), ln_e),
+                    )
                 };
                 let (ls, ld) = (ln_front + ls, ln_front + ld);
                 Response {
@@ -457,13 +459,27 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
             PolarizationLevel::OneShape => {
                 let (ls, ld) = log_weights(xi_half);
                 let t = prepared.t_stokes;
-                self.finish(material, g, prepared, (t, ln_front + ls), (t, ln_front + ld), attenuation)
+                self.finish(
+                    material,
+                    g,
+                    prepared,
+                    (t, ln_front + ls),
+                    (t, ln_front + ld),
+                    attenuation,
+                )
             }
             PolarizationLevel::Full if !Coh::USES_SHAPE => {
                 // Without shapes the three channels' weights are one and the same: M T S K.
                 let (ls, ld) = log_weights(xi_half);
                 let t = prepared.t_stokes;
-                self.finish(material, g, prepared, (t, ln_front + ls), (t, ln_front + ld), attenuation)
+                self.finish(
+                    material,
+                    g,
+                    prepared,
+                    (t, ln_front + ls),
+                    (t, ln_front + ld),
+                    attenuation,
+                )
             }
             PolarizationLevel::Full => {
                 let ((xs, xd), (ys, yd), (hs, hd)) =
@@ -612,6 +628,10 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
     /// quadrature errors of [`crate::psd::GaussHermite`] — it lowers `K_½` by no more than their
     /// own error: the exact weights satisfy it.
     #[inline]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN maximum must take the dark branch too"
+    )]
     fn channel_mix(&self, lx: T, ly: T, lh: T) -> (Vector4<T>, T) {
         let ax = lx + self.ln_sx;
         let ay = ly + self.ln_sy;
@@ -623,26 +643,37 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
         let rel = |a: T| if a == m { T::one() } else { (a - m).exp() };
         let (rx, ry, rh) = (rel(ax), rel(ay), rel(ah));
         let two_rh = rh * T::lit(2.0);
-        let v = Vector4::new(rx + ry, rx - ry, two_rh * self.phase.0, two_rh * self.phase.1);
+        let v = Vector4::new(
+            rx + ry,
+            rx - ry,
+            two_rh * self.phase.0,
+            two_rh * self.phase.1,
+        );
         (self.t * v, m)
     }
 
     /// `true` when `S0 e^{ln_e}` is below the smallest subnormal number, so that the part is 0
     /// (the pBSDF need not be evaluated).
     #[inline]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN exponent must count as dark too"
+    )]
     fn is_dark(&self, ln_e: T) -> bool {
         !(ln_e >= self.dark_below)
     }
 
-    /// `u · S0 e^{ln_e}`, the scalar applied once at the end. When `S0 e^{ln_e}` is not a normal
-    /// number, the magnitude of `u` is folded into the exponent first, `(u/u₀) e^{ln_e + ln S0
-    /// + ln u₀}`: every entry then rounds once, so a result that underflows into the subnormal
-    /// range keeps its degree of polarization (`|u_pol|/u₀`), and one whose factors are below
-    /// the smallest number of the type (a far tail of a bright packet) is not lost.
+    /// `u · S0 e^{ln_e}`, the scalar applied once at the end.
+    ///
+    /// When `S0 e^{ln_e}` is not a normal number, the magnitude of `u` is folded into the
+    /// exponent first: `(u/u₀) · exp(ln_e + ln S0 + ln u₀)`. Every entry then rounds once, so a
+    /// result that underflows into the subnormal range keeps its degree of polarization
+    /// (`|u_pol|/u₀`), and one whose factors are below the smallest number of the type (a far
+    /// tail of a bright packet) is not lost.
     #[inline]
     fn scaled(&self, u: Vector4<T>, ln_e: T) -> Vector4<T> {
         let e = ln_e.exp() * self.s0;
-        if (e >= T::MIN_POSITIVE && e <= T::MAX) || !(u[0] > T::zero()) {
+        if (e >= T::MIN_POSITIVE && e <= T::MAX) || u[0] <= T::zero() {
             u * e
         } else {
             (u / u[0]) * (ln_e + self.ln_s0 + u[0].ln()).exp()

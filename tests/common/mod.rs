@@ -277,3 +277,8 @@ pub fn cube_quad<const N: usize>(
         }
     }
 }
+
+// ---------------------------------------------------------------- test-side formulas
+
+/// Independent (crate-free) formulas used as expected values: see `tests/common/oracle.rs`.
+pub mod oracle;
