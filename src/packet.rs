@@ -310,7 +310,7 @@ impl<T: Real> WavePacket<T> {
     /// let theta = 0.25 * 1e12 / (core::f64::consts::PI * 1e6);
     /// assert!((p.shape(Channel::X)[(0, 0)] / theta - 1.0).abs() < 1e-12);
     /// // Twice as far: four times the coherence area.
-    /// let q = p.propagate(1e6);
+    /// let q = p.propagate(1e6).unwrap();
     /// assert!((q.shape(Channel::X)[(0, 0)] / (4.0 * theta) - 1.0).abs() < 1e-12);
     /// ```
     pub fn from_area_source(
@@ -387,8 +387,10 @@ impl<T: Real> WavePacket<T> {
     /// Sets the longitudinal coherence length `σ_zz` (length), the `ξ_z` extent of the 3-D shape
     /// matrices `Θ_α = blockdiag(Θ⊥_α, σ_zz²)`.
     ///
+    /// A `σ_zz` whose square overflows is unbounded coherence (`1/σ_zz² = 0`), as its limit.
+    ///
     /// # Errors
-    /// [`Error::OutOfRange`] unless `σ_zz` is finite and positive.
+    /// [`Error::OutOfRange`] unless `σ_zz` is finite and positive with `1/σ_zz²` finite.
     pub fn with_longitudinal_coherence(mut self, sigma_zz: T) -> Result<Self, Error> {
         if !(sigma_zz.is_finite() && sigma_zz > T::zero()) {
             return Err(Error::OutOfRange {
@@ -397,7 +399,15 @@ impl<T: Real> WavePacket<T> {
                 expected: "finite and > 0",
             });
         }
-        self.inv_sigma_zz_sq = (sigma_zz * sigma_zz).recip();
+        let inv = (sigma_zz * sigma_zz).recip();
+        if !inv.is_finite() {
+            return Err(Error::OutOfRange {
+                what: "longitudinal coherence length",
+                value: sigma_zz.to_f64(),
+                expected: "σ_zz² a normal number (σ_zz ≳ 1.1e-19 in f32, 1.5e-154 in f64)",
+            });
+        }
+        self.inv_sigma_zz_sq = inv;
         Ok(self)
     }
 
@@ -409,16 +419,23 @@ impl<T: Real> WavePacket<T> {
         let dx = det2(&nx);
         let dy = det2(&ny);
         let dh = det2(&((nx + ny) * T::lit(0.5)));
-        // |μ|² ≤ √(|Θx||Θy|)/|Θ½|  ⇔  (S2² + S3²)/4 ≤ SxSy √(|Θx||Θy|)/|Θ½|.
+        // |μ|² ≤ √(|Θx||Θy|)/|Θ½|  ⇔  (S2² + S3²)/4 ≤ SxSy √(|Θx||Θy|)/|Θ½|, on S/S0 (the test is
+        // homogeneous of degree 2 in S: on S itself the squares over- or underflowed beyond
+        // S0 ≈ 1e±154 in f64 and 1e±19 in f32, accepting |μ| = 1 with Θy = 4Θx at S0 = 1e±200).
         // The slack is absolute, relative to S0²: SxSy = (S0² − S1²)/4 loses all its digits for
         // nearly fully polarized light (S1 → ±S0), and a Stokes vector that `Stokes::new`
         // accepted (|S| ≤ S0 (1 + 64 ε), i.e. S1² + S2² + S3² ≤ S0² + 128 ε S0²) must pass here
         // when Θx = Θy. A relative slack on SxSy alone rejected (1, cos t, sin t, 0) for t ≲ 1e-8.
         let s = self.stokes.vector();
-        let lhs = (s[2] * s[2] + s[3] * s[3]) * T::lit(0.25);
+        if s[0] <= T::zero() {
+            return Ok(()); // a dark packet (S = 0, as Stokes::new guarantees)
+        }
+        let n = s / s[0];
+        let lhs = (n[2] * n[2] + n[3] * n[3]) * T::lit(0.25);
         let bound = (dx / dh).sqrt() * (dy / dh).sqrt();
-        let rhs = self.sx() * self.sy() * bound;
-        let tol = T::lit(Self::REALIZABILITY_SLACK_ULPS) * T::EPSILON * s[0] * s[0];
+        let half = T::lit(0.5);
+        let rhs = ((n[0] + n[1]) * half) * ((n[0] - n[1]) * half) * bound;
+        let tol = T::lit(Self::REALIZABILITY_SLACK_ULPS) * T::EPSILON;
         if lhs > rhs + tol {
             return Err(Error::Unrealizable {
                 reason: "|μ|² exceeds √(|Θx||Θy|)/|Θ½|: x and y components with different \
@@ -592,23 +609,39 @@ impl<T: Real> WavePacket<T> {
     /// Free propagation over `d` (length, ≥ 0) along k̂: the generalized radiance is conserved, so
     /// the Stokes vector is unchanged, and the coherence area of light from a source at distance
     /// `r` grows as `r²`: `Θ⊥ ← Θ⊥ ((r + d)/r)²`. Packets without a recorded distance (a distant
-    /// source, or built from a shape) are unchanged.
+    /// source, or built from a shape) are unchanged; `d = 0` is the identity.
     ///
-    /// NaN or negative `d` leaves the packet unchanged (this function cannot fail).
-    #[must_use]
-    pub fn propagate(&self, d: T) -> Self {
+    /// # Errors
+    /// [`Error::OutOfRange`] for a negative or non-finite `d`, or when the grown shape or the
+    /// new distance overflows the type (in `f32`, e.g. a lamp at 1 m propagated by 1e20 µm):
+    /// the packet would otherwise carry infinite or NaN shapes.
+    pub fn propagate(&self, d: T) -> Result<Self, Error> {
+        if !(d.is_finite() && d >= T::zero()) {
+            return Err(Error::OutOfRange {
+                what: "propagation distance",
+                value: d.to_f64(),
+                expected: "finite and ≥ 0",
+            });
+        }
         let mut p = *self;
         if let Some(r) = self.distance
             && d > T::zero()
-            && d.is_finite()
         {
             let grow = (r + d) / r;
             let g2 = grow * grow;
             p.shape_x *= g2;
             p.shape_y *= g2;
             p.distance = Some(r + d);
+            let finite = |m: &Matrix2<T>| m.iter().all(|x| x.is_finite());
+            if !(finite(&p.shape_x) && finite(&p.shape_y) && (r + d).is_finite()) {
+                return Err(Error::OutOfRange {
+                    what: "propagation distance (the grown coherence shape overflows)",
+                    value: d.to_f64(),
+                    expected: "(r + d)/r · |Θ⊥|^{1/2} finite",
+                });
+            }
         }
-        p
+        Ok(p)
     }
 
     /// The same light described in the frame turned by `psi` counter-clockwise about k̂
@@ -692,15 +725,18 @@ impl<T: Real> WavePacket<T> {
     }
 }
 
+/// `k = 2π/λ` for a finite, positive, normal wavelength whose `k` is finite (a subnormal λ
+/// gave `k = ∞`).
 fn wavenumber<T: Real>(wavelength: T) -> Result<T, Error> {
-    if !(wavelength.is_finite() && wavelength > T::zero()) {
+    let k = T::two_pi() / wavelength;
+    if !(wavelength.is_finite() && wavelength >= T::MIN_POSITIVE && k.is_finite()) {
         return Err(Error::OutOfRange {
             what: "wavelength",
             value: wavelength.to_f64(),
-            expected: "finite and > 0",
+            expected: "finite and > 0, a normal number with 2π/λ finite",
         });
     }
-    Ok(T::two_pi() / wavelength)
+    Ok(k)
 }
 
 /// `|m| = m₁₁ m₂₂ − m₁₂ m₂₁` by [`Real::diff_of_products`] (accurate under cancellation in `f32`:

@@ -84,6 +84,10 @@ struct Scene {
     ell_over_lambda: f64,
     sigma_over_lambda: f64,
     stokes: Vector4<f64>,
+    /// The Stokes vector's scale (1, or log-uniform in 1e-30…1e12: a dim or bright packet;
+    /// the coherent lobe of a 10⁸ µm-wide packet at 89.99° is ~10²³ per unit S0, so brighter
+    /// packets can overflow f32 — `bright_wide_lobe_overflows_without_nan`).
+    s0_scale: f64,
 }
 
 fn scene(max_anisotropy: f64) -> impl Strategy<Value = Scene> {
@@ -102,10 +106,11 @@ fn scene(max_anisotropy: f64) -> impl Strategy<Value = Scene> {
             log_uniform(1e-3, 1e4),
             log_uniform(1e-4, 0.05),
             common::stokes_vector(),
+            prop_oneof![1 => Just(1.0), 1 => log_uniform(1e-30, 1e12)],
         ),
     )
         .prop_map(
-            |((lambda, w, a, ang, ratio), (ti, azimuth, exit, ell, sig, s))| Scene {
+            |((lambda, w, a, ang, ratio), (ti, azimuth, exit, ell, sig, s, s0_scale))| Scene {
                 lambda,
                 width_over_lambda: w,
                 anisotropy: a,
@@ -117,6 +122,7 @@ fn scene(max_anisotropy: f64) -> impl Strategy<Value = Scene> {
                 ell_over_lambda: ell,
                 sigma_over_lambda: sig,
                 stokes: s,
+                s0_scale,
             },
         )
 }
@@ -188,6 +194,7 @@ fn build_rounded<T: Real>(s: &Scene, two_shapes: bool, round: fn(f64) -> f64) ->
     }
     let sx = CoherenceShape::new(mx).unwrap();
     let sy = CoherenceShape::new(my).unwrap();
+    let st = st * s.s0_scale;
     let stokes = Stokes::new(l(st[0]), l(st[1]), l(st[2]), l(st[3])).unwrap();
     let packet = WavePacket::new(stokes, sx, sy, frame, l(s.lambda)).unwrap();
     let eta = Complex::new(l(1.5), l(0.0));
@@ -466,6 +473,204 @@ fn full_level_is_valid_at_the_realizability_bound() {
     assert!(checked >= 36, "only {checked} non-zero parts");
 }
 
+/// Regression (fix "scale last"): a far tail of a bright packet — S0 = 1e25, normal incidence,
+/// exit 20° off specular, σ = 0.01 µm, ℓ = 3.4 µm, λ = 0.5 µm, where f64 gives 2.95e-22 — came
+/// out exactly 0 in f32 at every level and in the batch path, because the weight (≈ 3e-47) was
+/// formed before it was scaled by S0. The weights are now logarithms combined with ln S0 before
+/// anything is exponentiated. f32 agrees with f64 to `16 ε₃₂ (m/2 + |ln S0| + 10)`, the rounding
+/// of the summed exponent (`m = ℓ²|h_t|²` the PSD's Mahalanobis exponent).
+#[test]
+fn bright_packet_far_tail_does_not_underflow() {
+    use gmueller::interaction::batch::{DirectionsSoa, StokesSoa, plane_wave_rayleigh_rice};
+    fn run<T: Real>() -> (Vec<(&'static str, f64)>, f64) {
+        let l = |x: f64| T::lit(x);
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let travel = Vector3::new(l(0.0), l(0.0), l(-1.0));
+        let packet = WavePacket::from_stokes(
+            Stokes::new(l(1e25), l(3e24), l(-2e24), l(1e24)).unwrap(),
+            CoherenceShape::isotropic(l(10.0)).unwrap(),
+            Frame::sp(travel, Vector3::z()).unwrap(),
+            l(0.5),
+        )
+        .unwrap();
+        let eta = Complex::new(l(1.5), l(0.0));
+        let material = RoughSurface {
+            psd: GaussianPsd::isotropic(l(0.01), l(3.4)).unwrap(),
+            specular: FresnelReflection::new(eta).unwrap(),
+            scatter: RayleighRice::new(eta).unwrap(),
+        };
+        let t = 20f64.to_radians();
+        let exit = Vector3::new(l(t.sin()), l(0.0), l(t.cos()));
+        let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+        let b = Built {
+            packet,
+            material,
+            g,
+        };
+        let mut out: Vec<_> = all_levels(&b)
+            .into_iter()
+            .map(|(name, r)| (name, r.scattered.s0().to_f64()))
+            .collect();
+        let (x, y, z) = ([exit.x], [exit.y], [exit.z]);
+        let (mut s0, mut s1, mut s2, mut s3) = ([T::zero()], [T::zero()], [T::zero()], [T::zero()]);
+        let mut soa = StokesSoa {
+            s: [&mut s0, &mut s1, &mut s2, &mut s3],
+        };
+        let exits = DirectionsSoa {
+            x: &x,
+            y: &y,
+            z: &z,
+        };
+        plane_wave_rayleigh_rice(&b.material, &b.packet, &surface, &exits, &mut soa).unwrap();
+        out.push(("batch", s0[0].to_f64()));
+        (out, b.g.h_t().x.to_f64())
+    }
+    let (r64, h) = run::<f64>();
+    let (r32, _) = run::<f32>();
+    let m = (3.4 * h).powi(2);
+    let tol = 16.0 * f64::from(f32::EPSILON) * (0.5 * m + 1e25f64.ln() + 10.0);
+    for ((name, a), (_, b)) in r32.iter().zip(&r64) {
+        if name.ends_with("Incoherent") {
+            // The incoherent lobe (width cos θ/w) is 10⁻³⁷⁰ down here, 0 in both precisions.
+            assert!(*a == 0.0 && *b < 1e-300, "{name}: {a:e}, {b:e}");
+            continue;
+        }
+        // ≈ 3e-22 for the plane wave; the partially coherent levels blur the tail up a little.
+        assert!(*b > 1e-23 && *b < 1e-15, "{name}: f64 {b:e}");
+        assert_close(&format!("{name}: f32 vs f64"), *a, *b, Tol::new(0.0, tol));
+    }
+}
+
+/// A coherent lobe brighter than the type: an f32 packet of S0 = 2.2e29 with a 5·10⁵ λ
+/// coherence width at normal incidence has a specular lobe of ~10⁴¹ at its peak. The result is
+/// an honest overflow — S0 = +∞ — with the zero Stokes parameters of unpolarized light still 0
+/// (not 0·∞ = NaN), and a polarized packet gives ±∞ with the signs of the f64 result.
+#[test]
+fn bright_wide_lobe_overflows_without_nan() {
+    let scene = |stokes: Vector4<f64>| Scene {
+        lambda: 1.0,
+        width_over_lambda: 521178.16309255146,
+        anisotropy: 1.0,
+        shape_angle: 0.0,
+        ratio: 1.0,
+        theta_i_deg: 0.0,
+        azimuth: 0.0,
+        exit: Exit::Specular,
+        ell_over_lambda: 1.0,
+        sigma_over_lambda: 0.05,
+        stokes,
+        s0_scale: 2.653568608423507e28,
+    };
+    for st in [
+        Vector4::new(8.3746, 0.0, 0.0, 0.0),
+        Vector4::new(8.3746, 3.0, -4.0, 2.0),
+    ] {
+        let b32 = build::<f32>(&scene(st), false);
+        let b64 = build::<f64>(&scene(st), false);
+        for ((name, r32), (_, r64)) in all_levels(&b32).into_iter().zip(all_levels(&b64)) {
+            let (v32, v64) = (r32.specular.vector(), r64.specular.vector());
+            for i in 0..4 {
+                let (a, b) = (f64::from(v32[i]), v64[i]);
+                assert!(!a.is_nan(), "{name}: NaN in {v32:?}");
+                if b.abs() > 2.0 * f64::from(f32::MAX) {
+                    assert_eq!(a, b.signum() * f64::INFINITY, "{name}[{i}]: {a:e} vs {b:e}");
+                } else if b == 0.0 {
+                    assert_eq!(a, 0.0, "{name}[{i}]");
+                }
+            }
+        }
+    }
+}
+
+/// Regression (CI failure with a random seed, the minimal input): λ = 1, w/λ = 0.2204,
+/// anisotropy 4.67e5, shape angle 2.138, Θ_y = 1.024 Θ_x, θ_i = 85.47°, exit 89.99° at φ =
+/// 1.244, ℓ/λ = 1, σ/λ = 0.05, S = (1e-3, −1.69e-4, 5.41e-4, 0): the f64 Full·Partial specular
+/// output was (3.26e-35, 3.13e-35, 2.96e-35, 0), DoP 1.32. Now valid at every level, in both
+/// precisions and at several azimuths.
+#[test]
+fn two_shape_grazing_regression() {
+    for azimuth in [0.0, 1.0, -2.5] {
+        let s = Scene {
+            lambda: 1.0,
+            width_over_lambda: 0.2204,
+            anisotropy: 4.67e5,
+            shape_angle: 2.138,
+            ratio: 1.024,
+            theta_i_deg: 85.47,
+            azimuth,
+            exit: Exit::General {
+                theta_deg: 89.99,
+                phi: 1.244,
+            },
+            ell_over_lambda: 1.0,
+            sigma_over_lambda: 0.05,
+            stokes: Vector4::new(1e-3, -1.69e-4, 5.41e-4, 0.0),
+            s0_scale: 1.0,
+        };
+        kernel_properties::<f64>(&s, true).unwrap();
+        kernel_properties::<f32>(&s, true).unwrap();
+    }
+}
+
+/// Regression (fix "channel mix", quadrature): with a K-correlation PSD (σ² = 9e-8, T = 0.0366,
+/// γ = 1.2912) blurred by `GaussHermite` of any order 2…32, Θ_x = (5e-5)² I µm², Θ_y = 4Θ_x,
+/// θ_i = 60°, the per-channel quadrature errors broke `K_½²|μ|² ≤ K_x K_y` and the scattered DoP
+/// was 1.053 (1.46 with Θ_y = 49Θ_x); `Adaptive` gave 0.994. Valid now for every order, both
+/// ratios (|μ| at 0.999 of the realizability bound) and a grid of exits at φ ≠ 0.
+#[test]
+fn gauss_hermite_channels_stay_valid() {
+    use gmueller::psd::{Adaptive, KCorrelation};
+    let psd = KCorrelation::<f64, 2>::new(9e-8, 0.0366, 1.2912).unwrap();
+    let eta = Complex::new(1.5, 0.0);
+    let material = RoughSurface {
+        psd,
+        specular: FresnelReflection::new(eta).unwrap(),
+        scatter: RayleighRice::new(eta).unwrap(),
+    };
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let mut checked = 0;
+    for ratio in [4.0f64, 49.0] {
+        let b = 4.0 * ratio / ((1.0 + ratio) * (1.0 + ratio));
+        let s2 = 0.999 * b.sqrt();
+        for (to, po) in [(10.0, 0.5), (40.0, 1.0), (62.0, 0.1), (70.0, 2.5)] {
+            let exit = Vector3::new(
+                f64::to_radians(to).sin() * f64::cos(po),
+                f64::to_radians(to).sin() * f64::sin(po),
+                f64::to_radians(to).cos(),
+            );
+            let (p, e) = two_shape_case::<f64>(
+                0.5,
+                5e-5,
+                1.0,
+                0.0,
+                ratio,
+                60.0,
+                0.3,
+                exit,
+                [1.0, 0.0, s2, 0.0],
+            );
+            let g = Geometry::for_packet(&p, &surface, e).unwrap();
+            for order in [2, 3, 4, 8, 16, 32] {
+                let kernel = Kernel::<Full, Partial, GaussHermite<f64>>::new(
+                    GaussHermite::new(order).unwrap(),
+                );
+                let r = kernel.evaluate(&material, &p, &g);
+                let d = dop(&r.scattered);
+                assert!(
+                    d <= 1.0 + 64.0 * f64::EPSILON,
+                    "order {order}, ratio {ratio}, exit ({to}°, {po}): DoP {d}"
+                );
+                checked += 1;
+            }
+            let adaptive =
+                Kernel::<Full, Partial, Adaptive<f64>>::new(Adaptive::new(1e-9).unwrap())
+                    .evaluate(&material, &p, &g);
+            assert!(dop(&adaptive.scattered) <= 1.0 + 64.0 * f64::EPSILON);
+        }
+    }
+    assert_eq!(checked, 48);
+}
+
 // ------------------------------------------------------- continuity into the limits
 
 /// The surface coherence term in closed form, computed here independently of the crate: an
@@ -632,6 +837,7 @@ fn grazing_anisotropic_section_is_continuous() {
                     ell_over_lambda: 1.0,
                     sigma_over_lambda: 0.01,
                     stokes: Vector4::new(1.0, 0.0, 0.0, 0.0),
+                    s0_scale: 1.0,
                 };
                 let b64 = build::<f64>(&s, false);
                 let b32 = build::<f32>(&s, false);

@@ -484,7 +484,7 @@ fn area_source_and_propagation() {
         }
         assert_eq!(p.distance(), Some(r));
         for d in [0.0, 0.5 * r, 3.0 * r] {
-            let q = p.propagate(d);
+            let q = p.propagate(d).unwrap();
             let g = ((r + d) / r).powi(2);
             assert_all_close(
                 "propagated Θ",
@@ -503,7 +503,7 @@ fn area_source_and_propagation() {
                 Tol::new(0.0, 1e-13),
             );
             // Composition: propagate(d/2) twice.
-            let twice = p.propagate(d / 2.0).propagate(d / 2.0);
+            let twice = p.propagate(d / 2.0).unwrap().propagate(d / 2.0).unwrap();
             assert_all_close(
                 "propagate composes",
                 twice.shape(Channel::Y).iter().copied(),
@@ -511,17 +511,92 @@ fn area_source_and_propagation() {
                 Tol::new(0.0, 1e-13),
             );
         }
-        // NaN / negative distances leave the packet unchanged.
-        assert_eq!(p.propagate(f64::NAN), p);
-        assert_eq!(p.propagate(-1.0), p);
+        // NaN, infinite and negative distances are errors.
+        for d in [f64::NAN, f64::INFINITY, -1.0, -f64::MIN_POSITIVE] {
+            assert!(p.propagate(d).is_err(), "propagate({d}) accepted");
+        }
     }
     // Packets without a distance: no-op.
     let w = CoherenceShape::isotropic(20.0).unwrap();
     let p = WavePacket::from_stokes(s, w, frame_xyz(), 0.5).unwrap();
-    assert_eq!(p.propagate(1e6), p);
+    assert_eq!(p.propagate(1e6).unwrap(), p);
     let sun = WavePacket::from_distant_disk_source(s, 6.8e-5, frame_xyz(), 0.5).unwrap();
     assert_eq!(sun.distance(), None);
-    assert_eq!(sun.propagate(1e9), sun);
+    assert_eq!(sun.propagate(1e9).unwrap(), sun);
+}
+
+/// Regression (fix "realizability on S/S0"): the realizability test squared S itself, so in f64
+/// it accepted |μ| = 1 with `Θ_y = 4Θ_x` (bound 0.64) at S0 = 1e±200, in f32 at S0 ≥ 1e20 or
+/// ≤ 1e-23, and rejected the valid one-shape f32 packet S = (3e19, 0, 2.4e19, 0). It is now
+/// decided on S/S0: at every scale of the type, |μ|² = B(1 − 1e-4) is accepted and
+/// |μ|² = B(1 + 1e-4) rejected, for a rotated anisotropic `Θ_x` and `Θ_y = 4Θ_x` (B = 0.64).
+#[test]
+fn realizability_is_scale_invariant() {
+    fn check<T: Real>(scales: &[f64]) {
+        let l = |x: f64| T::lit(x);
+        let f = frame_xyz_t::<T>();
+        let tx = Matrix2::new(2.0, 0.7, 0.7, 0.5);
+        let (cx, cy) = (
+            CoherenceShape::new(tx.map(l)).unwrap(),
+            CoherenceShape::new((tx * 4.0).map(l)).unwrap(),
+        );
+        let b = 0.64f64;
+        for &scale in scales {
+            let make = |mu2: f64| {
+                let v = stokes_from_mu(0.3, 0.7, mu2.sqrt(), 0.4) * scale;
+                let st = Stokes::new(l(v[0]), l(v[1]), l(v[2]), l(v[3])).unwrap();
+                WavePacket::new(st, cx, cy, f, l(0.5))
+            };
+            assert!(
+                make(b * (1.0 - 1e-4)).is_ok(),
+                "rejected below the bound at {scale:e}"
+            );
+            assert!(
+                matches!(make(b * (1.0 + 1e-4)), Err(Error::Unrealizable { .. })),
+                "accepted above the bound at {scale:e}"
+            );
+            assert!(
+                matches!(make(1.0), Err(Error::Unrealizable { .. })),
+                "|μ| = 1 accepted at {scale:e}"
+            );
+            // One shape: full correlation is realizable at every scale.
+            let v = Vector4::new(1.0, 0.0, 0.8, 0.6) * scale;
+            let st = Stokes::new(l(v[0]), l(v[1]), l(v[2]), l(v[3])).unwrap();
+            assert!(
+                WavePacket::from_stokes(st, cx, f, l(0.5)).is_ok(),
+                "one shape at {scale:e}"
+            );
+        }
+    }
+    check::<f64>(&[
+        1e-300, 1e-200, 1e-160, 1e-20, 1.0, 1e20, 1e160, 1e200, 1e300,
+    ]);
+    check::<f32>(&[1e-35, 1e-23, 1e-19, 1.0, 1e19, 1e20, 1e30, 1e37]);
+    // The f32 case.
+    let st = Stokes::new(3e19f32, 0.0, 2.4e19, 0.0).unwrap();
+    let w = CoherenceShape::isotropic(1.0f32).unwrap();
+    assert!(WavePacket::from_stokes(st, w, frame_xyz_t::<f32>(), 0.5).is_ok());
+}
+
+/// Regression (fix "propagate overflow"): in f32 a 1 µm² source at 1 m (Θ⊥ ≈ 8e10 µm²)
+/// propagated by 1e20 µm grew its shape by (1e14)² to ∞ (and NaN in the inverse); it is now an
+/// error, while distances whose shape stays finite still propagate as `((r + d)/r)²`.
+#[test]
+fn propagation_that_overflows_is_an_error() {
+    let s = Stokes::<f32>::unpolarized(1.0).unwrap();
+    let f = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let p = WavePacket::from_area_source(s, 1.0f32, 1e6, f, 0.5).unwrap();
+    assert!(p.propagate(1e20).is_err());
+    assert!(p.propagate(f32::MAX).is_err());
+    let q = p.propagate(1e7).unwrap();
+    let th = p.shape(Channel::X)[(0, 0)];
+    assert_close(
+        "propagated Θ (f32)",
+        f64::from(q.shape(Channel::X)[(0, 0)]),
+        f64::from(th) * 121.0,
+        Tol::new(0.0, 1e-6),
+    );
+    assert!(q.shape(Channel::X).iter().all(|x| x.is_finite()));
 }
 
 #[test]
@@ -954,7 +1029,7 @@ fn main_relations<T: Real>(tol: Tol) {
     assert_close("area Θ", a.shape(Channel::Y)[(1, 1)].to_f64(), th, tol);
     assert_close(
         "propagated Θ",
-        a.propagate(l(50.0)).shape(Channel::Y)[(1, 1)].to_f64(),
+        a.propagate(l(50.0)).unwrap().shape(Channel::Y)[(1, 1)].to_f64(),
         th * 2.25,
         tol,
     );

@@ -538,8 +538,6 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
 /// factor. No heap allocation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedPacket<T: Real, Pol, Coh> {
-    /// `S0` (the scale applied last).
-    s0: T,
     /// `ln S0` (−∞ for a dark packet).
     ln_s0: T,
     /// `ln(smallest subnormal) − ln S0`: a part whose `ln_e` lies below is 0.
@@ -597,7 +595,6 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
         };
         let k = packet.wavenumber();
         Self {
-            s0,
             ln_s0: s0.ln(),
             dark_below: (T::MIN_POSITIVE * T::EPSILON).ln() - s0.ln(),
             two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
@@ -672,11 +669,16 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
     /// tail of a bright packet) is not lost.
     #[inline]
     fn scaled(&self, u: Vector4<T>, ln_e: T) -> Vector4<T> {
-        let e = ln_e.exp() * self.s0;
+        // exp(ln_e) · S0 would round exp(ln_e) first, with a subnormal's few digits when the
+        // weight is tiny and S0 bright: one exponential of the sum instead.
+        let e = (ln_e + self.ln_s0).exp();
         if (e >= T::MIN_POSITIVE && e <= T::MAX) || u[0] <= T::zero() {
             u * e
         } else {
-            (u / u[0]) * (ln_e + self.ln_s0 + u[0].ln()).exp()
+            // An overflow stays an overflow (±∞), but an entry that is exactly 0 stays 0 rather
+            // than becoming 0 · ∞ = NaN.
+            let e = (ln_e + self.ln_s0 + u[0].ln()).exp();
+            (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
         }
     }
 }

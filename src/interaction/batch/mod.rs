@@ -313,13 +313,14 @@ pub struct PlaneWavePrep<T: Real> {
     /// `(Im ε)²` and `(Im ε)/2`.
     eim2: T,
     eim_half: T,
-    /// `ln(σ²|Λ|^{1/2}) + ln(2π (2k cos θ_i)² / λ²)`.
+    /// `ln(σ²|Λ|^{1/2}) + ln(2π (2k cos θ_i)² / λ²) + ln S0`.
     log_scale: T,
     variance: T,
     l00: T,
     l10: T,
     l11: T,
-    /// `T S` as `(S0 + S1)/2, (S0 − S1)/2, S2, S3` (the Full level's effective vector).
+    /// `T S/S0` as `(S0 + S1)/2, (S0 − S1)/2, S2, S3` (the Full level's effective vector,
+    /// normalised; `S0` is in `log_scale`).
     stokes: [T; 4],
     /// `√ε` of the type: below it `Frame::sp` falls back to a tangent of n̂.
     parallel_tol: T,
@@ -337,8 +338,17 @@ impl<T: Real> PlaneWavePrep<T> {
         // The incident s/p frame, T and the effective Stokes vector exactly as the Full level.
         let (cos_i, incident_sp) = geometry::incidence(&s, surface)?;
         let t = frame_change_mueller(packet.frame(), &incident_sp).0;
+        // S/S0, with ln S0 folded into the exponent of the weight: the weight alone (K, tiny in
+        // a far tail) underflowed before it was scaled by a bright S0 (f32: 0 for S0 = 1e25
+        // where the answer is 3e-22).
         let st = packet.stokes().0;
-        let (sx, sy) = (packet.sx(), packet.sy());
+        let (st, ln_s0) = if st[0] > T::zero() {
+            (st / st[0], st[0].ln())
+        } else {
+            (Vector4::zeros(), T::zero())
+        };
+        let half = T::lit(0.5);
+        let (sx, sy) = ((st[0] + st[1]) * half, (st[0] - st[1]) * half);
         let ts = t * Vector4::new(sx + sy, sx - sy, st[2], st[3]);
         let u_az = n.cross(&incident_sp.x());
         let v_az = n.cross(&u_az);
@@ -386,7 +396,7 @@ impl<T: Real> PlaneWavePrep<T> {
             real_eps,
             eim2: e.im * e.im,
             eim_half: e.im * T::lit(0.5),
-            log_scale: log_amplitude + log_prefactor,
+            log_scale: log_amplitude + log_prefactor + ln_s0,
             variance: psd.variance(),
             l00: l[(0, 0)],
             l10: l[(1, 0)],
