@@ -98,3 +98,47 @@ fn exitant_packet_carries_the_stokes_vector_in_the_exit_frame() {
     assert!(out.has_single_shape());
     assert_close("wavelength", out.wavelength(), 0.55, Tol::new(0.0, 1e-14));
 }
+
+/// The exitant packet of a dim or bright response (the kernel's output at a far tail of a
+/// renderer's path can be 1e-22 or less), in f32 and f64, at grazing angles and φ ≠ 0: the
+/// realizability test on S/S0 accepts every valid Stokes vector at every scale (it squared S
+/// itself and rejected such packets), and the area-conserving shape stays finite.
+#[test]
+fn exitant_packet_of_dim_and_bright_responses() {
+    fn check<T: gmueller::Real>(scales: &[f64]) {
+        let l = |x: f64| T::lit(x);
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        for (ti, az, to, po) in [
+            (0.6f64, 0.3f64, 0.4f64, 2.0f64),
+            (1.55, -1.2, 1.5, 0.7),
+            (0.0, 0.0, 1.2, -2.5),
+        ] {
+            let travel = Vector3::new(ti.sin() * az.cos(), ti.sin() * az.sin(), -ti.cos());
+            let packet = WavePacket::from_stokes(
+                Stokes::new(l(1.0), l(0.2), l(-0.3), l(0.1)).unwrap(),
+                CoherenceShape::new(Matrix2::new(l(400.0), l(50.0), l(50.0), l(100.0))).unwrap(),
+                Frame::sp(travel.map(l), Vector3::z()).unwrap(),
+                l(0.55),
+            )
+            .unwrap();
+            let exit = Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(l);
+            let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+            for &sc in scales {
+                // Fully polarized (on the edge of the Poincaré sphere) and partially polarized.
+                for v in [[1.0, 0.6, 0.0, -0.8], [1.0, 0.1, 0.2, 0.3]] {
+                    let s = Stokes::new(l(v[0] * sc), l(v[1] * sc), l(v[2] * sc), l(v[3] * sc))
+                        .unwrap();
+                    let out = exitant_packet(&packet, &g, s)
+                        .unwrap_or_else(|e| panic!("θi = {ti}, scale {sc:e}: {e}"));
+                    assert!(
+                        out.shape(gmueller::packet::Channel::X)
+                            .iter()
+                            .all(|x| x.is_finite())
+                    );
+                }
+            }
+        }
+    }
+    check::<f64>(&[1e-300, 1e-200, 1e-22, 1.0, 1e22, 1e200, 1e300]);
+    check::<f32>(&[1e-37, 1e-30, 1e-22, 1.0, 1e22, 1e30, 1e37]);
+}

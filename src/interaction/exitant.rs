@@ -25,7 +25,7 @@ use nalgebra::Matrix2;
 
 use super::{Geometry, surface_inverse_coherence};
 use crate::error::Error;
-use crate::packet::{Channel, CoherenceShape, WavePacket};
+use crate::packet::{Channel, CoherenceShape, WavePacket, det2, pow2_scale};
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -45,15 +45,27 @@ pub fn exitant_shape<T: Real>(
             min_eigenvalue: 0.0,
         },
     )?;
-    let sigma = xi.inverse()?;
+    // Σ = Ξ⁻¹ = L⁻ᵀ L⁻¹ from Ξ's Cholesky factor L, so Θ_geo = P Σ Pᵀ = G Gᵀ with G = P L⁻ᵀ.
+    let l = xi.cholesky_factor();
+    let li = Matrix2::new(
+        l[(0, 0)].recip(),
+        T::zero(),
+        -l[(1, 0)] / (l[(0, 0)] * l[(1, 1)]),
+        l[(1, 1)].recip(),
+    );
     let (ex, ey) = (g.exit_sp.x(), g.exit_sp.y());
     let (t1, t2) = (g.surface.x(), g.surface.y());
     let p = Matrix2::new(ex.dot(&t1), ex.dot(&t2), ey.dot(&t1), ey.dot(&t2));
-    let geo = p * sigma.covariance() * p.transpose();
-    let det_geo = geo[(0, 0)] * geo[(1, 1)] - geo[(0, 1)] * geo[(1, 0)];
+    let gm = p * li.transpose();
+    let geo = gm * gm.transpose();
+    // |Θ_geo| = (det P)² |Σ| = cos²θ_o / |Ξ| (det P = (x̂_e × ŷ_e)·n̂ = r̂·n̂), so the
+    // area-conserving scale (|Θ_½|/|Θ_geo|)^{1/2} is (|Θ_½| |Ξ|)^{1/2}/cos θ_o, formed from
+    // logarithms rather than from the cancelling 2×2 determinants of `geo` and `Θ_½`.
     let theta = packet.shape(Channel::Half);
-    let det_in = theta[(0, 0)] * theta[(1, 1)] - theta[(0, 1)] * theta[(1, 0)];
-    CoherenceShape::new(geo * (det_in / det_geo).sqrt())
+    let s = pow2_scale(theta.amax());
+    let ln_det_theta = det2(&(theta / s)).ln() + T::lit(2.0) * s.ln();
+    let scale = (T::lit(0.5) * (ln_det_theta + xi.log_det())).exp() / g.cos_o;
+    CoherenceShape::new(geo * scale)
 }
 
 /// The exitant packet carrying `stokes` (e.g. a kernel [`super::Response`]'s total, a Stokes

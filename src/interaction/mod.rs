@@ -65,7 +65,7 @@ pub use pbsdf::{
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::gaussian::Gaussian;
-use crate::packet::{Channel, WavePacket, inverse_cholesky2};
+use crate::packet::{Channel, WavePacket};
 use crate::psd::{BlurMethod, Psd};
 use crate::real::Real;
 use crate::stokes::Stokes;
@@ -741,7 +741,7 @@ pub fn surface_inverse_coherence<T: Real>(
     let f = packet.frame();
     let (x, y, k) = (f.x(), f.y(), f.k());
     let (t1, t2, n) = (surface.x(), surface.y(), surface.k());
-    let li = inverse_cholesky2(&packet.shape(channel))?;
+    let li = packet.shape_inverse_cholesky(channel)?;
     let (a, c, d) = (li[(0, 0)], li[(1, 0)], li[(1, 1)]);
     let rz = packet.inverse_longitudinal_variance().sqrt();
     // Rows of F: f1 = a A₁, f2 = c A₁ + d A₂, f3 = σ_zz⁻¹ b.
