@@ -268,14 +268,16 @@ pub struct Estimate {
 }
 
 /// In-place 2-D FFT of a row-major `n × n` array (forward: `e^{−2πi k·j/n}`, unnormalised).
-struct Fft2 {
+pub struct Fft2 {
     fft: Arc<dyn Fft<f64>>,
     scratch: Vec<C>,
     n: usize,
 }
 
 impl Fft2 {
-    fn new(n: usize, inverse: bool) -> Self {
+    /// A forward (or, with `inverse`, backward) transform of size `n × n`.
+    #[must_use]
+    pub fn new(n: usize, inverse: bool) -> Self {
         let mut planner = FftPlanner::new();
         let fft = if inverse {
             planner.plan_fft_inverse(n)
@@ -294,7 +296,8 @@ impl Fft2 {
         }
     }
 
-    fn run(&mut self, buf: &mut [C]) {
+    /// Transforms `buf` (row-major, `n²` values) in place.
+    pub fn run(&mut self, buf: &mut [C]) {
         let n = self.n;
         self.fft.process_with_scratch(buf, &mut self.scratch);
         Self::transpose(buf, n);
@@ -304,7 +307,8 @@ impl Fft2 {
 }
 
 /// Signed frequency index of DFT bin `i` (`−n/2 < s ≤ n/2`).
-fn signed(i: usize, n: usize) -> i64 {
+#[must_use]
+pub fn signed(i: usize, n: usize) -> i64 {
     if i <= n / 2 {
         i as i64
     } else {
@@ -328,12 +332,14 @@ struct Plan {
     terms: usize,
 }
 
-fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
+/// The beam envelope `A(x) = exp(−|x|²/(2W²))` on the grid (row-major, centred at index `n/2`)
+/// and its area `|P| = Σ |A|² dx²`.
+#[must_use]
+pub fn beam_envelope(grid: &Grid) -> (Vec<f64>, f64) {
     let (n, dx) = (grid.n, grid.dx);
-    let nn = n * n;
     let half = (n / 2) as f64;
     let coord = |i: usize| (i as f64 - half) * dx;
-    let mut beam = vec![0.0; nn];
+    let mut beam = vec![0.0; n * n];
     let w2 = grid.beam_width * grid.beam_width;
     for iy in 0..n {
         for ix in 0..n {
@@ -342,20 +348,17 @@ fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
         }
     }
     let area = beam.iter().map(|a| a * a).sum::<f64>() * dx * dx;
+    (beam, area)
+}
 
-    // Circulant eigenvalues of a sampled stationary covariance (min-image separations).
+fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
+    let (n, dx) = (grid.n, grid.dx);
+    let nn = n * n;
+    let (beam, area) = beam_envelope(grid);
+    let w2 = grid.beam_width * grid.beam_width;
+
     let mut fwd = Fft2::new(n, false);
-    let mut spectrum = |cov: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {
-        let mut buf = vec![C::new(0.0, 0.0); nn];
-        for iy in 0..n {
-            for ix in 0..n {
-                let (x, y) = (signed(ix, n) as f64 * dx, signed(iy, n) as f64 * dx);
-                buf[iy * n + ix] = C::new(cov(x, y), 0.0);
-            }
-        }
-        fwd.run(&mut buf);
-        buf.iter().map(|c| c.re.max(0.0)).collect()
-    };
+    let mut spectrum = |cov: &dyn Fn(f64, f64) -> f64| circulant_spectrum(&mut fwd, dx, cov);
 
     let mut xi = scene.surface_precision();
     if grid.beam_compensation {
@@ -377,13 +380,7 @@ fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
         }
     }
 
-    let height_amp = if scene.matter.correlation(0.0, 0.0).is_some() {
-        let m = scene.matter;
-        let mu = spectrum(&|x, y| m.correlation(x, y).unwrap_or(0.0));
-        Some(mu.into_iter().map(f64::sqrt).collect())
-    } else {
-        None
-    };
+    let height_amp = height_amplitudes(&mut fwd, &scene.matter, dx);
 
     // Directions, v, and the Taylor order.
     let k = scene.k();
@@ -445,6 +442,49 @@ fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
     }
 }
 
+/// Circulant eigenvalues of a sampled stationary covariance `cov(x, y)` on the `n × n` grid of
+/// spacing `dx` (`n` from `fwd`; min-image separations), clamped at 0.
+pub fn circulant_spectrum(fwd: &mut Fft2, dx: f64, cov: &dyn Fn(f64, f64) -> f64) -> Vec<f64> {
+    let n = fwd.n;
+    let mut buf = vec![C::new(0.0, 0.0); n * n];
+    for iy in 0..n {
+        for ix in 0..n {
+            let (x, y) = (signed(ix, n) as f64 * dx, signed(iy, n) as f64 * dx);
+            buf[iy * n + ix] = C::new(cov(x, y), 0.0);
+        }
+    }
+    fwd.run(&mut buf);
+    buf.iter().map(|c| c.re.max(0.0)).collect()
+}
+
+/// The square roots of the height spectrum (circulant eigenvalues of `R`) on the grid of `fwd`
+/// with spacing `dx`, or `None` for the grating (synthesised directly).
+pub fn height_amplitudes(fwd: &mut Fft2, matter: &Matter, dx: f64) -> Option<Vec<f64>> {
+    matter.correlation(0.0, 0.0)?;
+    let m = *matter;
+    let mu = circulant_spectrum(fwd, dx, &|x, y| m.correlation(x, y).unwrap_or(0.0));
+    Some(mu.into_iter().map(f64::sqrt).collect())
+}
+
+/// Two independent random height fields with spectrum `amp²` (the real and imaginary parts of
+/// one complex field), using `inv` (a backward [`Fft2`]) and the scratch `buf` (`n²` values).
+pub fn random_heights(
+    inv: &mut Fft2,
+    buf: &mut [C],
+    amp: &[f64],
+    rng: &mut Rng,
+) -> (Vec<f64>, Vec<f64>) {
+    for (b, a) in buf.iter_mut().zip(amp) {
+        *b = rng.complex_normal() * *a;
+    }
+    inv.run(buf);
+    let s = 2f64.sqrt() / inv.n as f64;
+    (
+        buf.iter().map(|c| c.re * s).collect(),
+        buf.iter().map(|c| c.im * s).collect(),
+    )
+}
+
 /// Scratch space of one worker thread.
 struct Worker {
     fwd: Fft2,
@@ -465,19 +505,6 @@ impl Worker {
             u: vec![C::new(0.0, 0.0); nn],
             g: vec![C::new(0.0, 0.0); nn * p.terms],
         }
-    }
-
-    /// Two independent random height fields (real and imaginary parts of one complex field).
-    fn random_heights(&mut self, p: &Plan, amp: &[f64], rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
-        for (b, a) in self.buf.iter_mut().zip(amp) {
-            *b = rng.complex_normal() * *a;
-        }
-        self.inv.run(&mut self.buf);
-        let s = 2f64.sqrt() / p.n as f64;
-        (
-            self.buf.iter().map(|c| c.re * s).collect(),
-            self.buf.iter().map(|c| c.im * s).collect(),
-        )
     }
 
     /// `L` at every direction for one height field, averaged exactly over the light.
@@ -559,7 +586,7 @@ pub fn run(
                     let mut rng = Rng::new(seed, item as u64);
                     let fields: Vec<Vec<f64>> = match (&p.height_amp, scene.matter) {
                         (Some(amp), _) => {
-                            let (a, b) = w.random_heights(&p, amp, &mut rng);
+                            let (a, b) = random_heights(&mut w.inv, &mut w.buf, amp, &mut rng);
                             vec![a, b]
                         }
                         (None, Matter::Sinusoid { amplitude, period }) => {
@@ -657,7 +684,9 @@ fn fast_size_multiple(m: usize, per: usize) -> usize {
     n
 }
 
-fn fast_size(m: usize) -> usize {
+/// The smallest 2ᵃ3ᵇ ≥ m.
+#[must_use]
+pub fn fast_size(m: usize) -> usize {
     let mut best = usize::MAX;
     let mut p2 = 1usize;
     while p2 < 4 * m {
