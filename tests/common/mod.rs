@@ -282,3 +282,4 @@ pub fn cube_quad<const N: usize>(
 
 /// Independent (crate-free) formulas used as expected values: see `tests/common/oracle.rs`.
 pub mod oracle;
+pub mod scene;
