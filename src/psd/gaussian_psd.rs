@@ -4,7 +4,7 @@ use nalgebra::{SMatrix, SVector};
 
 use super::{BlurMethod, ClosedForm, Psd};
 use crate::error::Error;
-use crate::gaussian::{Gaussian, cholesky, in_normal_range, solve_lower};
+use crate::gaussian::{Gaussian, cholesky, in_normal_range, mahalanobis_from_cholesky};
 use crate::real::Real;
 
 /// The PSD of a Gaussian-correlated random field: `R(x) = σ² g^Λ(x)`, `p(ζ) = σ² |Λ|^{1/2} g^{Λ⁻¹}(ζ)`.
@@ -158,7 +158,7 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     fn blur_parts(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> Option<(SMatrix<T, N, N>, T)> {
         let sum: SMatrix<T, N, N> = self.spectral.covariance() + cov.covariance();
         let l = cholesky(&sum).ok()?;
-        let m = solve_lower(&l, h).norm_squared();
+        let m = mahalanobis_from_cholesky(&l, h);
         Some((l, m))
     }
 
