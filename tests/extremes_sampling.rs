@@ -3,10 +3,13 @@
 //! 0.1…100 µm and incidence up to 89.99° (plus exact normal incidence), construction succeeds
 //! below 80° (beyond, a sampler may refuse a very narrow lobe with an error, see the test), and
 //! every sample is a finite unit direction above the
-//! horizon whose `pdf(direction)` equals `sample.pdf`, finite and positive.
+//! horizon whose `pdf(direction)` equals `sample.pdf`, finite and positive — for uniforms inside
+//! the unit square (f64) and on and beyond its boundary (`[v, 1]`, `[1, v]`, `[0, v]`, `[v, 0]`,
+//! the largest `T` below 1, ±10⁻³ outside, ±∞ and NaN; f32 and f64).
 
 mod common;
 
+use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::interaction::sampling::LobeSampler;
 use gmueller::psd::{GaussianPsd, KCorrelation};
@@ -79,5 +82,86 @@ proptest! {
                 "K-correlation sampler construction failed away from grazing: {e:?}"
             ),
         }
+    }
+}
+
+/// The uniforms on and beyond the boundary of the unit square, with one interior value `v`.
+fn boundary_uniforms<T: Real>(v: f64) -> Vec<[T; 2]> {
+    let below_one = 1.0 - T::EPSILON.to_f64() / 2.0; // the largest T below 1
+    let edges = [
+        0.0, 1.0, below_one, -1e-3, 1.0 + 1e-3, f64::INFINITY, f64::NEG_INFINITY, f64::NAN,
+    ];
+    let mut out = Vec::new();
+    for e in edges {
+        out.push([T::lit(v), T::lit(e)]);
+        out.push([T::lit(e), T::lit(v)]);
+        for e2 in [0.0, 1.0, below_one] {
+            out.push([T::lit(e), T::lit(e2)]);
+        }
+    }
+    out
+}
+
+/// Every boundary draw: a finite unit direction strictly above the surface, `pdf` finite and
+/// positive and equal to `pdf(direction)` (exactly: both are the same function of the same
+/// direction).
+fn check_boundary<T: Real>(sampler: &LobeSampler<T>, v: f64) -> Result<(), TestCaseError> {
+    let tol_unit = 64.0 * T::EPSILON.to_f64();
+    for u in boundary_uniforms::<T>(v) {
+        let s = sampler.sample(u);
+        let d = s.direction;
+        let what = format!("{} u = {u:?}: {d:?}, pdf {:?}", std::any::type_name::<T>(), s.pdf);
+        prop_assert!(d.iter().all(|x| x.is_finite()), "finite direction: {what}");
+        prop_assert!((d.norm().to_f64() - 1.0).abs() < tol_unit, "unit direction: {what}");
+        prop_assert!(d.z > T::zero(), "above the horizon: {what}");
+        prop_assert!(s.pdf.is_finite() && s.pdf > T::zero(), "pdf: {what}");
+        prop_assert!(sampler.pdf(&d) == s.pdf, "pdf(direction) {:?}: {what}", sampler.pdf(&d));
+    }
+    Ok(())
+}
+
+/// The samplers of `samplers_at_the_extremes`, built in `T`, at boundary uniforms.
+#[allow(clippy::too_many_arguments, reason = "one proptest case")]
+fn boundary_case<T: Real>(
+    lambda: f64, ell: f64, width: f64, rms: f64, theta: f64, azimuth: f64, gamma: f64, v: f64,
+) -> Result<(), TestCaseError> {
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let src = Vector3::new(theta.sin() * azimuth.cos(), theta.sin() * azimuth.sin(), theta.cos());
+    let src = src.map(T::lit);
+    let k = T::lit(std::f64::consts::TAU / lambda);
+    let w = T::lit(width * lambda);
+    let gauss = GaussianPsd::<T, 2>::isotropic(T::lit(rms * lambda), T::lit(ell * lambda)).unwrap();
+    if let Ok(s) = LobeSampler::gaussian(&gauss, &surface, &src, k, w) {
+        check_boundary(&s, v)?;
+    }
+    let kc = KCorrelation::<T, 2>::new(
+        T::lit((rms * lambda).powi(2)),
+        T::lit((ell * lambda).powi(2)),
+        T::lit(gamma),
+    )
+    .unwrap();
+    if let Ok(s) = LobeSampler::k_correlation(&kc, &surface, &src, k, w) {
+        check_boundary(&s, v)?;
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(common::proptest_config(96))]
+    /// Uniforms on the boundary of the unit square: `sample([v, 1])` returned a horizon
+    /// direction with pdf 0 for narrow lobes (those whose mass inside the disk rounds to 1).
+    #[test]
+    fn samplers_at_the_boundary_of_the_unit_square(
+        lambda in log_uniform(0.1, 100.0),
+        ell in log_uniform(1e-3, 1e4),
+        width in log_uniform(1e-3, 1e6),
+        rms in log_uniform(1e-4, 0.05),
+        theta in incidence(),
+        azimuth in -3.1..3.1f64,
+        gamma in 1.5..4.0f64,
+        v in 0.0..1.0f64,
+    ) {
+        boundary_case::<f64>(lambda, ell, width, rms, theta, azimuth, gamma, v)?;
+        boundary_case::<f32>(lambda, ell, width, rms, theta, azimuth, gamma, v)?;
     }
 }

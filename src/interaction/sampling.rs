@@ -44,8 +44,16 @@
 //! interpolant's antiderivative, inverted by safeguarded Newton. Then `ρ = F⁻¹(v F(ρ_max(ψ)))` in
 //! closed form. The density of the returned direction is therefore `pdf` up to the tabulation
 //! error (≤ 1e-13 relative to the peak, far below any Monte Carlo resolution); `Sample::pdf` is
-//! `pdf(direction)` itself, so the two agree to the last bit. A draw that rounding puts on the
-//! horizon is pulled in by a few ulps (probability O(ε)), so `pdf > 0` for every sample.
+//! `pdf(direction)` itself, so the two agree to the last bit.
+//!
+//! # The unit interval's endpoint
+//! Both inversions take their uniform in `[0, 1)`: an input is clamped into `[0, 1 − ε/2]`
+//! (the largest `T` below 1; NaN becomes 0). `v = 1` would be the truncation boundary
+//! `ρ = ρ_max`, the horizon, where `p_ω = 0`: for every lobe whose mass inside the disk rounds
+//! to 1 (`F⁻¹(1) = ∞`, clamped to the boundary) `[v, 1]` drew a horizon direction with
+//! `pdf = 0`. From `1 − ε/2` the radial draw stays at `1 − F ≥ ε/2`, where the density is a
+//! normal number. A draw that rounding still puts within a few ulps of the horizon is pulled in
+//! by a few ulps, so `pdf > 0` for every sample.
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 
@@ -353,9 +361,12 @@ impl<T: Real> TruncatedLobe<T> {
     }
 }
 
+/// A uniform clamped into `[0, 1⁻]`, `1⁻ = 1 − ε/2` the largest `T` below 1 (NaN → 0): the
+/// inverse CDFs are defined on `[0, 1)`, whose image is the open support (the endpoint 1 is the
+/// truncation boundary, the horizon, where `p_ω = cos θ_o p_u = 0`).
 #[inline]
 fn clamp01<T: Real>(v: T) -> T {
-    v.max(T::zero()).min(T::one())
+    v.max(T::zero()).min(T::one() - T::lit(0.5) * T::EPSILON)
 }
 
 /// The distance along `d = L (cos ψ, sin ψ)` from `c` to the unit circle, in units of `|d|`
@@ -683,9 +694,14 @@ impl<T: Real> LobeSampler<T> {
         cos_o * self.disk_pdf(&u)
     }
 
-    /// Draws an exit direction from two uniforms `u ∈ [0, 1]²` (clamped), exactly from
+    /// Draws an exit direction from two uniforms `u ∈ [0, 1)²`, exactly from
     /// [`LobeSampler::pdf`] (see the module docs). For a mixture the first uniform also
     /// selects the component (and is rescaled).
+    ///
+    /// Every input is accepted without panic: each uniform is clamped into `[0, 1 − ε/2]`
+    /// (values above, including 1 and `+∞`, act as the largest `T` below 1; values below 0,
+    /// `−∞` and NaN as 0). The result is always a finite unit direction strictly above the
+    /// surface with `pdf` finite and `> 0`, equal to [`LobeSampler::pdf`] of it.
     #[must_use]
     pub fn sample(&self, u: [T; 2]) -> Sample<T> {
         let mut v0 = clamp01(u[0]);
