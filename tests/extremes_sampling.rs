@@ -5,7 +5,9 @@
 //! every sample is a finite unit direction above the
 //! horizon whose `pdf(direction)` equals `sample.pdf`, finite and positive — for uniforms inside
 //! the unit square (f64) and on and beyond its boundary (`[v, 1]`, `[1, v]`, `[0, v]`, `[v, 0]`,
-//! the largest `T` below 1, ±10⁻³ outside, ±∞ and NaN; f32 and f64).
+//! the largest `T` below 1, ±10⁻³ outside, ±∞ and NaN; f32 and f64); and lobes too narrow for
+//! the scalar type's grid of directions (width below 8ε) are refused at construction, while every
+//! accepted one, up to that limit, draws only directions with `pdf > 0`.
 
 mod common;
 
@@ -164,4 +166,104 @@ proptest! {
         boundary_case::<f64>(lambda, ell, width, rms, theta, azimuth, gamma, v)?;
         boundary_case::<f32>(lambda, ell, width, rms, theta, azimuth, gamma, v)?;
     }
+}
+
+/// Narrow lobes: correlation lengths up to 10¹⁸ λ at 30° incidence with `w_min = ∞` (plane
+/// waves, so the lobe is the PSD's own). A lobe narrower than 8ε in the projected disk cannot be
+/// sampled: `c + L z` rounds to `c` along the coordinates where `c` is large (f32 ℓ = 10⁷ λ:
+/// every draw had the specular `u_x`, so the draws did not follow `pdf`). Such lobes are
+/// refused; every accepted one draws 2000 seeded directions with `pdf > 0` and at least 20
+/// distinct values of each tangent coordinate.
+fn narrow_lobes<T: Real>(ells: &[f64]) {
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let theta = 30f64.to_radians();
+    let src = Vector3::new(theta.sin(), 0.0, theta.cos()).map(T::lit);
+    let lambda = 0.5;
+    let k = T::lit(std::f64::consts::TAU / lambda);
+    let (mut accepted, mut refused) = (0, 0);
+    for &ell in ells {
+        let p = GaussianPsd::<T, 2>::isotropic(T::lit(0.01 * lambda), T::lit(ell * lambda)).unwrap();
+        let kc = KCorrelation::<T, 2>::new(
+            T::lit((0.01 * lambda).powi(2)),
+            T::lit((ell * lambda).powi(2)),
+            T::lit(2.5),
+        )
+        .unwrap();
+        let inf = T::lit(f64::INFINITY);
+        for s in [
+            LobeSampler::gaussian(&p, &surface, &src, k, inf),
+            LobeSampler::k_correlation(&kc, &surface, &src, k, inf),
+        ] {
+            let s = match s {
+                Ok(s) => s,
+                Err(gmueller::Error::Unrealizable { reason }) => {
+                    assert!(reason.contains("narrower"), "{reason}");
+                    refused += 1;
+                    continue;
+                }
+                Err(e) => panic!("{} ℓ = {ell} λ: {e:?}", std::any::type_name::<T>()),
+            };
+            accepted += 1;
+            let mut x = 0.5f64;
+            let mut dirs = Vec::new();
+            for i in 0..2000 {
+                // A Kronecker (golden-ratio) sequence: seeded, well spread.
+                x = (x + 0.618_033_988_749_895) % 1.0;
+                let u = [T::lit(x), T::lit((i as f64 + 0.5) / 2000.0)];
+                let d = s.sample(u);
+                let what = format!("{} ℓ = {ell} λ, u = {u:?}: {d:?}", std::any::type_name::<T>());
+                assert!(d.pdf > T::zero() && d.pdf.is_finite() && d.direction.z > T::zero(), "{what}");
+                dirs.push(d.direction.map(|v| v.to_f64().to_bits()));
+            }
+            let ty = std::any::type_name::<T>();
+            for axis in 0..2 {
+                let mut c: Vec<u64> = dirs.iter().map(|d| d[axis]).collect();
+                c.sort_unstable();
+                c.dedup();
+                assert!(c.len() >= 20, "{ty} ℓ = {ell} λ: {} distinct values of u[{axis}]", c.len());
+            }
+        }
+    }
+    let ty = std::any::type_name::<T>();
+    assert!(accepted >= 2 && refused >= 2, "{ty}: accepted {accepted}, refused {refused}");
+}
+
+#[test]
+fn lobes_narrower_than_the_float_grid_are_refused() {
+    narrow_lobes::<f32>(&[1e3, 1e4, 1e6, 1e7, 1e9]);
+    narrow_lobes::<f64>(&[1e10, 1e12, 1e15, 1e16, 1e18]);
+}
+
+/// The case `nothing_panics_on_finite_input` found: incidence with cos θ_i = 5·10⁻²⁴⁶ (the lobe
+/// centre on the unit circle) and a K-correlation lobe 10⁻¹⁸ wide; the sampler drew horizon
+/// directions with pdf 0. It is refused now.
+#[test]
+fn grazing_sub_resolution_lobe_is_refused() {
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let src = Vector3::new(0.0, 1.8783770709182997e-55, 1e-300);
+    let kc = KCorrelation::<f64, 2>::new(0.0, 1.7376618155853006e-168, 3.322599045891505e203).unwrap();
+    let r = LobeSampler::k_correlation(&kc, &surface, &src, 0.6077570085065888, 5.89157231586223e62);
+    assert!(matches!(r, Err(gmueller::Error::Unrealizable { .. })), "{:?}", r.map(|s| s.sample([0.0, 0.0])));
+}
+
+/// Found by the same search: f32 with `w_min = 2.6·10⁻⁴²` makes the incoherent lobe
+/// `√(1/w_min²)/k ≈ 4.5·10⁴⁰` wide, beyond f32 (the sampler drew NaN directions). Refused; the
+/// same lobe in f64 is accepted and samples normally.
+#[test]
+fn lobe_wider_than_the_scalar_type_is_refused() {
+    let src = Vector3::new(0.0, 0.0, 4.39639664200053);
+    let (k, w) = (8.652166140935165, 2.5685616729281098e-42);
+    let s32 = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let p32 = GaussianPsd::<f32, 2>::isotropic(0.0, 0.30059147474528997).unwrap();
+    let r = LobeSampler::gaussian(&p32, &s32, &src.map(|x| x as f32), k as f32, w as f32);
+    assert!(
+        matches!(r, Err(gmueller::Error::Unrealizable { .. })),
+        "{:?}",
+        r.map(|s| s.sample([0.5, 0.5]))
+    );
+    let s64 = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let p64 = GaussianPsd::<f64, 2>::isotropic(0.0, 0.30059147474528997).unwrap();
+    let s = LobeSampler::gaussian(&p64, &s64, &src, k, w).unwrap();
+    let d = s.sample([0.3, 0.6]);
+    assert!(d.pdf > 0.0 && d.pdf.is_finite() && d.direction.z > 0.0, "{d:?}");
 }

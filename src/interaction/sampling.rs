@@ -70,6 +70,9 @@ const DEG: usize = 16;
 const TABLE_TOL: f64 = 1e-13;
 /// The most panels a table may use.
 const MAX_PANELS: usize = 1 << 14;
+/// The narrowest lobe a sampler accepts, in machine epsilons of the scalar type (see
+/// [`LobeSampler::gaussian`]).
+const MIN_WIDTH_ULPS: f64 = 8.0;
 /// The weight of the K-correlation lobe in its mixture with the Gaussian (incoherent) lobe.
 pub const K_CORRELATION_LOBE_WEIGHT: f64 = 0.5;
 
@@ -217,6 +220,22 @@ impl<T: Real> TruncatedLobe<T> {
                 gamma: gamma.to_f64(),
             },
         };
+        // The lobe's width in u (|det L|/‖L‖_F ≤ the smallest singular value of L, times the
+        // profile's own width, 1/√(γ + 1) for the power profile) must resolve on the disk's
+        // float grid (spacing ≤ ε): a narrower lobe puts every representable direction but its
+        // centre so many widths out that its density underflows to 0.
+        let profile_width = match prof64 {
+            RadialProfile::Gaussian => 1.0,
+            RadialProfile::Power { gamma } => (gamma + 1.0).sqrt().recip(),
+        };
+        let frob = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        let width = (l[0] * l[2]).abs() / frob * profile_width;
+        if !(width >= MIN_WIDTH_ULPS * T::EPSILON.to_f64()) {
+            return Err(Error::Unrealizable {
+                reason: "sampling lobe narrower than 8ε in the projected disk (not resolvable \
+                         in the scalar type): use a smaller minimum coherence width, or f64",
+            });
+        }
         let a = |psi: f64| {
             let rho = rho_max(&centre, &l, inside, psi);
             radial_cdf(&prof64, half_exp, rho * rho)
@@ -231,6 +250,15 @@ impl<T: Real> TruncatedLobe<T> {
         }
         let det_l = l[0] * l[2];
         let log_norm = norm_q.ln() - mass.ln() - det_l.ln();
+        // Everything the sampler evaluates in T must be a finite T (f32: a lobe wider than
+        // 3e38, or γ above 3e38, is not).
+        let in_t = [l[0], l[1], l[2], mass, total, log_norm, half_exp, neg_exp];
+        if !in_t.iter().all(|&x| T::lit(x).is_finite()) {
+            return Err(Error::Unrealizable {
+                reason: "sampling lobe not representable in the scalar type (width or exponent \
+                         overflows)",
+            });
+        }
         let panels = panels64
             .iter()
             .map(|p| Panel {
@@ -593,7 +621,12 @@ impl<T: Real> LobeSampler<T> {
     /// # Errors
     /// [`Error::OutOfRange`] for `ŝ·n̂ ≤ 0`, `k ≤ 0` or `w_min ≤ 0`; [`Error::NonFinite`],
     /// [`Error::InvalidBasis`] for a bad ŝ; [`Error::NotPositiveDefinite`] if the lobe
-    /// covariance under- or overflows; [`Error::Unrealizable`] if the table does not converge.
+    /// covariance under- or overflows; [`Error::Unrealizable`] if the table does not converge,
+    /// or if the lobe is narrower than `8ε` (machine epsilons of `T`) in the projected disk —
+    /// too narrow for the float grid of directions there, so that drawn directions would have
+    /// `pdf = 0` (f64: widths below 1.8e-15, i.e. `1/(k ℓ)` for `ℓ` above ~10¹⁴ λ; f32: below
+    /// 9.5e-7, `ℓ` above ~1.7·10⁵ λ), or too wide for `T` (f32: a width `√(1/w_min²)/k` above
+    /// `f32::MAX`).
     pub fn gaussian(
         psd: &GaussianPsd<T, 2>,
         surface: &Frame<T>,
