@@ -160,7 +160,7 @@ fn hermitian_eigenvalues<T: Real>(mut a: Matrix4<Complex<T>>) -> Vector4<T> {
                 off += a[(p, q)].norm_sqr();
             }
         }
-        if !(off > eps * eps * frob2) {
+        if !off.is_finite() || off <= eps * eps * frob2 {
             break;
         }
         for p in 0..3 {
@@ -173,7 +173,11 @@ fn hermitian_eigenvalues<T: Real>(mut a: Matrix4<Complex<T>>) -> Vector4<T> {
                 let u_conj = Complex::new(apq.re / g, -apq.im / g); // e^{−iφ}
                 let (app, aqq) = (a[(p, p)].re, a[(q, q)].re);
                 let theta = (aqq - app) / (g + g);
-                let sign = if theta < T::zero() { -T::one() } else { T::one() };
+                let sign = if theta < T::zero() {
+                    -T::one()
+                } else {
+                    T::one()
+                };
                 let t = sign / (theta.abs() + theta.hypot(T::one()));
                 let c = T::one() / t.hypot(T::one());
                 let sn = t * c;
@@ -217,7 +221,11 @@ fn normalized<T: Real>(m: &Matrix4<T>) -> (Matrix4<T>, T) {
 
 /// `num / den`, or 0 when `den = 0`.
 fn ratio_or_zero<T: Real>(num: T, den: T) -> T {
-    if den == T::zero() { T::zero() } else { num / den }
+    if den == T::zero() {
+        T::zero()
+    } else {
+        num / den
+    }
 }
 
 impl<T: Real> Mueller<T> {
@@ -241,7 +249,10 @@ impl<T: Real> Mueller<T> {
     #[must_use]
     pub fn diattenuation(&self) -> T {
         let (m, _) = normalized(&self.0);
-        ratio_or_zero(Vector3::new(m[(0, 1)], m[(0, 2)], m[(0, 3)]).norm(), m[(0, 0)])
+        ratio_or_zero(
+            Vector3::new(m[(0, 1)], m[(0, 2)], m[(0, 3)]).norm(),
+            m[(0, 0)],
+        )
     }
 
     /// The polarizance `P ∈ [0, 1]` (for a physical matrix): the degree of polarization of the
@@ -263,7 +274,10 @@ impl<T: Real> Mueller<T> {
     #[must_use]
     pub fn polarizance(&self) -> T {
         let (m, _) = normalized(&self.0);
-        ratio_or_zero(Vector3::new(m[(1, 0)], m[(2, 0)], m[(3, 0)]).norm(), m[(0, 0)])
+        ratio_or_zero(
+            Vector3::new(m[(1, 0)], m[(2, 0)], m[(3, 0)]).norm(),
+            m[(0, 0)],
+        )
     }
 
     /// The Gil–Bernabeu depolarization index `P_Δ ∈ [0, 1]`: 1 for non-depolarizing (e.g.

@@ -589,17 +589,12 @@ impl<T: Real> CsdMatrix<T> {
             .iter()
             .fold(T::zero(), |acc, z| acc.max(z.re.abs()).max(z.im.abs()));
         if r == T::zero() {
-            return Ok(Self {
-                m,
-                one_point: true,
-            });
+            return Ok(Self { m, one_point: true });
         }
         // Every part of C/r is in [−1, 1]: no product or sum below can overflow.
         let mn = m.map(|z| z / r);
-        let modulus_max = |a: &Matrix2<Complex<T>>| {
-            a.iter()
-                .fold(T::zero(), |acc, z| acc.max(z.re.hypot(z.im)))
-        };
+        let modulus_max =
+            |a: &Matrix2<Complex<T>>| a.iter().fold(T::zero(), |acc, z| acc.max(z.re.hypot(z.im)));
         let scale = modulus_max(&mn);
         let tol = T::lit(Self::TOLERANCE_ULPS) * T::EPSILON;
         let adj = mn.adjoint();

@@ -483,8 +483,14 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
             if m.matrix().iter().all(|x| x.is_finite()) {
                 // Scale-invariant analysis: finite for every finite Jones-derived matrix.
                 let l = m.coherency_eigenvalues();
-                assert!(l.iter().all(|x| !x.to_f64().is_nan()), "λ(H) = {l:?} of {j:?}");
-                assert!(!m.diattenuation().to_f64().is_nan() && !m.depolarization_index().to_f64().is_nan());
+                assert!(
+                    l.iter().all(|x| !x.to_f64().is_nan()),
+                    "λ(H) = {l:?} of {j:?}"
+                );
+                assert!(
+                    !m.diattenuation().to_f64().is_nan()
+                        && !m.depolarization_index().to_f64().is_nan()
+                );
             }
             let _ = (
                 m.is_physically_realizable(t(3)),
@@ -565,7 +571,10 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
                 g.convolve(&g).map(|s| (s.value(&x), s.log_value(&y))),
             );
             // Never NaN at finite points (0 and −∞ where out of range).
-            assert!(!g.value(&x).to_f64().is_nan() && !g.log_value(&x).to_f64().is_nan(), "g at {x:?}");
+            assert!(
+                !g.value(&x).to_f64().is_nan() && !g.log_value(&x).to_f64().is_nan(),
+                "g at {x:?}"
+            );
         }
         let _ = Gaussian::<T, 3>::isotropic(t(0)).map(|g| (g.section_xy(), g.marginal_xy()));
     })?;
@@ -597,7 +606,10 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
                 let _ = GaussianMixturePsd::new(vec![a, b]).map(|m| m.value(&h));
             }
         }
-        let cut = OrderCutoff { max_frequency: t(16), tail: t(17) };
+        let cut = OrderCutoff {
+            max_frequency: t(16),
+            tail: t(17),
+        };
         let dir = Vector2::new(t(18), t(19));
         let gratings = [
             Grating::<T, 2>::sinusoidal(t(20), &dir, t(21), cut),
@@ -605,9 +617,15 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
         ];
         for g in gratings.iter().flatten() {
             GRATING_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            let _ = (Grating::try_crossed(g, g, t(23)), Grating::crossed(g, g, t(24)));
+            let _ = (
+                Grating::try_crossed(g, g, t(23)),
+                Grating::crossed(g, g, t(24)),
+            );
             if let Ok(cov) = Gaussian::<T, 2>::isotropic(t(25)) {
-                let _ = (ClosedForm.blur(g, &cov, &h), ClosedForm.normalized_blur(g, &cov, &h));
+                let _ = (
+                    ClosedForm.blur(g, &cov, &h),
+                    ClosedForm.normalized_blur(g, &cov, &h),
+                );
             }
         }
     })?;
@@ -616,19 +634,25 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
         let src = Vector3::new(t(0), t(1), t(2).abs());
         let u = [t(3), t(4)];
         let (k, w) = (t(7).abs(), t(8).abs());
-        if let Ok(p) = GaussianPsd::<T, 2>::isotropic(t(5).abs(), t(6).abs()) {
-            if let Ok(s) = LobeSampler::gaussian(&p, &surface, &src, k, w) {
-                SAMPLER_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let d = s.sample(u);
-                assert!(d.pdf > T::zero() && d.direction.z > T::zero(), "sample {d:?}");
-                let _ = s.pdf(&v3(9));
-            }
+        if let Ok(p) = GaussianPsd::<T, 2>::isotropic(t(5).abs(), t(6).abs())
+            && let Ok(s) = LobeSampler::gaussian(&p, &surface, &src, k, w)
+        {
+            SAMPLER_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let d = s.sample(u);
+            assert!(
+                d.pdf > T::zero() && d.direction.z > T::zero(),
+                "sample {d:?}"
+            );
+            let _ = s.pdf(&v3(9));
         }
-        if let Ok(kc) = KCorrelation::<T, 2>::new(t(5).abs(), t(6).abs(), t(10).abs()) {
-            if let Ok(s) = LobeSampler::k_correlation(&kc, &surface, &src, k, w) {
-                let d = s.sample(u);
-                assert!(d.pdf > T::zero() && d.direction.z > T::zero(), "sample {d:?}");
-            }
+        if let Ok(kc) = KCorrelation::<T, 2>::new(t(5).abs(), t(6).abs(), t(10).abs())
+            && let Ok(s) = LobeSampler::k_correlation(&kc, &surface, &src, k, w)
+        {
+            let d = s.sample(u);
+            assert!(
+                d.pdf > T::zero() && d.direction.z > T::zero(),
+                "sample {d:?}"
+            );
         }
     })?;
     no_panic("packet & kernel", || {

@@ -91,7 +91,14 @@ proptest! {
 fn boundary_uniforms<T: Real>(v: f64) -> Vec<[T; 2]> {
     let below_one = 1.0 - T::EPSILON.to_f64() / 2.0; // the largest T below 1
     let edges = [
-        0.0, 1.0, below_one, -1e-3, 1.0 + 1e-3, f64::INFINITY, f64::NEG_INFINITY, f64::NAN,
+        0.0,
+        1.0,
+        below_one,
+        -1e-3,
+        1.0 + 1e-3,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
     ];
     let mut out = Vec::new();
     for e in edges {
@@ -112,12 +119,23 @@ fn check_boundary<T: Real>(sampler: &LobeSampler<T>, v: f64) -> Result<(), TestC
     for u in boundary_uniforms::<T>(v) {
         let s = sampler.sample(u);
         let d = s.direction;
-        let what = format!("{} u = {u:?}: {d:?}, pdf {:?}", std::any::type_name::<T>(), s.pdf);
+        let what = format!(
+            "{} u = {u:?}: {d:?}, pdf {:?}",
+            std::any::type_name::<T>(),
+            s.pdf
+        );
         prop_assert!(d.iter().all(|x| x.is_finite()), "finite direction: {what}");
-        prop_assert!((d.norm().to_f64() - 1.0).abs() < tol_unit, "unit direction: {what}");
+        prop_assert!(
+            (d.norm().to_f64() - 1.0).abs() < tol_unit,
+            "unit direction: {what}"
+        );
         prop_assert!(d.z > T::zero(), "above the horizon: {what}");
         prop_assert!(s.pdf.is_finite() && s.pdf > T::zero(), "pdf: {what}");
-        prop_assert!(sampler.pdf(&d) == s.pdf, "pdf(direction) {:?}: {what}", sampler.pdf(&d));
+        prop_assert!(
+            sampler.pdf(&d) == s.pdf,
+            "pdf(direction) {:?}: {what}",
+            sampler.pdf(&d)
+        );
     }
     Ok(())
 }
@@ -125,10 +143,21 @@ fn check_boundary<T: Real>(sampler: &LobeSampler<T>, v: f64) -> Result<(), TestC
 /// The samplers of `samplers_at_the_extremes`, built in `T`, at boundary uniforms.
 #[allow(clippy::too_many_arguments, reason = "one proptest case")]
 fn boundary_case<T: Real>(
-    lambda: f64, ell: f64, width: f64, rms: f64, theta: f64, azimuth: f64, gamma: f64, v: f64,
+    lambda: f64,
+    ell: f64,
+    width: f64,
+    rms: f64,
+    theta: f64,
+    azimuth: f64,
+    gamma: f64,
+    v: f64,
 ) -> Result<(), TestCaseError> {
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-    let src = Vector3::new(theta.sin() * azimuth.cos(), theta.sin() * azimuth.sin(), theta.cos());
+    let src = Vector3::new(
+        theta.sin() * azimuth.cos(),
+        theta.sin() * azimuth.sin(),
+        theta.cos(),
+    );
     let src = src.map(T::lit);
     let k = T::lit(std::f64::consts::TAU / lambda);
     let w = T::lit(width * lambda);
@@ -182,7 +211,8 @@ fn narrow_lobes<T: Real>(ells: &[f64]) {
     let k = T::lit(std::f64::consts::TAU / lambda);
     let (mut accepted, mut refused) = (0, 0);
     for &ell in ells {
-        let p = GaussianPsd::<T, 2>::isotropic(T::lit(0.01 * lambda), T::lit(ell * lambda)).unwrap();
+        let p =
+            GaussianPsd::<T, 2>::isotropic(T::lit(0.01 * lambda), T::lit(ell * lambda)).unwrap();
         let kc = KCorrelation::<T, 2>::new(
             T::lit((0.01 * lambda).powi(2)),
             T::lit((ell * lambda).powi(2)),
@@ -211,8 +241,14 @@ fn narrow_lobes<T: Real>(ells: &[f64]) {
                 x = (x + 0.618_033_988_749_895) % 1.0;
                 let u = [T::lit(x), T::lit((i as f64 + 0.5) / 2000.0)];
                 let d = s.sample(u);
-                let what = format!("{} ℓ = {ell} λ, u = {u:?}: {d:?}", std::any::type_name::<T>());
-                assert!(d.pdf > T::zero() && d.pdf.is_finite() && d.direction.z > T::zero(), "{what}");
+                let what = format!(
+                    "{} ℓ = {ell} λ, u = {u:?}: {d:?}",
+                    std::any::type_name::<T>()
+                );
+                assert!(
+                    d.pdf > T::zero() && d.pdf.is_finite() && d.direction.z > T::zero(),
+                    "{what}"
+                );
                 dirs.push(d.direction.map(|v| v.to_f64().to_bits()));
             }
             let ty = std::any::type_name::<T>();
@@ -220,12 +256,19 @@ fn narrow_lobes<T: Real>(ells: &[f64]) {
                 let mut c: Vec<u64> = dirs.iter().map(|d| d[axis]).collect();
                 c.sort_unstable();
                 c.dedup();
-                assert!(c.len() >= 20, "{ty} ℓ = {ell} λ: {} distinct values of u[{axis}]", c.len());
+                assert!(
+                    c.len() >= 20,
+                    "{ty} ℓ = {ell} λ: {} distinct values of u[{axis}]",
+                    c.len()
+                );
             }
         }
     }
     let ty = std::any::type_name::<T>();
-    assert!(accepted >= 2 && refused >= 2, "{ty}: accepted {accepted}, refused {refused}");
+    assert!(
+        accepted >= 2 && refused >= 2,
+        "{ty}: accepted {accepted}, refused {refused}"
+    );
 }
 
 #[test]
@@ -234,16 +277,22 @@ fn lobes_narrower_than_the_float_grid_are_refused() {
     narrow_lobes::<f64>(&[1e10, 1e12, 1e15, 1e16, 1e18]);
 }
 
-/// The case `nothing_panics_on_finite_input` found: incidence with cos θ_i = 5·10⁻²⁴⁶ (the lobe
+/// The case `nothing_panics_on_finite_input` found: incidence with `cos θ_i = 5·10⁻²⁴⁶` (the lobe
 /// centre on the unit circle) and a K-correlation lobe 10⁻¹⁸ wide; the sampler drew horizon
 /// directions with pdf 0. It is refused now.
 #[test]
 fn grazing_sub_resolution_lobe_is_refused() {
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
     let src = Vector3::new(0.0, 1.8783770709182997e-55, 1e-300);
-    let kc = KCorrelation::<f64, 2>::new(0.0, 1.7376618155853006e-168, 3.322599045891505e203).unwrap();
-    let r = LobeSampler::k_correlation(&kc, &surface, &src, 0.6077570085065888, 5.89157231586223e62);
-    assert!(matches!(r, Err(gmueller::Error::Unrealizable { .. })), "{:?}", r.map(|s| s.sample([0.0, 0.0])));
+    let kc =
+        KCorrelation::<f64, 2>::new(0.0, 1.7376618155853006e-168, 3.322599045891505e203).unwrap();
+    let r =
+        LobeSampler::k_correlation(&kc, &surface, &src, 0.6077570085065888, 5.89157231586223e62);
+    assert!(
+        matches!(r, Err(gmueller::Error::Unrealizable { .. })),
+        "{:?}",
+        r.map(|s| s.sample([0.0, 0.0]))
+    );
 }
 
 /// Found by the same search: f32 with `w_min = 2.6·10⁻⁴²` makes the incoherent lobe
@@ -265,5 +314,8 @@ fn lobe_wider_than_the_scalar_type_is_refused() {
     let p64 = GaussianPsd::<f64, 2>::isotropic(0.0, 0.30059147474528997).unwrap();
     let s = LobeSampler::gaussian(&p64, &s64, &src, k, w).unwrap();
     let d = s.sample([0.3, 0.6]);
-    assert!(d.pdf > 0.0 && d.pdf.is_finite() && d.direction.z > 0.0, "{d:?}");
+    assert!(
+        d.pdf > 0.0 && d.pdf.is_finite() && d.direction.z > 0.0,
+        "{d:?}"
+    );
 }

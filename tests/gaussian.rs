@@ -455,14 +455,46 @@ fn transforms_reject_non_finite<T: gmueller::Real>() {
         let v = Vector2::new(bad, T::one());
         let m = Matrix2::new(T::one(), T::zero(), bad, T::one());
         names(g.lemma_s2_1(&m, &one).map(drop), "linear map B", "lemma B");
-        names(g.lemma_s2_1(&Matrix2::identity(), &v).map(drop), "frequency q", "lemma q");
-        names(g.product_shifted(&v, &g, &one).map(drop), "shift a", "product a");
-        names(g.product_shifted(&one, &g, &v).map(drop), "shift b", "product b");
-        names(g.fourier_shifted_modulated(&v, &one, &one).map(drop), "shift a", "fsm a");
-        names(g.fourier_shifted_modulated(&one, &v, &one).map(drop), "modulation k", "fsm k");
-        names(g.fourier_shifted_modulated(&one, &one, &v).map(drop), "frequency q", "fsm q");
-        names(g.corollary_s2_2(&rot, &v, &one).map(drop), "k ŝ", "corollary k_s");
-        names(g.corollary_s2_2(&rot, &one, &v).map(drop), "frequency q", "corollary q");
+        names(
+            g.lemma_s2_1(&Matrix2::identity(), &v).map(drop),
+            "frequency q",
+            "lemma q",
+        );
+        names(
+            g.product_shifted(&v, &g, &one).map(drop),
+            "shift a",
+            "product a",
+        );
+        names(
+            g.product_shifted(&one, &g, &v).map(drop),
+            "shift b",
+            "product b",
+        );
+        names(
+            g.fourier_shifted_modulated(&v, &one, &one).map(drop),
+            "shift a",
+            "fsm a",
+        );
+        names(
+            g.fourier_shifted_modulated(&one, &v, &one).map(drop),
+            "modulation k",
+            "fsm k",
+        );
+        names(
+            g.fourier_shifted_modulated(&one, &one, &v).map(drop),
+            "frequency q",
+            "fsm q",
+        );
+        names(
+            g.corollary_s2_2(&rot, &v, &one).map(drop),
+            "k ŝ",
+            "corollary k_s",
+        );
+        names(
+            g.corollary_s2_2(&rot, &one, &v).map(drop),
+            "frequency q",
+            "corollary q",
+        );
     }
 }
 
@@ -486,17 +518,38 @@ fn huge_points_give_zero<T: gmueller::Real>(huge: f64) {
     ] {
         let x = x.map(T::lit);
         let what = format!("{} at {x:?}", std::any::type_name::<T>());
-        assert_eq!(g.mahalanobis_sq(&x).to_f64(), f64::INFINITY, "mahalanobis {what}");
-        assert_eq!(g.log_value(&x).to_f64(), f64::NEG_INFINITY, "log_value {what}");
+        assert_eq!(
+            g.mahalanobis_sq(&x).to_f64(),
+            f64::INFINITY,
+            "mahalanobis {what}"
+        );
+        assert_eq!(
+            g.log_value(&x).to_f64(),
+            f64::NEG_INFINITY,
+            "log_value {what}"
+        );
         assert_eq!(g.value(&x).to_f64(), 0.0, "value {what}");
         assert_eq!(g.density(&x).to_f64(), 0.0, "density {what}");
-        assert_eq!(g.log_density(&x).to_f64(), f64::NEG_INFINITY, "log_density {what}");
+        assert_eq!(
+            g.log_density(&x).to_f64(),
+            f64::NEG_INFINITY,
+            "log_density {what}"
+        );
         assert_eq!(conv.value(&x).to_f64(), 0.0, "ScaledGaussian::value {what}");
-        assert_eq!(g.log_value_of_inverse(&x).to_f64(), f64::NEG_INFINITY, "inverse {what}");
+        assert_eq!(
+            g.log_value_of_inverse(&x).to_f64(),
+            f64::NEG_INFINITY,
+            "inverse {what}"
+        );
     }
     // Oracle: the literal exp(−½ xᵀΣ⁻¹x) for Σ = diag(1e-20, 1), x = (1e-10, 2).
     let x = Vector2::new(T::lit(1e-10), T::lit(2.0));
-    assert_close("mahalanobis", g.mahalanobis_sq(&x).to_f64(), 5.0, Tol::new(0.0, 1e-6));
+    assert_close(
+        "mahalanobis",
+        g.mahalanobis_sq(&x).to_f64(),
+        5.0,
+        Tol::new(0.0, 1e-6),
+    );
 }
 
 #[test]
@@ -506,7 +559,7 @@ fn huge_finite_points_give_zero_never_nan() {
 }
 
 /// `qᵀΣq` where the products `Lⱼᵢ qⱼ` overflow: Σ = L Lᵀ with L = [[2, 0], [2, 1]] and
-/// q = (T::MAX, −T::MAX) give `Lᵀq = (2·MAX − 2·MAX, −MAX)`, by hand `qᵀΣq = MAX²` = +∞, so
+/// `q = (T::MAX, −T::MAX)` give `Lᵀq = (2·MAX − 2·MAX, −MAX)`, by hand `qᵀΣq = MAX²` = +∞, so
 /// `ln g^{Σ⁻¹}(q) = −∞` (the plain product gave ∞ − ∞ = NaN); with q scaled by 2⁻⁶⁰⁰ (f64)
 /// the same vector gives exactly `−½ (2⁻⁶⁰⁰·MAX)²`.
 fn inverse_at_overflowing_products<T: gmueller::Real>() {
@@ -544,7 +597,10 @@ fn lemma_s2_1_tiny_b_is_not_singular() {
     assert_close("lemma, tiny B", got, expected, Tol::new(0.0, 1e-12));
     // A truly singular B is still rejected.
     let sing = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 0.0, 1.0);
-    assert!(matches!(g.lemma_s2_1(&sing, &q), Err(Error::Singular { .. })));
+    assert!(matches!(
+        g.lemma_s2_1(&sing, &q),
+        Err(Error::Singular { .. })
+    ));
 }
 
 /// Overflowing intermediates of the shifted forms: an error naming the quantity, or 0 —
@@ -569,7 +625,10 @@ fn shifted_forms_overflow<T: gmueller::Real>() {
     assert_eq!(g.corollary_s2_2(&rot, &big, &big).unwrap().to_f64(), 0.0);
     let near = Vector2::new(T::one(), T::one());
     let r = g.fourier_shifted_modulated(&Vector2::new(max, max), &z, &near);
-    assert!(matches!(r, Err(Error::NonFinite { what }) if what.contains("phase")), "{r:?}");
+    assert!(
+        matches!(r, Err(Error::NonFinite { what }) if what.contains("phase")),
+        "{r:?}"
+    );
 }
 
 #[test]

@@ -4,7 +4,7 @@
 //! the Jones pair acting on a two-point CSD, a Monte Carlo check of S1.7 over field realizations,
 //! Cloude realizability, diattenuation / polarizance / depolarization index of known elements and
 //! the Lu–Chipman decomposition (recomposition and recovery of known factors); scale invariance of
-//! every analysis function at 10^±30 (f32) and 10^±300 (f64), with D, P, P_Δ of
+//! every analysis function at `10^±30` (f32) and `10^±300` (f64), with D, P, `P_Δ` of
 //! `10¹⁰·diag(2, 1)` checked against the hand values; and finite coherency eigenvalues for 10⁵
 //! random f32 and f64 Jones-derived matrices (three within 64ε·tr H of 0).
 
@@ -374,7 +374,7 @@ impl SplitMix {
 /// J = 10¹⁰·diag(2, 1) in f32 (|J₀₀|² = 4e20, and the squares of the Mueller entries overflow):
 /// by hand, the intensity transmittances are 4·10²⁰ and 10²⁰, so D = P = (4 − 1)/(4 + 1) = 0.6,
 /// and `M = ½·10²⁰ [[5, 3, 0, 0], [3, 5, 0, 0], [0, 0, 4, 0], [0, 0, 0, 4]]` gives
-/// `Σ M_ij² − M₀₀² = (25 − 6.25)·10⁴⁰`, so `P_Δ = √18.75 / (√3 · 2.5) = 1` (D = ∞, P_Δ = 0 before).
+/// `Σ M_ij² − M₀₀² = (25 − 6.25)·10⁴⁰`, so `P_Δ = √18.75 / (√3 · 2.5) = 1` (`D = ∞`, `P_Δ = 0` before).
 #[test]
 fn analysis_of_a_huge_f32_diattenuator_matches_the_hand_values() {
     let j = JonesMatrix::from_matrix(Matrix2::new(
@@ -386,7 +386,11 @@ fn analysis_of_a_huge_f32_diattenuator_matches_the_hand_values() {
     .unwrap();
     let m = Mueller::from_jones(&j);
     // (assert_close accepts ∞ against a finite value through its relative term: check finiteness.)
-    assert!([m.diattenuation(), m.polarizance(), m.depolarization_index()].iter().all(|x| x.is_finite()));
+    assert!(
+        [m.diattenuation(), m.polarizance(), m.depolarization_index()]
+            .iter()
+            .all(|x| x.is_finite())
+    );
     assert_close("M00", f64::from(m.matrix()[(0, 0)]), 2.5e20, F32);
     assert_close("D", f64::from(m.diattenuation()), 0.6, F32);
     assert_close("P", f64::from(m.polarizance()), 0.6, F32);
@@ -395,12 +399,16 @@ fn analysis_of_a_huge_f32_diattenuator_matches_the_hand_values() {
     let l = m.coherency_eigenvalues();
     assert_close("λ₀ = M00", f64::from(l[0]), 2.5e20, F32);
     for k in 1..4 {
-        assert!(f64::from(l[k]).abs() <= 64.0 * f64::from(f32::EPSILON) * 2.5e20, "λ{k} = {}", l[k]);
+        assert!(
+            f64::from(l[k]).abs() <= 64.0 * f64::from(f32::EPSILON) * 2.5e20,
+            "λ{k} = {}",
+            l[k]
+        );
     }
 }
 
 /// Every analysis function of `Mueller` gives the same answer for `s·M` as for `M` at
-/// `s = 10^±30` (f32) and `10^±300` (f64): D, P, P_Δ, λ(H)/s, realizability, and the Lu–Chipman
+/// `s = 10^±30` (f32) and `10^±300` (f64): D, P, `P_Δ`, `λ(H)/s`, realizability, and the Lu–Chipman
 /// retardance and diattenuation.
 fn analysis_scale_invariance<T: Real>(scales: [f64; 2], tol: Tol) {
     let cast = |m: &Mueller<f64>| Mueller::from_matrix(m.matrix().map(T::lit)).unwrap();
@@ -419,7 +427,11 @@ fn analysis_scale_invariance<T: Real>(scales: [f64; 2], tol: Tol) {
         let eps = T::EPSILON.to_f64();
         for &sc in &scales {
             let m = Mueller::from_matrix(b.matrix() * T::lit(sc)).unwrap();
-            let what = format!("{} × {sc:e}: {:?}", std::any::type_name::<T>(), base.matrix());
+            let what = format!(
+                "{} × {sc:e}: {:?}",
+                std::any::type_name::<T>(),
+                base.matrix()
+            );
             for (name, got, want) in [
                 ("D", m.diattenuation(), b.diattenuation()),
                 ("P", m.polarizance(), b.polarizance()),
@@ -432,15 +444,34 @@ fn analysis_scale_invariance<T: Real>(scales: [f64; 2], tol: Tol) {
             assert!(l.iter().all(|x| x.is_finite()), "λ = {l:?}: {what}");
             for k in 0..4 {
                 let t = Tol::new(64.0 * eps, 0.0);
-                assert_close(&format!("λ{k}/s {what}"), l[k].to_f64() / sc, bl[k].to_f64(), t);
+                assert_close(
+                    &format!("λ{k}/s {what}"),
+                    l[k].to_f64() / sc,
+                    bl[k].to_f64(),
+                    t,
+                );
             }
             let tol_real = T::lit(64.0) * T::EPSILON;
-            assert_eq!(m.is_physically_realizable(tol_real), b.is_physically_realizable(tol_real), "{what}");
+            assert_eq!(
+                m.is_physically_realizable(tol_real),
+                b.is_physically_realizable(tol_real),
+                "{what}"
+            );
             match (m.lu_chipman(), &blc) {
                 (Ok(lc), Ok(b0)) => {
                     let t = Tol::new(1e3 * eps, 1e3 * eps);
-                    assert_close(&format!("retardance {what}"), lc.retardance().to_f64(), b0.retardance().to_f64(), t);
-                    assert_close(&format!("LC D {what}"), lc.diattenuation().to_f64(), b0.diattenuation().to_f64(), t);
+                    assert_close(
+                        &format!("retardance {what}"),
+                        lc.retardance().to_f64(),
+                        b0.retardance().to_f64(),
+                        t,
+                    );
+                    assert_close(
+                        &format!("LC D {what}"),
+                        lc.diattenuation().to_f64(),
+                        b0.diattenuation().to_f64(),
+                        t,
+                    );
                 }
                 (r, b0) => assert_eq!(r.is_ok(), b0.is_ok(), "Lu–Chipman {what}"),
             }
@@ -461,13 +492,28 @@ fn check_rank_one<T: Real>(j: &JonesMatrix<T>, what: &str) {
     let l = m.coherency_eigenvalues();
     let tr = m.matrix()[(0, 0)].to_f64();
     let eps = T::EPSILON.to_f64();
-    let what = format!("{} {what}: J = {:?}", std::any::type_name::<T>(), j.matrix());
+    let what = format!(
+        "{} {what}: J = {:?}",
+        std::any::type_name::<T>(),
+        j.matrix()
+    );
     assert!(l.iter().all(|x| x.is_finite()), "λ = {l:?}: {what}");
-    assert!((l[0].to_f64() - tr).abs() <= 64.0 * eps * tr, "λ₀ = {:e} vs {tr:e}: {what}", l[0].to_f64());
+    assert!(
+        (l[0].to_f64() - tr).abs() <= 64.0 * eps * tr,
+        "λ₀ = {:e} vs {tr:e}: {what}",
+        l[0].to_f64()
+    );
     for k in 1..4 {
-        assert!(l[k].to_f64().abs() <= 64.0 * eps * tr, "λ{k} = {:e}: {what}", l[k].to_f64());
+        assert!(
+            l[k].to_f64().abs() <= 64.0 * eps * tr,
+            "λ{k} = {:e}: {what}",
+            l[k].to_f64()
+        );
     }
-    assert!(m.is_physically_realizable(T::lit(64.0) * T::EPSILON), "{what}");
+    assert!(
+        m.is_physically_realizable(T::lit(64.0) * T::EPSILON),
+        "{what}"
+    );
 }
 
 /// 10⁵ random Jones matrices (entries uniform in the unit square of ℂ) and 10⁵ nearly singular
@@ -478,8 +524,16 @@ fn coherency_robustness<T: Real>(seed: u64) {
     for i in 0..100_000 {
         check_rank_one(&rng.jones::<T>(), &format!("random {i}"));
         let j = rng.jones::<T>().matrix();
-        let tri = Matrix2::new(j[(0, 0)] * T::lit(1e-4), j[(0, 1)], Complex::new(T::zero(), T::zero()), j[(1, 1)]);
-        check_rank_one(&JonesMatrix::from_matrix(tri).unwrap(), &format!("triangular {i}"));
+        let tri = Matrix2::new(
+            j[(0, 0)] * T::lit(1e-4),
+            j[(0, 1)],
+            Complex::new(T::zero(), T::zero()),
+            j[(1, 1)],
+        );
+        check_rank_one(
+            &JonesMatrix::from_matrix(tri).unwrap(),
+            &format!("triangular {i}"),
+        );
     }
 }
 
@@ -494,13 +548,24 @@ fn coherency_eigenvalues_are_finite_for_random_jones_matrices() {
 /// `[[10⁻⁴, 1 + 10⁻⁴i], [0, 1]]` gave NaN eigenvalues before.
 fn coherency_structured<T: Real>() {
     let vals = [
-        (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0),
-        (0.5, 0.0), (1.0, 1.0), (0.3, -0.7), (1e-4, 0.0), (1.0, 1e-4),
+        (0.0, 0.0),
+        (1.0, 0.0),
+        (-1.0, 0.0),
+        (0.0, 1.0),
+        (0.0, -1.0),
+        (0.5, 0.0),
+        (1.0, 1.0),
+        (0.3, -0.7),
+        (1e-4, 0.0),
+        (1.0, 1e-4),
     ];
     let z = |k: usize| Complex::new(T::lit(vals[k].0), T::lit(vals[k].1));
     for i in 0..10_000 {
         let j = Matrix2::new(z(i / 1000), z(i / 100 % 10), z(i / 10 % 10), z(i % 10));
-        check_rank_one(&JonesMatrix::from_matrix(j).unwrap(), &format!("structured {i}"));
+        check_rank_one(
+            &JonesMatrix::from_matrix(j).unwrap(),
+            &format!("structured {i}"),
+        );
     }
 }
 

@@ -13,8 +13,8 @@ use gmueller::Error;
 use gmueller::Real;
 use gmueller::gaussian::Gaussian;
 use gmueller::psd::{
-    BlurMethod, ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation, OrderCutoff,
-    Psd, Smooth,
+    BlurMethod, ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation,
+    OrderCutoff, Psd, Smooth,
 };
 use nalgebra::{Matrix2, SVector, Vector2};
 
@@ -22,9 +22,15 @@ use nalgebra::{Matrix2, SVector, Vector2};
 /// must be rejected as non-finite).
 fn magnitudes<T: Real>() -> Vec<T> {
     let max = T::max_value().unwrap();
-    let tiny = T::lit(if T::EPSILON.to_f64() > 1e-10 { 1.4e-45 } else { 5e-324 });
+    let tiny = T::lit(if T::EPSILON.to_f64() > 1e-10 {
+        1.4e-45
+    } else {
+        5e-324
+    });
     let mut v = vec![T::zero(), tiny, max, max * T::lit(0.5)];
-    for e in [-300, -200, -100, -40, -38, -30, -20, -10, -3, 0, 3, 10, 20, 30, 38, 100, 200, 300] {
+    for e in [
+        -300, -200, -100, -40, -38, -30, -20, -10, -3, 0, 3, 10, 20, 30, 38, 100, 200, 300,
+    ] {
         v.push(T::lit(10f64.powi(e)));
     }
     v.push(T::lit(0.7));
@@ -80,7 +86,10 @@ fn sweep<T: Real>() {
             if let Ok(p) = GaussianPsd::<T, 2>::isotropic(a, b) {
                 check_psd(&p, &format!("isotropic {w}"));
                 let sp = p.spectral_shape().covariance();
-                assert!(sp.iter().all(|x| x.is_finite()) && sp[(0, 0)] > T::zero(), "{w}: {sp:?}");
+                assert!(
+                    sp.iter().all(|x| x.is_finite()) && sp[(0, 0)] > T::zero(),
+                    "{w}: {sp:?}"
+                );
                 accepted += 1;
             }
             if let Ok(p) = GaussianPsd::<T, 3>::from_scatmech(a, b) {
@@ -138,17 +147,30 @@ fn sweep<T: Real>() {
                         assert!(e.is_finite() && *e > T::zero(), "{wg}: η = {e:?}");
                     }
                     let d = g.dropped_efficiency();
-                    assert!(d.is_finite() && d >= T::zero() && d <= T::one(), "{wg}: {d:?}");
+                    assert!(
+                        d.is_finite() && d >= T::zero() && d <= T::one(),
+                        "{wg}: {d:?}"
+                    );
                     if let Ok(x) = Grating::try_crossed(&g, &g, T::zero()) {
                         check_psd(&x, &format!("crossed {wg}"));
-                        assert!(x.orders().iter().all(|(z, _)| z.iter().all(|v| v.is_finite())));
+                        assert!(
+                            x.orders()
+                                .iter()
+                                .all(|(z, _)| z.iter().all(|v| v.is_finite()))
+                        );
                     }
-                    check_psd(&Grating::crossed(&g, &g, T::zero()), &format!("crossed {wg}"));
+                    check_psd(
+                        &Grating::crossed(&g, &g, T::zero()),
+                        &format!("crossed {wg}"),
+                    );
                 }
             }
         }
     }
-    assert!(accepted > 100, "{ty}: the sweep accepted only {accepted} PSDs");
+    assert!(
+        accepted > 100,
+        "{ty}: the sweep accepted only {accepted} PSDs"
+    );
 }
 
 #[test]
@@ -162,7 +184,10 @@ fn accepted_psds_have_finite_derived_quantities() {
 fn rejects_naming<P: std::fmt::Debug>(r: Result<P, Error>, name: &str) {
     match r {
         Err(Error::OutOfRange { what, .. } | Error::NonFinite { what }) => {
-            assert!(what.contains(name), "error names {what:?}, expected {name:?}");
+            assert!(
+                what.contains(name),
+                "error names {what:?}, expected {name:?}"
+            );
         }
         other => {
             let got: String = format!("{other:?}").chars().take(300).collect();
@@ -177,7 +202,10 @@ fn overflowing_derived_quantities_are_rejected() {
     // σ² = 10⁴⁰ and 10⁻⁶⁰ are outside f32; p(0) = σ²ℓ² = 10⁶⁰ too.
     rejects_naming(GaussianPsd::<f32, 2>::isotropic(1e20, 1.0), "rms height");
     rejects_naming(GaussianPsd::<f32, 2>::isotropic(1e-30, 1.0), "rms height");
-    rejects_naming(GaussianPsd::<f32, 2>::isotropic(1e15, 1e15), "rms height σ and correlation length ℓ");
+    rejects_naming(
+        GaussianPsd::<f32, 2>::isotropic(1e15, 1e15),
+        "rms height σ and correlation length ℓ",
+    );
     rejects_naming(GaussianPsd::<f64, 2>::isotropic(1e200, 1.0), "rms height");
     // A peak below the range is accepted (the amplitude is a logarithm): f32 σ = 10⁻²⁰,
     // ℓ = 10⁻³ has p(0) = σ²ℓ² = 10⁻⁴⁶ < the smallest f32, ln p(0) = −46 ln 10 by hand.
@@ -186,56 +214,142 @@ fn overflowing_derived_quantities_are_rejected() {
     let lv = f64::from(faint.log_value(&Vector2::zeros()));
     assert_close("ln p(0)", lv, -46.0 * 10f64.ln(), Tol::new(0.0, 1e-6));
     // 1/ℓ² outside f32: ℓ = 10⁻²⁰ (1e40) and 10²³ (1e-46 → 0).
-    rejects_naming(GaussianPsd::<f32, 2>::isotropic(1.0, 1e-20), "correlation length");
-    rejects_naming(GaussianPsd::<f32, 2>::isotropic(1.0, 1e23), "correlation length");
-    rejects_naming(GaussianPsd::<f64, 2>::from_scatmech(1.0, 1e-200), "1/e correlation length");
+    rejects_naming(
+        GaussianPsd::<f32, 2>::isotropic(1.0, 1e-20),
+        "correlation length",
+    );
+    rejects_naming(
+        GaussianPsd::<f32, 2>::isotropic(1.0, 1e23),
+        "correlation length",
+    );
+    rejects_naming(
+        GaussianPsd::<f64, 2>::from_scatmech(1.0, 1e-200),
+        "1/e correlation length",
+    );
     // ∫p = 2π σ² overflows although σ² = 0.9·MAX does not.
-    rejects_naming(GaussianPsd::<f64, 2>::from_spectral_shape(0.9 * f64::MAX, Gaussian::isotropic(1.0).unwrap()), "variance σ² and spectral shape P");
+    rejects_naming(
+        GaussianPsd::<f64, 2>::from_spectral_shape(
+            0.9 * f64::MAX,
+            Gaussian::isotropic(1.0).unwrap(),
+        ),
+        "variance σ² and spectral shape P",
+    );
     // Λ⁻¹ of Λ = 10⁻⁴⁰ I is not an f32.
     let lam = Gaussian::<f32, 2>::new(Matrix2::new(1e-40, 0.0, 0.0, 1e-40)).unwrap();
-    rejects_naming(GaussianPsd::from_autocorrelation(1.0, &lam), "correlation shape Λ");
+    rejects_naming(
+        GaussianPsd::from_autocorrelation(1.0, &lam),
+        "correlation shape Λ",
+    );
     // Mixture: Σ σⱼ² = 2 · 2e38 overflows f32.
-    let big = GaussianPsd::<f32, 2>::from_spectral_shape(2e38, Gaussian::isotropic(1.0).unwrap()).unwrap_err();
-    assert!(matches!(big, Error::OutOfRange { .. }), "2e38·2π overflows ∫p: {big:?}");
-    let half = GaussianPsd::<f32, 2>::from_spectral_shape(2e37, Gaussian::isotropic(1.0).unwrap()).unwrap();
+    let big = GaussianPsd::<f32, 2>::from_spectral_shape(2e38, Gaussian::isotropic(1.0).unwrap())
+        .unwrap_err();
+    assert!(
+        matches!(big, Error::OutOfRange { .. }),
+        "2e38·2π overflows ∫p: {big:?}"
+    );
+    let half = GaussianPsd::<f32, 2>::from_spectral_shape(2e37, Gaussian::isotropic(1.0).unwrap())
+        .unwrap();
     rejects_naming(GaussianMixturePsd::new(vec![half; 4]), "mixture components");
     rejects_naming(Smooth::new(f32::MAX), "specular weight");
     rejects_naming(Smooth::new(f64::MAX / 10.0), "specular weight");
     // K-correlation, n = 2: p(0) = σ²(γ − 1)T by hand.
     let k = KCorrelation::<f64, 2>::new(1.0, 1e308, 2.0).unwrap();
-    assert_close("p(0) = σ²(γ−1)T", k.peak_value(), 1e308, Tol::new(0.0, 1e-13));
-    rejects_naming(KCorrelation::<f64, 2>::new(1.0, 1e308, 3.0), "K-correlation σ², T, γ");
-    rejects_naming(KCorrelation::<f32, 2>::new(1e-30, 1e-30, 2.0), "K-correlation σ², T, γ");
-    rejects_naming(KCorrelation::<f64, 2>::new(1.0, 1e10, 1e300), "K-correlation σ², T, γ");
+    assert_close(
+        "p(0) = σ²(γ−1)T",
+        k.peak_value(),
+        1e308,
+        Tol::new(0.0, 1e-13),
+    );
+    rejects_naming(
+        KCorrelation::<f64, 2>::new(1.0, 1e308, 3.0),
+        "K-correlation σ², T, γ",
+    );
+    rejects_naming(
+        KCorrelation::<f32, 2>::new(1e-30, 1e-30, 2.0),
+        "K-correlation σ², T, γ",
+    );
+    rejects_naming(
+        KCorrelation::<f64, 2>::new(1.0, 1e10, 1e300),
+        "K-correlation σ², T, γ",
+    );
     let huge_gamma = KCorrelation::<f64, 2>::new(1.0, 1e-300, 1e290).unwrap();
-    assert_close("p(0), γ = 1e290", huge_gamma.peak_value(), 1e-10, Tol::new(0.0, 1e-12));
+    assert_close(
+        "p(0), γ = 1e290",
+        huge_gamma.peak_value(),
+        1e-10,
+        Tol::new(0.0, 1e-12),
+    );
     // ABC: A is validated by name; B² and σ² = 2πA/((C − 2)B²) outside the type.
-    rejects_naming(KCorrelation::<f64, 2>::from_abc(f64::NAN, 1.0, 3.0), "ABC amplitude A");
-    rejects_naming(KCorrelation::<f64, 2>::from_abc(-1.0, 1.0, 3.0), "ABC amplitude A");
-    rejects_naming(KCorrelation::<f32, 2>::from_abc(1.0, 1e30, 3.0), "ABC length B");
-    rejects_naming(KCorrelation::<f32, 2>::from_abc(1.0, 1e-30, 3.0), "ABC length B");
-    rejects_naming(KCorrelation::<f32, 2>::from_abc(1.0, 1e-19, 3.0), "ABC parameters A, B, C");
+    rejects_naming(
+        KCorrelation::<f64, 2>::from_abc(f64::NAN, 1.0, 3.0),
+        "ABC amplitude A",
+    );
+    rejects_naming(
+        KCorrelation::<f64, 2>::from_abc(-1.0, 1.0, 3.0),
+        "ABC amplitude A",
+    );
+    rejects_naming(
+        KCorrelation::<f32, 2>::from_abc(1.0, 1e30, 3.0),
+        "ABC length B",
+    );
+    rejects_naming(
+        KCorrelation::<f32, 2>::from_abc(1.0, 1e-30, 3.0),
+        "ABC length B",
+    );
+    rejects_naming(
+        KCorrelation::<f32, 2>::from_abc(1.0, 1e-19, 3.0),
+        "ABC parameters A, B, C",
+    );
     // Mixture fit: squared component widths 1/(2 s T) above f32::MAX for T = 1e-40 (s ≪ 1).
     let kt = KCorrelation::<f32, 2>::new(1e10, 1e-40, 2.5).unwrap();
     rejects_naming(kt.mixture_fit(12), "K-correlation T, γ");
     // Gratings: 2π/Λ = ∞ for Λ = 1e-308 (f64) and 1e-38 (f32); ζ_m = m 2π/Λ overflows for
     // m ≥ 2 at Λ = 4e-308.
-    let cut = OrderCutoff { max_frequency: f64::INFINITY, tail: 1e-12 };
+    let cut = OrderCutoff {
+        max_frequency: f64::INFINITY,
+        tail: 1e-12,
+    };
     let x = Vector2::x();
-    rejects_naming(Grating::<f64, 2>::sinusoidal(1e-308, &x, 1.0, cut), "grating period");
-    rejects_naming(Grating::<f64, 2>::sinusoidal(4e-308, &x, 1.0, cut), "grating period");
-    let cut32 = OrderCutoff { max_frequency: f32::INFINITY, tail: 1e-6 };
-    rejects_naming(Grating::<f32, 2>::rectangular(1e-38, &Vector2::x(), 1.0, 0.3, cut32), "grating period");
-    rejects_naming(Grating::<f64, 2>::rectangular(1.0, &x, f64::NAN, 0.3, cut), "phase depth");
+    rejects_naming(
+        Grating::<f64, 2>::sinusoidal(1e-308, &x, 1.0, cut),
+        "grating period",
+    );
+    rejects_naming(
+        Grating::<f64, 2>::sinusoidal(4e-308, &x, 1.0, cut),
+        "grating period",
+    );
+    let cut32 = OrderCutoff {
+        max_frequency: f32::INFINITY,
+        tail: 1e-6,
+    };
+    rejects_naming(
+        Grating::<f32, 2>::rectangular(1e-38, &Vector2::x(), 1.0, 0.3, cut32),
+        "grating period",
+    );
+    rejects_naming(
+        Grating::<f64, 2>::rectangular(1.0, &x, f64::NAN, 0.3, cut),
+        "phase depth",
+    );
     // A direction of 1e-200 is not zero.
     let small = Grating::<f64, 2>::sinusoidal(1.0, &Vector2::new(1e-200, 0.0), 1.0, cut).unwrap();
-    assert_close("ζ₁ along x", small.orders()[1].0.x.abs(), std::f64::consts::TAU, Tol::new(0.0, 1e-15));
+    assert_close(
+        "ζ₁ along x",
+        small.orders()[1].0.x.abs(),
+        std::f64::consts::TAU,
+        Tol::new(0.0, 1e-15),
+    );
     // Crossed: positions ζ_a + ζ_b overflow (orders 0, ±1 at ±0.6·MAX, summed).
     let p = std::f64::consts::TAU / (0.6 * f64::MAX);
-    let narrow = OrderCutoff { max_frequency: 0.7 * f64::MAX, tail: 0.0 };
+    let narrow = OrderCutoff {
+        max_frequency: 0.7 * f64::MAX,
+        tail: 0.0,
+    };
     let g = Grating::<f64, 2>::sinusoidal(p, &x, 1.0, narrow).unwrap();
     assert_eq!(g.orders().len(), 3, "orders 0, ±1: {:?}", g.orders());
-    rejects_naming(Grating::try_crossed(&g, &g, 0.0), "crossed grating order positions");
+    rejects_naming(
+        Grating::try_crossed(&g, &g, 0.0),
+        "crossed grating order positions",
+    );
     rejects_naming(Grating::try_crossed(&g, &g, f64::NAN), "minimum efficiency");
     // The infallible form returns the empty grating, everything dropped.
     let failed = Grating::crossed(&g, &g, 0.0);
@@ -251,14 +365,38 @@ fn overflowing_derived_quantities_are_rejected() {
 fn grating_order_count_is_capped() {
     assert_eq!(Grating::<f64, 2>::MAX_ORDERS, 10_001);
     let x = Vector2::x();
-    let loose = OrderCutoff { max_frequency: f64::INFINITY, tail: 1e-12 };
-    rejects_naming(Grating::<f64, 2>::rectangular(1.0, &x, 1.0, 0.3, loose), "number of grating orders");
-    rejects_naming(Grating::<f32, 2>::rectangular(1.0, &Vector2::x(), 1.0, 0.3, OrderCutoff { max_frequency: f32::INFINITY, tail: 1e-7 }), "number of grating orders");
+    let loose = OrderCutoff {
+        max_frequency: f64::INFINITY,
+        tail: 1e-12,
+    };
+    rejects_naming(
+        Grating::<f64, 2>::rectangular(1.0, &x, 1.0, 0.3, loose),
+        "number of grating orders",
+    );
+    rejects_naming(
+        Grating::<f32, 2>::rectangular(
+            1.0,
+            &Vector2::x(),
+            1.0,
+            0.3,
+            OrderCutoff {
+                max_frequency: f32::INFINITY,
+                tail: 1e-7,
+            },
+        ),
+        "number of grating orders",
+    );
     let tau = std::f64::consts::TAU;
-    let at = |m: f64| OrderCutoff { max_frequency: (m + 0.5) * tau, tail: 0.0 };
+    let at = |m: f64| OrderCutoff {
+        max_frequency: (m + 0.5) * tau,
+        tail: 0.0,
+    };
     let ok = Grating::<f64, 2>::rectangular(1.0, &x, 1.0, 0.37, at(5000.0)).unwrap();
     assert_eq!(ok.orders().len(), 10_001);
-    rejects_naming(Grating::<f64, 2>::rectangular(1.0, &x, 1.0, 0.37, at(5001.0)), "number of grating orders");
+    rejects_naming(
+        Grating::<f64, 2>::rectangular(1.0, &x, 1.0, 0.37, at(5001.0)),
+        "number of grating orders",
+    );
     // Dropped efficiency, by hand: Σ_{|m|>M} 2c sin²(πmD)/(πm)², c = 1 − cos φ₀ (summed here
     // to m = 10⁶, the rest below 2c/(π²·10⁶)).
     let (c, d) = (1.0 - 1f64.cos(), 0.37);
@@ -268,12 +406,38 @@ fn grating_order_count_is_capped() {
             2.0 * 2.0 * c * (xm * d).sin().powi(2) / (xm * xm)
         })
         .sum();
-    assert_close("dropped efficiency", ok.dropped_efficiency(), tail, Tol::new(2.0 * c / (9.8e6) + 1e-13, 1e-6));
+    assert_close(
+        "dropped efficiency",
+        ok.dropped_efficiency(),
+        tail,
+        Tol::new(2.0 * c / (9.8e6) + 1e-13, 1e-6),
+    );
     // Crossed: 101 × 101 orders exceed the cap; with a threshold only the strong ones remain.
-    let s = Grating::<f64, 2>::sinusoidal(1.0, &x, 40.0, OrderCutoff { max_frequency: 50.5 * tau, tail: 0.0 }).unwrap();
+    let s = Grating::<f64, 2>::sinusoidal(
+        1.0,
+        &x,
+        40.0,
+        OrderCutoff {
+            max_frequency: 50.5 * tau,
+            tail: 0.0,
+        },
+    )
+    .unwrap();
     assert_eq!(s.orders().len(), 101);
-    let sy = Grating::<f64, 2>::sinusoidal(1.0, &Vector2::y(), 40.0, OrderCutoff { max_frequency: 50.5 * tau, tail: 0.0 }).unwrap();
-    rejects_naming(Grating::try_crossed(&s, &sy, 0.0), "number of grating orders");
+    let sy = Grating::<f64, 2>::sinusoidal(
+        1.0,
+        &Vector2::y(),
+        40.0,
+        OrderCutoff {
+            max_frequency: 50.5 * tau,
+            tail: 0.0,
+        },
+    )
+    .unwrap();
+    rejects_naming(
+        Grating::try_crossed(&s, &sy, 0.0),
+        "number of grating orders",
+    );
     assert_eq!(Grating::crossed(&s, &sy, 0.0).dropped_efficiency(), 1.0);
     let strong = Grating::try_crossed(&s, &sy, 1e-4).unwrap();
     assert!(strong.orders().len() <= Grating::<f64, 2>::MAX_ORDERS && !strong.orders().is_empty());
@@ -288,9 +452,17 @@ fn huge_frequency_blurs<T: Real>(huge: f64) {
     let cov = Gaussian::<T, 2>::isotropic(T::lit(1e-10)).unwrap();
     for h in [Vector2::new(huge, 1.0), Vector2::new(huge, -huge)] {
         let h = h.map(T::lit);
-        assert_eq!(ClosedForm.normalized_blur(&p, &cov, &h).to_f64(), 0.0, "{h:?}");
+        assert_eq!(
+            ClosedForm.normalized_blur(&p, &cov, &h).to_f64(),
+            0.0,
+            "{h:?}"
+        );
         assert_eq!(ClosedForm.blur(&p, &cov, &h).to_f64(), 0.0, "{h:?}");
-        assert_eq!(p.log_normalized_blur(&cov, &h).to_f64(), f64::NEG_INFINITY, "{h:?}");
+        assert_eq!(
+            p.log_normalized_blur(&cov, &h).to_f64(),
+            f64::NEG_INFINITY,
+            "{h:?}"
+        );
         assert_eq!(p.value(&h).to_f64(), 0.0);
     }
 }

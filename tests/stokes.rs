@@ -278,7 +278,10 @@ fn known_states() {
     let h = FRAC_1_SQRT_2;
     // (1, i)/√2: S3 = +1 (crate convention), fully circular.
     let e = JonesVector::new(z(h, 0.0), z(0.0, h)).unwrap();
-    let s = CsdMatrix::from_jones_vector(&e).unwrap().to_stokes().unwrap();
+    let s = CsdMatrix::from_jones_vector(&e)
+        .unwrap()
+        .to_stokes()
+        .unwrap();
     assert_all_close(
         "circular",
         s.vector().iter().copied(),
@@ -292,14 +295,20 @@ fn known_states() {
     assert_eq!(s.azimuth(), 0.0, "undefined azimuth returns 0");
     // Linear at 22.5°: E = (cos, sin), ψ = π/8, χ = 0.
     let e = JonesVector::new(z(FRAC_PI_8.cos(), 0.0), z(FRAC_PI_8.sin(), 0.0)).unwrap();
-    let s = CsdMatrix::from_jones_vector(&e).unwrap().to_stokes().unwrap();
+    let s = CsdMatrix::from_jones_vector(&e)
+        .unwrap()
+        .to_stokes()
+        .unwrap();
     assert_close("ψ", s.azimuth(), FRAC_PI_8, F64);
     assert_close("χ", s.ellipticity_angle(), 0.0, F64);
     assert_close("DoLP", s.degree_of_linear_polarization(), 1.0, F64);
     // Linear at −60°: ψ = −π/3.
     let t = -std::f64::consts::FRAC_PI_3;
     let e = JonesVector::new(z(t.cos(), 0.0), z(t.sin(), 0.0)).unwrap();
-    let s = CsdMatrix::from_jones_vector(&e).unwrap().to_stokes().unwrap();
+    let s = CsdMatrix::from_jones_vector(&e)
+        .unwrap()
+        .to_stokes()
+        .unwrap();
     assert_close("ψ", s.azimuth(), t, F64);
     // Unpolarized and zero light: no NaN.
     let u = Stokes::unpolarized(2.0_f64).unwrap();
@@ -386,17 +395,17 @@ fn scales<T: Real>(top: T) -> Vec<T> {
 }
 
 /// `Stokes::new` gives the same verdict at every scale, and every accepted vector has finite
-/// degrees of polarization equal to the unscaled ones (DoP = ∞ at MAX before: the polarized
+/// degrees of polarization equal to the unscaled ones (`DoP = ∞` at MAX before: the polarized
 /// norm overflowed and `∞ > S0·(1 + 64ε)` was false).
 fn stokes_scale_invariance<T: Real>(tol: Tol) {
     let bases = [
-        [1.0, 0.9, 0.9, 0.0],    // |S| = 1.27: invalid
-        [1.0, 0.6, 0.8, 0.0],    // |S| = 1: valid, fully polarized
-        [1.0, 0.6, 0.0, -0.8],   // circular part
-        [1.0, 0.3, -0.2, 0.1],   // partially polarized
-        [1.0, 0.6, 0.8, 0.01],   // |S| = 1.00005: invalid
-        [-1.0, 0.0, 0.0, 0.0],   // S0 < 0
-        [0.5, 0.0, 0.0, 0.0],    // unpolarized
+        [1.0, 0.9, 0.9, 0.0],  // |S| = 1.27: invalid
+        [1.0, 0.6, 0.8, 0.0],  // |S| = 1: valid, fully polarized
+        [1.0, 0.6, 0.0, -0.8], // circular part
+        [1.0, 0.3, -0.2, 0.1], // partially polarized
+        [1.0, 0.6, 0.8, 0.01], // |S| = 1.00005: invalid
+        [-1.0, 0.0, 0.0, 0.0], // S0 < 0
+        [0.5, 0.0, 0.0, 0.0],  // unpolarized
     ];
     for b in bases {
         // Bases with max|Sₖ| = 1, so that the top scale is T::MAX itself.
@@ -410,21 +419,47 @@ fn stokes_scale_invariance<T: Real>(tol: Tol) {
             assert_eq!(r.is_ok(), base.is_ok(), "verdict changed: {what}: {r:?}");
             if let (Ok(s), Ok(b0)) = (r, &base) {
                 for (name, got, want) in [
-                    ("DoP", s.degree_of_polarization(), b0.degree_of_polarization()),
-                    ("DoLP", s.degree_of_linear_polarization(), b0.degree_of_linear_polarization()),
-                    ("DoCP", s.degree_of_circular_polarization(), b0.degree_of_circular_polarization()),
+                    (
+                        "DoP",
+                        s.degree_of_polarization(),
+                        b0.degree_of_polarization(),
+                    ),
+                    (
+                        "DoLP",
+                        s.degree_of_linear_polarization(),
+                        b0.degree_of_linear_polarization(),
+                    ),
+                    (
+                        "DoCP",
+                        s.degree_of_circular_polarization(),
+                        b0.degree_of_circular_polarization(),
+                    ),
                     ("χ", s.ellipticity_angle(), b0.ellipticity_angle()),
                     ("ψ", s.azimuth(), b0.azimuth()),
-                    ("|S|/scale", s.polarized_intensity() / sc, b0.polarized_intensity()),
+                    (
+                        "|S|/scale",
+                        s.polarized_intensity() / sc,
+                        b0.polarized_intensity(),
+                    ),
                 ] {
                     assert!(got.is_finite(), "{name} not finite: {what}");
                     assert_close(&format!("{name} {what}"), got.to_f64(), want.to_f64(), tol);
                 }
                 let c = s.to_csd();
-                assert!(c.matrix().iter().all(|z| z.re.is_finite() && z.im.is_finite()), "CSD {what}");
+                assert!(
+                    c.matrix()
+                        .iter()
+                        .all(|z| z.re.is_finite() && z.im.is_finite()),
+                    "CSD {what}"
+                );
                 let back = c.to_stokes().unwrap();
-                for k in 0..4 {
-                    assert_close(&format!("S{k} back {what}"), (back.vector()[k] / sc).to_f64(), b[k], tol);
+                for (k, &bk) in b.iter().enumerate() {
+                    assert_close(
+                        &format!("S{k} back {what}"),
+                        (back.vector()[k] / sc).to_f64(),
+                        bk,
+                        tol,
+                    );
                 }
             }
         }
@@ -448,9 +483,12 @@ fn stokes_validity_is_scale_invariant() {
 fn csd_scale_invariance<T: Real>(tol: Tol) {
     let bases = [
         ([z(0.5, 0.0), z(0.1, -0.3), z(0.1, 0.3), z(0.25, 0.0)], true),
-        ([z(0.5, 0.0), z(0.1, -0.3), z(0.1, 0.31), z(0.25, 0.0)], false), // not Hermitian
-        ([z(0.5, 0.0), z(0.5, 0.0), z(0.5, 0.0), z(0.25, 0.0)], false),   // det < 0
-        ([z(0.0, 0.0), z(1.0, 1.0), z(0.0, 0.0), z(0.0, 0.0)], false),    // not Hermitian
+        (
+            [z(0.5, 0.0), z(0.1, -0.3), z(0.1, 0.31), z(0.25, 0.0)],
+            false,
+        ), // not Hermitian
+        ([z(0.5, 0.0), z(0.5, 0.0), z(0.5, 0.0), z(0.25, 0.0)], false), // det < 0
+        ([z(0.0, 0.0), z(1.0, 1.0), z(0.0, 0.0), z(0.0, 0.0)], false),  // not Hermitian
     ];
     for (b, valid) in bases {
         let bm = Matrix2::new(b[0], b[1], b[2], b[3]);
@@ -459,7 +497,11 @@ fn csd_scale_invariance<T: Real>(tol: Tol) {
         // Stokes parameters reach 2·max part: keep them finite at the top scale.
         for sc in scales(T::max_value().unwrap() * T::lit(0.5)) {
             let c = CsdMatrix::one_point(bm.map(|x| cz::<T>(x) * sc));
-            let what = format!("{bm:?} × {:e} ({})", sc.to_f64(), std::any::type_name::<T>());
+            let what = format!(
+                "{bm:?} × {:e} ({})",
+                sc.to_f64(),
+                std::any::type_name::<T>()
+            );
             assert_eq!(c.is_ok(), valid, "verdict changed: {what}: {c:?}");
             if let (Ok(c), Ok(b0)) = (c, &base) {
                 let (s, s0) = (c.to_stokes().unwrap(), b0.to_stokes().unwrap());
@@ -493,20 +535,36 @@ fn csd_overflow<T: Real>() {
     ));
     let diag = Matrix2::new(zc(m, T::zero()), o, o, zc(m, T::zero()));
     for r in [CsdMatrix::one_point(diag), CsdMatrix::two_point(diag)] {
-        assert!(matches!(r, Err(Error::NonFinite { what }) if what.contains("Stokes")), "{r:?}");
+        assert!(
+            matches!(r, Err(Error::NonFinite { what }) if what.contains("Stokes")),
+            "{r:?}"
+        );
     }
     let half = T::lit(0.5);
     let ok = Matrix2::new(zc(m * half, T::zero()), o, o, zc(m * half, T::zero()));
     let s = CsdMatrix::one_point(ok).unwrap().to_stokes().unwrap();
     assert_eq!(s.s0(), m);
     let e = JonesVector::new(zc(T::lit(1e200f64.min(m.to_f64())), T::zero()), o).unwrap();
-    assert!(matches!(CsdMatrix::from_jones_vector(&e), Err(Error::NonFinite { .. })));
+    assert!(matches!(
+        CsdMatrix::from_jones_vector(&e),
+        Err(Error::NonFinite { .. })
+    ));
     // Stokes → CSD at the top of the range: C_xx = (S0 + S1)/2 = MAX, finite.
     let c = Stokes::new(m, m, T::zero(), T::zero()).unwrap().to_csd();
     assert_eq!(c.matrix()[(0, 0)].re, m);
-    assert!(c.matrix().iter().all(|z| z.re.is_finite() && z.im.is_finite()));
-    let g = GeneralizedStokes::new(Vector4::new(big, big, big, big)).unwrap().to_csd();
-    assert!(g.matrix().iter().all(|z| z.re.is_finite() && z.im.is_finite()));
+    assert!(
+        c.matrix()
+            .iter()
+            .all(|z| z.re.is_finite() && z.im.is_finite())
+    );
+    let g = GeneralizedStokes::new(Vector4::new(big, big, big, big))
+        .unwrap()
+        .to_csd();
+    assert!(
+        g.matrix()
+            .iter()
+            .all(|z| z.re.is_finite() && z.im.is_finite())
+    );
 }
 
 #[test]

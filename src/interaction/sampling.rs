@@ -230,7 +230,7 @@ impl<T: Real> TruncatedLobe<T> {
         };
         let frob = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
         let width = (l[0] * l[2]).abs() / frob * profile_width;
-        if !(width >= MIN_WIDTH_ULPS * T::EPSILON.to_f64()) {
+        if width.is_nan() || width < MIN_WIDTH_ULPS * T::EPSILON.to_f64() {
             return Err(Error::Unrealizable {
                 reason: "sampling lobe narrower than 8ε in the projected disk (not resolvable \
                          in the scalar type): use a smaller minimum coherence width, or f64",

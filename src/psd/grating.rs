@@ -200,7 +200,11 @@ impl<T: Real, const N: usize> Grating<T, N> {
             if !(e > 0.0 && et > T::zero()) {
                 continue;
             }
-            let signs: &[T] = if m == 0 { &[T::one()] } else { &[T::one(), T::lit(-1.0)] };
+            let signs: &[T] = if m == 0 {
+                &[T::one()]
+            } else {
+                &[T::one(), T::lit(-1.0)]
+            };
             if orders.len() + signs.len() > Self::MAX_ORDERS {
                 return Err(too_many_orders(orders.len() + signs.len()));
             }
@@ -343,7 +347,7 @@ impl<T: Real, const N: usize> Grating<T, N> {
     /// assert!(Grating::try_crossed(&gx, &gy, f64::NAN).is_err());
     /// ```
     pub fn try_crossed(a: &Self, b: &Self, min_efficiency: T) -> Result<Self, Error> {
-        if !(min_efficiency >= T::zero()) {
+        if min_efficiency.partial_cmp(&T::zero()).is_none() || min_efficiency < T::zero() {
             return Err(Error::OutOfRange {
                 what: "minimum efficiency of a crossed grating",
                 value: min_efficiency.to_f64(),

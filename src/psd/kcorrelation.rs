@@ -96,7 +96,8 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
         }
         let nu = 0.5 * gamma.to_f64() + 0.5;
         // c = (2T)^{n/2} Γ(ν)/Γ(ν − n/2), in logs (2T itself may overflow).
-        let log_c = 0.5 * n * (core::f64::consts::LN_2 + t.to_f64().ln()) + ln_gamma_ratio(nu, 0.5 * n);
+        let log_c =
+            0.5 * n * (core::f64::consts::LN_2 + t.to_f64().ln()) + ln_gamma_ratio(nu, 0.5 * n);
         let sigma2 = variance.to_f64();
         let log_peak = sigma2.ln() + log_c;
         let plain = sigma2 * log_c.exp();
@@ -242,7 +243,8 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
                 return Err(unrepresentable);
             }
             let shape = Gaussian::isotropic(width).map_err(|_| unrepresentable.clone())?;
-            comps.push(GaussianPsd::from_spectral_shape(var_t, shape).map_err(|_| unrepresentable)?);
+            comps
+                .push(GaussianPsd::from_spectral_shape(var_t, shape).map_err(|_| unrepresentable)?);
         }
         // A-posteriori uniform error, relative to p(0).
         let mut err = 0.0_f64;
@@ -325,11 +327,13 @@ impl<T: Real> KCorrelation<T, 2> {
         // σ² = 2π A/((C − 2) B²), in f64 logs (B² and C − 2 may over- or underflow T).
         let (a64, b64, c64) = (a.to_f64(), b.to_f64(), c.to_f64());
         let plain = core::f64::consts::TAU * a64 / ((c64 - 2.0) * b64 * b64);
-        let variance = T::lit(if a == T::zero() || (plain.is_finite() && plain > f64::MIN_POSITIVE) {
-            plain
-        } else {
-            (core::f64::consts::TAU.ln() + a64.ln() - (c64 - 2.0).ln() - 2.0 * b64.ln()).exp()
-        });
+        let variance = T::lit(
+            if a == T::zero() || (plain.is_finite() && plain > f64::MIN_POSITIVE) {
+                plain
+            } else {
+                (core::f64::consts::TAU.ln() + a64.ln() - (c64 - 2.0).ln() - 2.0 * b64.ln()).exp()
+            },
+        );
         if a > T::zero() && !(variance.is_finite() && variance > T::zero()) {
             return Err(Error::OutOfRange {
                 what: "ABC parameters A, B, C",

@@ -77,7 +77,10 @@ mod tests {
         // x − 1 is exact.
         for x in [1.5_f64, 2.0, 3.7, 10.0, 1e3, 1e8, 1e15, 1e300, 1e308] {
             let r = ln_gamma_ratio(x, 1.0);
-            assert!((r - (x - 1.0).ln()).abs() <= 1e-14 * (x - 1.0).ln().abs().max(1.0), "{x}: {r}");
+            assert!(
+                (r - (x - 1.0).ln()).abs() <= 1e-14 * (x - 1.0).ln().abs().max(1.0),
+                "{x}: {r}"
+            );
         }
         for x in [2.5_f64, 7.0, 1e6, 1e200] {
             let want = (x - 1.0).ln() + (x - 2.0).ln();
