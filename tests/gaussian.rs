@@ -594,6 +594,7 @@ fn lemma_s2_1_tiny_b_is_not_singular() {
     let q = Vector3::new(40e-110, 0.0, 0.0);
     let expected = (-800.0 - 6f64.ln() + 330.0 * 10f64.ln()).exp();
     let got = g.lemma_s2_1(&b, &q).unwrap();
+    assert!(got.is_finite(), "{got}");
     assert_close("lemma, tiny B", got, expected, Tol::new(0.0, 1e-12));
     // A truly singular B is still rejected.
     let sing = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 0.0, 1.0);

@@ -254,6 +254,7 @@ fn overflowing_derived_quantities_are_rejected() {
     rejects_naming(Smooth::new(f64::MAX / 10.0), "specular weight");
     // K-correlation, n = 2: p(0) = σ²(γ − 1)T by hand.
     let k = KCorrelation::<f64, 2>::new(1.0, 1e308, 2.0).unwrap();
+    assert!(k.peak_value().is_finite());
     assert_close(
         "p(0) = σ²(γ−1)T",
         k.peak_value(),
@@ -273,6 +274,7 @@ fn overflowing_derived_quantities_are_rejected() {
         "K-correlation σ², T, γ",
     );
     let huge_gamma = KCorrelation::<f64, 2>::new(1.0, 1e-300, 1e290).unwrap();
+    assert!(huge_gamma.peak_value().is_finite());
     assert_close(
         "p(0), γ = 1e290",
         huge_gamma.peak_value(),

@@ -453,6 +453,7 @@ fn stokes_scale_invariance<T: Real>(tol: Tol) {
                     "CSD {what}"
                 );
                 let back = c.to_stokes().unwrap();
+                assert!(back.vector().iter().all(|x| x.is_finite()), "back {what}");
                 for (k, &bk) in b.iter().enumerate() {
                     assert_close(
                         &format!("S{k} back {what}"),
