@@ -122,7 +122,8 @@ impl<T: Real> Stokes<T> {
     /// `max |Sₖ|`, so it is scale invariant (exactly, for scalings by powers of two) and cannot
     /// overflow: `(MAX, 0.9·MAX, 0.9·MAX, 0)` is rejected like `(1, 0.9, 0.9, 0)`. Every
     /// accepted vector has a finite polarized intensity `|(S1, S2, S3)|`, so
-    /// [`Self::degree_of_polarization`] and the other ratios are finite, in `[0, 1 + 64ε]`.
+    /// [`Self::degree_of_polarization`] and the other degrees are finite, of magnitude at most
+    /// `1 + 64ε`.
     ///
     /// # Errors
     /// [`Error::NonFinite`] for NaN or ∞, and for a valid vector whose polarized intensity
