@@ -61,14 +61,17 @@ pub struct ScaledGaussian<T: Real, const N: usize> {
 }
 
 impl<T: Real, const N: usize> ScaledGaussian<T, N> {
-    /// `e^{log_scale} g^Σ(x)`; `0` where it underflows, never NaN for finite `x`.
+    /// `e^{log_scale} g^Σ(x)`; `0` where it underflows (also at huge or infinite `x`), never NaN
+    /// for a non-NaN `x` as long as `log_scale < +∞` (true for every `ScaledGaussian` this crate
+    /// returns: their `log_scale` is finite or `−∞`).
     #[inline]
     #[must_use]
     pub fn value(&self, x: &SVector<T, N>) -> T {
         (self.log_scale + self.gaussian.log_value(x)).exp()
     }
 
-    /// `log_scale + ln g^Σ(x)`, accurate where [`Self::value`] underflows.
+    /// `log_scale + ln g^Σ(x)`, accurate where [`Self::value`] underflows; `−∞` where
+    /// [`Gaussian::log_value`] is, with the same NaN rule as [`Self::value`].
     #[inline]
     #[must_use]
     pub fn log_value(&self, x: &SVector<T, N>) -> T {
@@ -176,6 +179,69 @@ pub(crate) fn solve_lower<T: Real, const N: usize>(
     y
 }
 
+/// `true` for NaN (`RealField` has no `is_nan`).
+#[inline]
+pub(crate) fn is_nan<T: Real>(x: T) -> bool {
+    x.partial_cmp(&x).is_none()
+}
+
+/// `|L⁻¹x|²` for a lower-triangular Cholesky factor `L`: never NaN for finite `x` (`+∞` when the
+/// value exceeds the range), `+∞` for an infinite `x`, NaN only for a NaN `x`.
+///
+/// The plain substitution can meet `0 · ∞` (an overflowed `yᵢ` times a zero entry of `L`) at huge
+/// finite `x`; only then is `x` rescaled by its largest entry and the squared norm assembled in
+/// log space (`(s |y|)²` with `y = L⁻¹(x/s)`), so the common path costs one comparison.
+#[inline]
+pub(crate) fn mahalanobis_from_cholesky<T: Real, const N: usize>(
+    l: &SMatrix<T, N, N>,
+    x: &SVector<T, N>,
+) -> T {
+    let m = solve_lower(l, x).norm_squared();
+    if is_nan(m) {
+        rescaled_quadratic(x, |v| solve_lower(l, v))
+    } else {
+        m
+    }
+}
+
+/// `|A x|²` for a linear map `apply = A` (finite entries), by rescaling: `x = s x̂` with
+/// `s = max|xᵢ|`, then `(s |A x̂|)²` with the product formed in log space. NaN for a NaN `x`,
+/// `+∞` for an infinite `x` or when `|A x̂|` itself overflows (the true value is then beyond the
+/// range of `T` for every `A` of moderately bounded entries).
+#[cold]
+fn rescaled_quadratic<T: Real, const N: usize>(
+    x: &SVector<T, N>,
+    apply: impl Fn(&SVector<T, N>) -> SVector<T, N>,
+) -> T {
+    if x.iter().any(|&v| is_nan(v)) {
+        return T::lit(f64::NAN);
+    }
+    let s = x.amax();
+    if !s.is_finite() {
+        return T::lit(f64::INFINITY);
+    }
+    if s == T::zero() {
+        return T::zero();
+    }
+    let y = apply(&(x / s));
+    if y.iter().any(|v| !v.is_finite()) {
+        return T::lit(f64::INFINITY);
+    }
+    scaled_norm_sq(s.ln(), &y)
+}
+
+/// `(e^{log_s} |w|)²` for finite `w`, formed in log space so that neither the scale nor the
+/// squares over- or underflow on the way (the result itself may be `+∞` or `0`).
+#[inline]
+fn scaled_norm_sq<T: Real, const N: usize>(log_s: T, w: &SVector<T, N>) -> T {
+    let r = w.amax();
+    if r == T::zero() {
+        return T::zero();
+    }
+    let n = (w / r).norm(); // in [1, √N]
+    (T::lit(2.0) * (log_s + r.ln() + n.ln())).exp()
+}
+
 /// `x ∈ [10⁻³⁰, 10³⁰]`: safely inside the normal numbers of f32 and f64, so products and
 /// quotients of two such values neither over- nor underflow.
 #[inline]
@@ -211,10 +277,11 @@ fn lower_inverse<T: Real, const N: usize>(l: &SMatrix<T, N, N>) -> SMatrix<T, N,
     inv
 }
 
-/// `|det B|` by Gaussian elimination with partial pivoting (no cofactors).
-fn abs_det<T: Real, const N: usize>(b: &SMatrix<T, N, N>) -> T {
+/// `ln |det B|` by Gaussian elimination with partial pivoting (no cofactors), as the sum of the
+/// logarithms of the pivots so that it neither over- nor underflows; `−∞` for a zero pivot.
+fn log_abs_det<T: Real, const N: usize>(b: &SMatrix<T, N, N>) -> T {
     let mut a = *b;
-    let mut det = T::one();
+    let mut log_det = T::zero();
     for j in 0..N {
         let mut piv = j;
         for i in (j + 1)..N {
@@ -224,10 +291,10 @@ fn abs_det<T: Real, const N: usize>(b: &SMatrix<T, N, N>) -> T {
         }
         a.swap_rows(j, piv);
         let d = a[(j, j)];
-        det *= d.abs();
         if d == T::zero() {
-            return T::zero();
+            return T::lit(f64::NEG_INFINITY);
         }
+        log_det += d.abs().ln();
         for i in (j + 1)..N {
             let f = a[(i, j)] / d;
             for k in j..N {
@@ -236,7 +303,7 @@ fn abs_det<T: Real, const N: usize>(b: &SMatrix<T, N, N>) -> T {
             }
         }
     }
-    det
+    log_det
 }
 
 /// `ln (2π)`.
@@ -348,34 +415,55 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     }
 
     /// The squared Mahalanobis distance `xᵀ Σ⁻¹ x = |L⁻¹x|²`.
+    ///
+    /// Defined for every `x`: in `[0, ∞)` for finite `x`, `+∞` where the value exceeds the range
+    /// of `T` (e.g. `|x|` near `T::MAX`, or a huge `x` against a tiny Σ) and for an infinite `x`;
+    /// NaN only when `x` has a NaN entry. (The plain substitution would give NaN from `0 · ∞`
+    /// at huge finite `x`; that case is recomputed with `x` rescaled.)
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::gaussian::Gaussian;
+    /// use nalgebra::{Matrix2, Vector2};
+    /// let g = Gaussian::new(Matrix2::new(1e-20_f64, 0.0, 0.0, 1.0)).unwrap();
+    /// assert_eq!(g.mahalanobis_sq(&Vector2::new(1e300, 1.0)), f64::INFINITY);
+    /// assert_eq!(g.value(&Vector2::new(1e300, 1.0)), 0.0);
+    /// assert!((g.mahalanobis_sq(&Vector2::new(1e-10, 2.0)) - 5.0).abs() < 1e-14);
+    /// ```
     #[inline]
     #[must_use]
     pub fn mahalanobis_sq(&self, x: &SVector<T, N>) -> T {
-        solve_lower(&self.chol, x).norm_squared()
+        mahalanobis_from_cholesky(&self.chol, x)
     }
 
     /// `ln g^Σ(x) = −½ xᵀΣ⁻¹x`, accurate where [`Self::value`] underflows.
+    ///
+    /// In `(−∞, 0]` for finite `x`: a finite negative number while `xᵀΣ⁻¹x` is representable,
+    /// `−∞` beyond (see [`Self::mahalanobis_sq`]); never NaN unless `x` has a NaN entry.
     #[inline]
     #[must_use]
     pub fn log_value(&self, x: &SVector<T, N>) -> T {
         -T::lit(0.5) * self.mahalanobis_sq(x)
     }
 
-    /// The unnormalised value `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)` (DESIGN §1); `0` on underflow.
+    /// The unnormalised value `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)` (DESIGN §1), in `[0, 1]`: `0` on
+    /// underflow, at huge finite `x` and at infinite `x`; NaN only for a NaN entry of `x`.
     #[inline]
     #[must_use]
     pub fn value(&self, x: &SVector<T, N>) -> T {
         self.log_value(x).exp()
     }
 
-    /// `ln` of the normalised density `(2π)^{−N/2} |Σ|^{−1/2} g^Σ(x)`.
+    /// `ln` of the normalised density `(2π)^{−N/2} |Σ|^{−1/2} g^Σ(x)`; `−∞` where
+    /// [`Self::log_value`] is, never NaN for a non-NaN `x`.
     #[inline]
     #[must_use]
     pub fn log_density(&self, x: &SVector<T, N>) -> T {
         self.log_value(x) - T::lit(0.5) * (T::lit(N as f64) * ln_two_pi::<T>() + self.log_det)
     }
 
-    /// The normalised density `(2π)^{−N/2} |Σ|^{−1/2} g^Σ(x)`, integrating to 1 over `ℝᴺ`.
+    /// The normalised density `(2π)^{−N/2} |Σ|^{−1/2} g^Σ(x)`, integrating to 1 over `ℝᴺ`; `0`
+    /// where [`Self::value`] is (and `+∞` only if `|Σ|^{−1/2}` itself overflows at `x ≈ 0`).
     #[inline]
     #[must_use]
     pub fn density(&self, x: &SVector<T, N>) -> T {
@@ -390,10 +478,20 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     }
 
     /// `g^{Σ⁻¹}(q) = exp(−½ qᵀ Σ q) = exp(−½ |Lᵀq|²)` in log form, without inverting anything.
+    ///
+    /// In `(−∞, 0]` for finite `q` (`−∞` where `qᵀΣq` exceeds the range), never NaN unless `q`
+    /// has a NaN entry (huge `q` is rescaled, as in [`Self::mahalanobis_sq`]).
     #[inline]
     #[must_use]
     pub fn log_value_of_inverse(&self, q: &SVector<T, N>) -> T {
-        -T::lit(0.5) * (self.chol.transpose() * q).norm_squared()
+        let lt = self.chol.transpose();
+        let m = (lt * q).norm_squared();
+        let m = if is_nan(m) {
+            rescaled_quadratic(q, |v| lt * v)
+        } else {
+            m
+        };
+        -T::lit(0.5) * m
     }
 
     /// The Gaussian with inverse covariance, `g^{Σ⁻¹}`.
@@ -460,20 +558,35 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     /// C = (A⁻¹ + B⁻¹)⁻¹,  c = C (A⁻¹ a + B⁻¹ b),  log_scale = −½ (a − b)ᵀ (A + B)⁻¹ (a − b)
     /// ```
     ///
+    /// `log_scale` is finite or `−∞` (shifts so far apart that the factor underflows; the
+    /// [`ScaledGaussian`] then evaluates to `0`), never NaN.
+    ///
     /// # Errors
-    /// As [`Gaussian::product`].
+    /// [`Error::NonFinite`] if `a` or `b` has a NaN or infinite entry, or if the centre `c`
+    /// overflows (shifts near `T::MAX`); otherwise as [`Gaussian::product`].
     pub fn product_shifted(
         &self,
         a: &SVector<T, N>,
         other: &Self,
         b: &SVector<T, N>,
     ) -> Result<(ScaledGaussian<T, N>, SVector<T, N>), Error> {
+        ensure_finite("shift a", a.iter().copied())?;
+        ensure_finite("shift b", b.iter().copied())?;
         let c = self.product(other)?;
         let centre = c.cov * (self.precision() * a + other.precision() * b);
+        ensure_finite("product centre c (overflow)", centre.iter().copied())?;
         let sum = Self::new(self.cov + other.cov)?;
+        // a − b may overflow for finite shifts: halve first (exact), the quadratic form is ×4.
+        let d = a - b;
+        let log_scale = if d.iter().all(|v| v.is_finite()) {
+            sum.log_value(&d)
+        } else {
+            let h = T::lit(0.5);
+            T::lit(4.0) * sum.log_value(&(a * h - b * h))
+        };
         Ok((
             ScaledGaussian {
-                log_scale: sum.log_value(&(a - b)),
+                log_scale,
                 gaussian: c,
             },
             centre,
@@ -525,8 +638,13 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     /// The printed lemma has `B⁻¹ q` and `|B|`: the argument must be `B⁻ᵀ q` (the two agree only
     /// for symmetric `B`), and `|B|` is `|det B|` (test `lemma_s2_1_printed_form_fails`).
     ///
+    /// The result is finite and `≥ 0`, or `+∞` when it exceeds the range of `T` (`|det B|` below
+    /// `|Σ|^{1/2}/T::MAX`); never NaN. `B` is rescaled by its largest entry before it is
+    /// inverted, so `B = 10⁻²⁰⁰ I` is not mistaken for a singular matrix.
+    ///
     /// # Errors
-    /// [`Error::Singular`] if `B` is singular.
+    /// [`Error::NonFinite`] if `B` or `q` has a NaN or infinite entry; [`Error::Singular`] if `B`
+    /// is singular (a zero pivot, or an inverse that is not representable).
     ///
     /// # Examples
     /// ```
@@ -541,11 +659,33 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     /// assert!((lemma - composed.log_fourier_at(&q).exp()).abs() < 1e-14);
     /// ```
     pub fn lemma_s2_1(&self, b: &SMatrix<T, N, N>, q: &SVector<T, N>) -> Result<T, Error> {
-        let bt_inv = b.transpose().try_inverse().ok_or(Error::Singular {
+        ensure_finite("linear map B", b.iter().copied())?;
+        ensure_finite("frequency q", q.iter().copied())?;
+        let singular = Error::Singular {
             what: "linear map B",
-        })?;
-        let det_b = abs_det(b);
-        Ok((self.log_fourier_at(&(bt_inv * q)) - det_b.ln()).exp())
+        };
+        // B = s B̂ with max|B̂ᵢⱼ| = 1: B⁻ᵀ = B̂⁻ᵀ/s, ln|det B| = N ln s + ln|det B̂|.
+        let s = b.amax();
+        if s == T::zero() {
+            return Err(singular);
+        }
+        let bn = b / s;
+        let inv = bn.transpose().try_inverse().ok_or(singular.clone())?;
+        let log_det_bn = log_abs_det(&bn);
+        if !(log_det_bn.is_finite() && inv.iter().all(|v| v.is_finite())) {
+            return Err(singular);
+        }
+        let log_det_b = T::lit(N as f64) * s.ln() + log_det_bn;
+        // g^{Σ⁻¹}(B⁻ᵀq) = exp(−½ |Lᵀ B̂⁻ᵀ q|² / s²); |q| is rescaled too where that overflows.
+        let arg = inv * q / s;
+        let log_g = if arg.iter().all(|v| v.is_finite()) {
+            self.log_value_of_inverse(&arg)
+        } else {
+            let r = q.amax();
+            let w = self.chol.transpose() * (inv * (q / r));
+            -T::lit(0.5) * scaled_norm_sq(r.ln() - s.ln(), &w)
+        };
+        Ok((T::lit(0.5) * self.log_det + log_g - log_det_b).exp())
     }
 
     /// Corollary S2.2: the Fourier transform of one packet term `e^{−i k ŝ·ξ} g^Θ(Qᵀ ξ)`.
@@ -560,16 +700,30 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     /// F{e^{−ik ŝ·ξ} g^Θ(Qᵀξ)}(q) = |Θ|^{1/2} g^{Θ⁻¹}(Qᵀ(q + k ŝ)) = |Θ|^{1/2} g^{Q Θ⁻¹ Qᵀ}(q + k ŝ)   (S2.2)
     /// ```
     /// The seed's sign `q + kŝ` holds for this phase under the transform kernel `e^{−iq·x}`
-    /// (test `corollary_s2_2_matches_quadrature_*`).
-    #[must_use]
+    /// (test `corollary_s2_2_matches_quadrature_*`). The value is finite and `≥ 0` for finite
+    /// input (`0` where it underflows, also when `q + kŝ` overflows), never NaN.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] if `k_s`, `q` or the rotation has a NaN or infinite entry.
     pub fn corollary_s2_2(
         &self,
         q_local_to_world: &Rotation<T, N>,
         k_s: &SVector<T, N>,
         q: &SVector<T, N>,
-    ) -> T {
-        let arg = q_local_to_world.matrix().transpose() * (q + k_s);
-        self.log_fourier_at(&arg).exp()
+    ) -> Result<T, Error> {
+        let qt = q_local_to_world.matrix().transpose();
+        ensure_finite("rotation Q", qt.iter().copied())?;
+        ensure_finite("wave vector k ŝ", k_s.iter().copied())?;
+        ensure_finite("frequency q", q.iter().copied())?;
+        let sum = q + k_s;
+        let log_g = if sum.iter().all(|v| v.is_finite()) {
+            self.log_value_of_inverse(&(qt * sum))
+        } else {
+            // q + kŝ overflows: halve both (exact); the quadratic form is ×4.
+            let h = T::lit(0.5);
+            T::lit(4.0) * self.log_value_of_inverse(&(qt * (q * h + k_s * h)))
+        };
+        Ok((T::lit(0.5) * self.log_det + log_g).exp())
     }
 
     /// Fourier transform of a shifted, modulated Gaussian `g^Σ(x − a) e^{i k·x}`, at `q`.
@@ -578,17 +732,36 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     /// ```text
     /// F{g^Σ(· − a) e^{i k·}}(q) = e^{−i (q − k)·a} |Σ|^{1/2} g^{Σ⁻¹}(q − k)
     /// ```
-    #[must_use]
+    /// Where the magnitude underflows the result is exactly `0`, whatever the phase.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] if `a`, `k` or `q` has a NaN or infinite entry, or if the phase
+    /// `(q − k)·a` overflows while the magnitude is not zero (the phase is then undefined).
     pub fn fourier_shifted_modulated(
         &self,
         a: &SVector<T, N>,
         k: &SVector<T, N>,
         q: &SVector<T, N>,
-    ) -> Complex<T> {
+    ) -> Result<Complex<T>, Error> {
+        ensure_finite("shift a", a.iter().copied())?;
+        ensure_finite("modulation k", k.iter().copied())?;
+        ensure_finite("frequency q", q.iter().copied())?;
         let d = q - k;
-        let m = self.log_fourier_at(&d).exp();
-        let (s, c) = (-d.dot(a)).sin_cos();
-        Complex::new(m * c, m * s)
+        let log_g = if d.iter().all(|v| v.is_finite()) {
+            self.log_value_of_inverse(&d)
+        } else {
+            // q − k overflows: halve both (exact); the quadratic form is ×4.
+            let h = T::lit(0.5);
+            T::lit(4.0) * self.log_value_of_inverse(&(q * h - k * h))
+        };
+        let m = (T::lit(0.5) * self.log_det + log_g).exp();
+        if m == T::zero() {
+            return Ok(Complex::new(T::zero(), T::zero()));
+        }
+        let phase = -d.dot(a);
+        ensure_finite("phase (q − k)·a (overflow)", [phase])?;
+        let (s, c) = phase.sin_cos();
+        Ok(Complex::new(m * c, m * s))
     }
 }
 

@@ -121,6 +121,113 @@ fn pauli<T: Real>(k: usize) -> Matrix2<Complex<T>> {
     }
 }
 
+/// Cloude's coherency matrix `H = ¼ Σ_ij M_ij (σ_i ⊗ σ_j*)` (see [`Mueller::coherency_matrix`]).
+fn coherency<T: Real>(m: &Matrix4<T>) -> Matrix4<Complex<T>> {
+    let mut h = Matrix4::zeros();
+    let q = T::lit(0.25);
+    for i in 0..4 {
+        let si = pauli::<T>(i);
+        for j in 0..4 {
+            let sj = pauli::<T>(j).map(|z| z.conj());
+            let w = m[(i, j)] * q;
+            h += crate::stack::kron(&si, &sj) * Complex::new(w, T::zero());
+        }
+    }
+    h
+}
+
+/// The eigenvalues (unsorted) of a Hermitian 4×4 matrix with entries of order 1, by the cyclic
+/// complex Jacobi method (Golub & Van Loan, *Matrix Computations*, §8.5, with the phase of
+/// `a_pq` removed by a diagonal unitary first).
+///
+/// # Formula
+/// ```text
+/// a_pq = g e^{iφ}:  D = diag(1, …, e^{−iφ} at q, …),   A′ = D† A D  has  a′_pq = g ≥ 0
+/// ϑ = (a_qq − a_pp) / (2g),  t = sgn ϑ / (|ϑ| + √(ϑ² + 1)),  c = 1/√(1 + t²),  s = t c
+/// a_pp ← a_pp − t g,  a_qq ← a_qq + t g,  a_pq ← 0
+/// a_rp ← c a′_rp − s a′_rq,  a_rq ← s a′_rp + c a′_rq      (r ∉ {p, q}; Hermitian mirror)
+/// ```
+/// Sweeps until the off-diagonal Frobenius norm is below `ε ‖A‖_F` (at most 40 sweeps; a
+/// sweep of 6 rotations converges quadratically, repeated eigenvalues included). Weyl's
+/// inequality then bounds each eigenvalue error by that norm plus the rotations' rounding.
+fn hermitian_eigenvalues<T: Real>(mut a: Matrix4<Complex<T>>) -> Vector4<T> {
+    let frob2 = a.iter().fold(T::zero(), |acc, z| acc + z.norm_sqr());
+    let eps = T::EPSILON;
+    for _ in 0..40 {
+        let mut off = T::zero();
+        for p in 0..3 {
+            for q in (p + 1)..4 {
+                off += a[(p, q)].norm_sqr();
+            }
+        }
+        if !off.is_finite() || off <= eps * eps * frob2 {
+            break;
+        }
+        for p in 0..3 {
+            for q in (p + 1)..4 {
+                let apq = a[(p, q)];
+                let g = apq.re.hypot(apq.im);
+                if g == T::zero() {
+                    continue;
+                }
+                let u_conj = Complex::new(apq.re / g, -apq.im / g); // e^{−iφ}
+                let (app, aqq) = (a[(p, p)].re, a[(q, q)].re);
+                let theta = (aqq - app) / (g + g);
+                let sign = if theta < T::zero() {
+                    -T::one()
+                } else {
+                    T::one()
+                };
+                let t = sign / (theta.abs() + theta.hypot(T::one()));
+                let c = T::one() / t.hypot(T::one());
+                let sn = t * c;
+                for r in 0..4 {
+                    if r == p || r == q {
+                        continue;
+                    }
+                    let arp = a[(r, p)];
+                    let arq = a[(r, q)] * u_conj;
+                    let new_rp = arp * c - arq * sn;
+                    let new_rq = arp * sn + arq * c;
+                    a[(r, p)] = new_rp;
+                    a[(p, r)] = new_rp.conj();
+                    a[(r, q)] = new_rq;
+                    a[(q, r)] = new_rq.conj();
+                }
+                a[(p, p)] = Complex::new(app - t * g, T::zero());
+                a[(q, q)] = Complex::new(aqq + t * g, T::zero());
+                a[(p, q)] = Complex::new(T::zero(), T::zero());
+                a[(q, p)] = Complex::new(T::zero(), T::zero());
+            }
+        }
+    }
+    Vector4::new(a[(0, 0)].re, a[(1, 1)].re, a[(2, 2)].re, a[(3, 3)].re)
+}
+
+/// `(M / s, s)` with `s = max |M_ij|` (`s = 0` for the zero matrix; all NaN if an entry is
+/// not finite): the analysis functions below work on `M / s`, whose entries lie in
+/// `[−1, 1]`, so no square or sum overflows or underflows and the results are scale invariant
+/// (exactly, for scalings by powers of two).
+fn normalized<T: Real>(m: &Matrix4<T>) -> (Matrix4<T>, T) {
+    let s = m.iter().fold(T::zero(), |acc, x| acc.max(x.abs()));
+    if !m.iter().all(|x| x.is_finite()) {
+        return (Matrix4::repeat(T::lit(f64::NAN)), T::lit(f64::NAN));
+    }
+    if s == T::zero() {
+        return (*m, s);
+    }
+    (m / s, s)
+}
+
+/// `num / den`, or 0 when `den = 0`.
+fn ratio_or_zero<T: Real>(num: T, den: T) -> T {
+    if den == T::zero() {
+        T::zero()
+    } else {
+        num / den
+    }
+}
+
 impl<T: Real> Mueller<T> {
     /// The diattenuation `D ∈ [0, 1]` (for a physical matrix): how much the transmitted intensity
     /// depends on the incident polarization.
@@ -129,7 +236,9 @@ impl<T: Real> Mueller<T> {
     /// ```text
     /// D = √(M₀₁² + M₀₂² + M₀₃²) / M₀₀        (0-based indices)
     /// ```
-    /// Returns 0 when `M₀₀ = 0` (an opaque element).
+    /// Computed on `M / max|M_ij|`: scale invariant, finite at every scale (f32
+    /// `from_jones(10¹⁰·diag(2, 1))` gives 0.6, not ∞). Returns 0 when `M₀₀ = 0` (an opaque
+    /// element), NaN if an entry is not finite.
     ///
     /// # Examples
     /// ```
@@ -139,13 +248,11 @@ impl<T: Real> Mueller<T> {
     /// ```
     #[must_use]
     pub fn diattenuation(&self) -> T {
-        let m = &self.0;
-        let d = Vector3::new(m[(0, 1)], m[(0, 2)], m[(0, 3)]).norm();
-        if m[(0, 0)] == T::zero() {
-            T::zero()
-        } else {
-            d / m[(0, 0)]
-        }
+        let (m, _) = normalized(&self.0);
+        ratio_or_zero(
+            Vector3::new(m[(0, 1)], m[(0, 2)], m[(0, 3)]).norm(),
+            m[(0, 0)],
+        )
     }
 
     /// The polarizance `P ∈ [0, 1]` (for a physical matrix): the degree of polarization of the
@@ -155,7 +262,8 @@ impl<T: Real> Mueller<T> {
     /// ```text
     /// P = √(M₁₀² + M₂₀² + M₃₀²) / M₀₀        (0-based indices)
     /// ```
-    /// Returns 0 when `M₀₀ = 0`.
+    /// Computed on `M / max|M_ij|` (scale invariant, as [`Mueller::diattenuation`]). Returns 0
+    /// when `M₀₀ = 0`, NaN if an entry is not finite.
     ///
     /// # Examples
     /// ```
@@ -165,13 +273,11 @@ impl<T: Real> Mueller<T> {
     /// ```
     #[must_use]
     pub fn polarizance(&self) -> T {
-        let m = &self.0;
-        let p = Vector3::new(m[(1, 0)], m[(2, 0)], m[(3, 0)]).norm();
-        if m[(0, 0)] == T::zero() {
-            T::zero()
-        } else {
-            p / m[(0, 0)]
-        }
+        let (m, _) = normalized(&self.0);
+        ratio_or_zero(
+            Vector3::new(m[(1, 0)], m[(2, 0)], m[(3, 0)]).norm(),
+            m[(0, 0)],
+        )
     }
 
     /// The Gil–Bernabeu depolarization index `P_Δ ∈ [0, 1]`: 1 for non-depolarizing (e.g.
@@ -181,7 +287,9 @@ impl<T: Real> Mueller<T> {
     /// ```text
     /// P_Δ = √(Σ_ij M_ij² − M₀₀²) / (√3 M₀₀)         (Gil & Bernabeu 1985)
     /// ```
-    /// Returns 0 when `M₀₀ = 0`.
+    /// Computed on `M / max|M_ij|` (scale invariant: 1 for every Jones-derived matrix at any
+    /// scale; f32 `from_jones(10¹⁰·diag(2, 1))` gave 0 when `Σ M_ij²` overflowed). Returns 0 when
+    /// `M₀₀ = 0`, NaN if an entry is not finite.
     ///
     /// # Examples
     /// ```
@@ -192,12 +300,10 @@ impl<T: Real> Mueller<T> {
     /// ```
     #[must_use]
     pub fn depolarization_index(&self) -> T {
-        let m00 = self.0[(0, 0)];
-        if m00 == T::zero() {
-            return T::zero();
-        }
-        let sum = self.0.norm_squared() - m00 * m00;
-        sum.max(T::zero()).sqrt() / (T::lit(3.0).sqrt() * m00)
+        let (m, _) = normalized(&self.0);
+        let m00 = m[(0, 0)];
+        let sum = m.norm_squared() - m00 * m00;
+        ratio_or_zero(sum.max(T::zero()).sqrt(), T::lit(3.0).sqrt() * m00)
     }
 
     /// Cloude's coherency matrix `H` (4×4 Hermitian), whose eigenvalues decide realizability.
@@ -221,26 +327,19 @@ impl<T: Real> Mueller<T> {
     /// ```
     #[must_use]
     pub fn coherency_matrix(&self) -> Matrix4<Complex<T>> {
-        let mut h = Matrix4::zeros();
-        let q = T::lit(0.25);
-        for i in 0..4 {
-            let si = pauli::<T>(i);
-            for j in 0..4 {
-                let sj = pauli::<T>(j).map(|z| z.conj());
-                let w = self.0[(i, j)] * q;
-                h += crate::stack::kron(&si, &sj) * Complex::new(w, T::zero());
-            }
-        }
-        h
+        coherency(&self.0)
     }
 
     /// The eigenvalues of [`Mueller::coherency_matrix`], sorted in descending order.
     ///
-    /// They are real (H is Hermitian) and sum to `M₀₀`. Computed with nalgebra's Hermitian
-    /// eigensolver on the fixed-size 4×4 (no allocation).
-    ///
-    /// If the iterative solver does not converge (only possible for entries so large that `H`
-    /// overflows) all four are NaN.
+    /// They are real (H is Hermitian) and sum to `M₀₀`. Computed by a cyclic complex Jacobi
+    /// eigensolver on the coherency matrix of `M / max|M_ij|` (fixed size, no allocation), then
+    /// scaled back: finite for every finite `M` (the result overflows to ±∞ only if an eigenvalue
+    /// exceeds `T::MAX`, possible for entries above `T::MAX/4`), with absolute error of a few
+    /// `ε · max|M_ij|` — a rank-1 (Jones-derived) matrix has three eigenvalues within `64ε·M₀₀`
+    /// of 0, including repeated and nearly repeated eigenvalues, where nalgebra's Hermitian
+    /// QR iteration failed to converge in f32 and the result was NaN. All four are NaN if an
+    /// entry of `M` is not finite.
     ///
     /// # Examples
     /// ```
@@ -253,31 +352,35 @@ impl<T: Real> Mueller<T> {
     /// ```
     #[must_use]
     pub fn coherency_eigenvalues(&self) -> Vector4<T> {
-        let h = self.coherency_matrix();
-        let scale = self.0.abs().max();
-        if !scale.is_finite() {
-            return Vector4::repeat(T::lit(f64::NAN));
+        let (l, s) = self.normalized_coherency_eigenvalues();
+        l * s
+    }
+
+    /// The eigenvalues of the coherency matrix of `M / s`, `s = max|M_ij|`, sorted descending,
+    /// and `s`.
+    fn normalized_coherency_eigenvalues(&self) -> (Vector4<T>, T) {
+        let (m, s) = normalized(&self.0);
+        if !s.is_finite() {
+            return (Vector4::repeat(T::lit(f64::NAN)), s);
         }
-        match nalgebra::SymmetricEigen::try_new(h, T::EPSILON, 10_000) {
-            Some(e) => {
-                let mut l = e.eigenvalues;
-                // Sort descending (4 elements: insertion sort, no allocation).
-                for a in 1..4 {
-                    let mut b = a;
-                    while b > 0 && l[b - 1] < l[b] {
-                        l.swap_rows(b - 1, b);
-                        b -= 1;
-                    }
-                }
-                l
+        let mut l = hermitian_eigenvalues(coherency(&m));
+        // Sort descending (4 elements: insertion sort, no allocation).
+        for a in 1..4 {
+            let mut b = a;
+            while b > 0 && l[b - 1] < l[b] {
+                l.swap_rows(b - 1, b);
+                b -= 1;
             }
-            None => Vector4::repeat(T::lit(f64::NAN)),
         }
+        (l, s)
     }
 
     /// `true` if `M` is physically realizable in Cloude's sense: a convex (incoherent) sum of
     /// Jones-derived Mueller matrices, i.e. every eigenvalue of the coherency matrix `H` is
     /// `≥ −tol · tr H` (and `tr H = M₀₀ > 0`, or `M = 0`).
+    ///
+    /// The comparison is made on `M / max|M_ij|` (scale invariant; no overflow for entries near
+    /// `T::MAX`). `false` if an entry is not finite.
     ///
     /// This is stronger than "maps valid Stokes vectors to valid Stokes vectors"
     /// (e.g. the handedness flip `diag(1, 1, 1, −1)` does that but is not realizable:
@@ -293,8 +396,15 @@ impl<T: Real> Mueller<T> {
     /// ```
     #[must_use]
     pub fn is_physically_realizable(&self, tol: T) -> bool {
-        let l = self.coherency_eigenvalues();
-        let trace = self.0[(0, 0)];
+        let (l, s) = self.normalized_coherency_eigenvalues();
+        if !s.is_finite() {
+            return false;
+        }
+        let trace = if s == T::zero() {
+            T::zero()
+        } else {
+            self.0[(0, 0)] / s
+        };
         if trace < T::zero() {
             return false;
         }

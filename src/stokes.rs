@@ -75,26 +75,83 @@ fn norm3<T: Real>(a: T, b: T, c: T) -> T {
     a.hypot(b).hypot(c)
 }
 
+/// `max(|S0|, |S1|, |S2|, |S3|)`, the normalisation of the scale-invariant checks.
+#[inline]
+fn max_abs4<T: Real>(v: &Vector4<T>) -> T {
+    v.iter().fold(T::zero(), |m, x| m.max(x.abs()))
+}
+
+/// `|(S1, S2, S3)|` and `S0`, both divided by `m = max |Sₖ|` (so each is at most `√3` and `1`):
+/// the comparison `S0 ≥ |S|` made on these cannot overflow, and is exactly invariant under
+/// scaling by powers of two. `(0, 0)` for the zero vector.
+#[inline]
+fn normalized_parts<T: Real>(v: &Vector4<T>) -> (T, T, T) {
+    let m = max_abs4(v);
+    if m == T::zero() {
+        return (T::zero(), T::zero(), T::zero());
+    }
+    let u = v / m;
+    (u[0], norm3(u[1], u[2], u[3]), m)
+}
+
+/// `(a + b)/2` without overflowing when `a + b` does (each halved first only then, so that
+/// subnormal sums keep their last bit).
+#[inline]
+fn half_sum<T: Real>(a: T, b: T) -> T {
+    let s = a + b;
+    if s.is_finite() {
+        s * T::lit(0.5)
+    } else {
+        a * T::lit(0.5) + b * T::lit(0.5)
+    }
+}
+
+/// [`half_sum`] of complex numbers, part by part.
+#[inline]
+fn half_sum_c<T: Real>(a: Complex<T>, b: Complex<T>) -> Complex<T> {
+    Complex::new(half_sum(a.re, b.re), half_sum(a.im, b.im))
+}
+
 impl<T: Real> Stokes<T> {
     /// Relative slack allowed in `S0 ≥ |S|` for rounding: `|S| ≤ S0 (1 + STOKES_SLACK_ULPS · ε)`.
     pub const SLACK_ULPS: f64 = 64.0;
 
     /// A validated Stokes vector.
     ///
+    /// The check `S0 ≥ |(S1, S2, S3)|` is made on the vector divided by its largest magnitude
+    /// `max |Sₖ|`, so it is scale invariant (exactly, for scalings by powers of two) and cannot
+    /// overflow: `(MAX, 0.9·MAX, 0.9·MAX, 0)` is rejected like `(1, 0.9, 0.9, 0)`. Every
+    /// accepted vector has a finite polarized intensity `|(S1, S2, S3)|`, so
+    /// [`Self::degree_of_polarization`] and the other degrees are finite, of magnitude at most
+    /// `1 + 64ε`.
+    ///
     /// # Errors
-    /// [`Error::NonFinite`] for NaN or ∞; [`Error::InvalidStokes`] if `S0 < |(S1, S2, S3)|` beyond
-    /// a rounding slack of [`Self::SLACK_ULPS`] machine epsilons (relative), which includes `S0 < 0`.
+    /// [`Error::NonFinite`] for NaN or ∞, and for a valid vector whose polarized intensity
+    /// `|(S1, S2, S3)|` overflows (possible only with `S0` within 64ε of `T::MAX`);
+    /// [`Error::InvalidStokes`] if `S0 < |(S1, S2, S3)|` beyond a rounding slack of
+    /// [`Self::SLACK_ULPS`] machine epsilons (relative), which includes `S0 < 0`.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::stokes::Stokes;
+    /// let m = f64::MAX;
+    /// assert!(Stokes::new(m, 0.9 * m, 0.9 * m, 0.0).is_err()); // |S| = 1.27 S0
+    /// let s = Stokes::new(m, 0.6 * m, 0.8 * m, 0.0).unwrap();
+    /// assert!((s.degree_of_polarization() - 1.0).abs() < 1e-15);
+    /// ```
     pub fn new(s0: T, s1: T, s2: T, s3: T) -> Result<Self, Error> {
         ensure_finite("Stokes parameter", [s0, s1, s2, s3])?;
-        let polarized = norm3(s1, s2, s3);
+        let v = Vector4::new(s0, s1, s2, s3);
+        let (a0, pol, m) = normalized_parts(&v);
         let slack = T::one() + T::lit(Self::SLACK_ULPS) * T::EPSILON;
-        if s0 < T::zero() || polarized > s0 * slack {
+        if a0 < T::zero() || pol > a0 * slack {
             return Err(Error::InvalidStokes {
                 s0: s0.to_f64(),
-                polarized: polarized.to_f64(),
+                polarized: pol.to_f64() * m.to_f64(),
             });
         }
-        Ok(Self(Vector4::new(s0, s1, s2, s3)))
+        ensure_finite("polarized intensity |(S1, S2, S3)| (overflow)", [pol * m])?;
+        Ok(Self(v))
     }
 
     /// A Stokes vector from any finite 4-vector, without checking `S0 ≥ |S|`.
@@ -150,11 +207,13 @@ impl<T: Real> Stokes<T> {
         self.0[3]
     }
 
-    /// `|(S1, S2, S3)|`, the polarized intensity.
+    /// `|(S1, S2, S3)|`, the polarized intensity; finite for every vector [`Stokes::new`]
+    /// accepts (computed as `m · |(S1, S2, S3)/m|`, `m = max |Sₖ|`, the form that check uses).
     #[inline]
     #[must_use]
     pub fn polarized_intensity(&self) -> T {
-        norm3(self.s1(), self.s2(), self.s3())
+        let (_, pol, m) = normalized_parts(&self.0);
+        pol * m
     }
 
     /// The degree of polarization, in `[0, 1]` (up to rounding).
@@ -163,7 +222,9 @@ impl<T: Real> Stokes<T> {
     /// ```text
     /// DoP = √(S1² + S2² + S3²) / S0
     /// ```
-    /// Zero intensity (`S0 = 0`, which validity forces to be the zero vector) returns 0.
+    /// Computed on the vector divided by `max |Sₖ|`, so it neither overflows nor underflows at
+    /// any scale (`S0` from the smallest subnormal to `T::MAX`). Zero intensity (`S0 = 0`, which
+    /// validity forces to be the zero vector) returns 0.
     ///
     /// # Examples
     /// ```
@@ -174,7 +235,8 @@ impl<T: Real> Stokes<T> {
     /// ```
     #[must_use]
     pub fn degree_of_polarization(&self) -> T {
-        ratio_or_zero(self.polarized_intensity(), self.s0())
+        let (a0, pol, _) = normalized_parts(&self.0);
+        ratio_or_zero(pol, a0)
     }
 
     /// The degree of linear polarization, in `[0, 1]` (up to rounding).
@@ -193,7 +255,11 @@ impl<T: Real> Stokes<T> {
     /// ```
     #[must_use]
     pub fn degree_of_linear_polarization(&self) -> T {
-        ratio_or_zero(self.s1().hypot(self.s2()), self.s0())
+        let m = max_abs4(&self.0);
+        if m == T::zero() {
+            return T::zero();
+        }
+        ratio_or_zero((self.s1() / m).hypot(self.s2() / m), self.s0() / m)
     }
 
     /// The **signed** degree of circular polarization, in `[−1, 1]` (up to rounding).
@@ -259,7 +325,12 @@ impl<T: Real> Stokes<T> {
     /// ```
     #[must_use]
     pub fn ellipticity_angle(&self) -> T {
-        let r = ratio_or_zero(self.s3(), self.polarized_intensity());
+        let (_, pol, m) = normalized_parts(&self.0);
+        let r = if m == T::zero() {
+            T::zero()
+        } else {
+            ratio_or_zero(self.s3() / m, pol)
+        };
         T::lit(0.5) * r.clamp(-T::one(), T::one()).asin()
     }
 
@@ -405,17 +476,17 @@ impl<T: Real> GeneralizedStokes<T> {
         }
     }
 
-    /// `½ Σ_k S_k σ_k`.
+    /// `½ Σ_k S_k σ_k`, halving before adding where the sum would overflow (so the CSD of
+    /// any finite parameters is finite).
     fn csd_matrix(&self) -> Matrix2<Complex<T>> {
-        let h = T::lit(0.5);
         let s = &self.0;
         // i · S3
         let is3 = Complex::new(-s[3].im, s[3].re);
         Matrix2::new(
-            (s[0] + s[1]) * h,
-            (s[2] - is3) * h,
-            (s[2] + is3) * h,
-            (s[0] - s[1]) * h,
+            half_sum_c(s[0], s[1]),
+            half_sum_c(s[2], -is3),
+            half_sum_c(s[2], is3),
+            half_sum_c(s[0], -s[1]),
         )
     }
 }
@@ -491,12 +562,16 @@ impl<T: Real> CsdMatrix<T> {
     /// S1.1 (r₁ = r₂):  C = ⟨E E†⟩ = C†,   C_xx ≥ 0,   C_yy ≥ 0,   det C = C_xx C_yy − |C_xy|² ≥ 0
     /// ```
     /// Each check allows `tol = TOLERANCE_ULPS · ε` relative to `s = max |C_ij|`: asymmetry
-    /// `≤ tol·s`, diagonal `≥ −tol·s`, `det ≥ −tol·s²`.
+    /// `≤ tol·s`, diagonal `≥ −tol·s`, `det ≥ −tol·s²`. The checks run on `C / r`,
+    /// `r = max(|Re C_ij|, |Im C_ij|)`, so they are scale invariant (exactly, for powers of two)
+    /// and cannot overflow: an entry `MAX + MAX·i` facing a zero is not Hermitian at any scale.
     ///
     /// # Errors
-    /// [`Error::NonFinite`] for NaN or ∞ entries; [`Error::NotHermitian`] if `|C − C†|` exceeds the
-    /// tolerance; [`Error::NotPositiveDefinite`] if a diagonal entry or the determinant is
-    /// negative beyond it (reporting the smallest eigenvalue of the Hermitian part).
+    /// [`Error::NonFinite`] for NaN or ∞ entries, and when the Stokes parameters of the matrix
+    /// (`C_xx + C_yy`, …, and their polarized intensity) overflow (entries near `T::MAX`);
+    /// [`Error::NotHermitian`] if `|C − C†|` exceeds the tolerance; [`Error::NotPositiveDefinite`]
+    /// if a diagonal entry or the determinant is negative beyond it (reporting the smallest
+    /// eigenvalue of the Hermitian part).
     ///
     /// # Examples
     /// ```
@@ -511,20 +586,28 @@ impl<T: Real> CsdMatrix<T> {
     /// ```
     pub fn one_point(m: Matrix2<Complex<T>>) -> Result<Self, Error> {
         ensure_finite("CSD matrix entry", m.iter().flat_map(|z| [z.re, z.im]))?;
-        let scale = m.iter().fold(T::zero(), |acc, z| acc.max(z.re.hypot(z.im)));
-        let tol = T::lit(Self::TOLERANCE_ULPS) * T::EPSILON;
-        let adj = m.adjoint();
-        let asym = (m - adj)
+        let r = m
             .iter()
-            .fold(T::zero(), |acc, z| acc.max(z.re.hypot(z.im)));
+            .fold(T::zero(), |acc, z| acc.max(z.re.abs()).max(z.im.abs()));
+        if r == T::zero() {
+            return Ok(Self { m, one_point: true });
+        }
+        // Every part of C/r is in [−1, 1]: no product or sum below can overflow.
+        let mn = m.map(|z| z / r);
+        let modulus_max =
+            |a: &Matrix2<Complex<T>>| a.iter().fold(T::zero(), |acc, z| acc.max(z.re.hypot(z.im)));
+        let scale = modulus_max(&mn);
+        let tol = T::lit(Self::TOLERANCE_ULPS) * T::EPSILON;
+        let adj = mn.adjoint();
+        let asym = modulus_max(&(mn - adj));
         if asym > tol * scale {
             return Err(Error::NotHermitian {
                 what: "one-point CSD matrix",
-                asymmetry: asym.to_f64(),
+                asymmetry: asym.to_f64() * r.to_f64(),
             });
         }
-        let h = (m + adj) * Complex::new(T::lit(0.5), T::zero());
-        let (a, d, b) = (h[(0, 0)].re, h[(1, 1)].re, h[(0, 1)]);
+        let hn = (mn + adj) * Complex::new(T::lit(0.5), T::zero());
+        let (a, d, b) = (hn[(0, 0)].re, hn[(1, 1)].re, hn[(0, 1)]);
         let det = a * d - b.norm_sqr();
         if a < -tol * scale || d < -tol * scale || det < -tol * scale * scale {
             // Smallest eigenvalue of the Hermitian 2×2: (a + d)/2 − √(((a − d)/2)² + |b|²).
@@ -532,19 +615,36 @@ impl<T: Real> CsdMatrix<T> {
             let min_eig = half * (a + d) - (half * (a - d)).hypot(b.re.hypot(b.im));
             return Err(Error::NotPositiveDefinite {
                 what: "one-point CSD matrix",
-                min_eigenvalue: min_eig.to_f64(),
+                min_eigenvalue: min_eig.to_f64() * r.to_f64(),
             });
         }
-        Ok(Self {
+        // The Hermitian part at the input's scale; where (C + C†)/2 overflows, r·(C/r + …)/2
+        // instead (each part of hn is at most 1 in magnitude, so that is finite).
+        let h = (m + m.adjoint()) * Complex::new(T::lit(0.5), T::zero());
+        let h = if h.iter().all(|z| z.re.is_finite() && z.im.is_finite()) {
+            h
+        } else {
+            hn.map(|z| z * r)
+        };
+        let c = Self {
             m: h,
             one_point: true,
-        })
+        };
+        let stokes = GeneralizedStokes::from_csd(&c).0.map(|z| z.re);
+        let (_, pol, sm) = normalized_parts(&stokes);
+        ensure_finite(
+            "Stokes parameters of the one-point CSD matrix (overflow)",
+            stokes.iter().copied().chain([pol * sm]),
+        )?;
+        Ok(c)
     }
 
-    /// A two-point CSD matrix `C(r₁, r₂)`: any finite complex 2×2 matrix.
+    /// A two-point CSD matrix `C(r₁, r₂)`: any finite complex 2×2 matrix whose generalized Stokes
+    /// parameters `A_mül vec(C)` (sums of two entries) are finite too.
     ///
     /// # Errors
-    /// [`Error::NonFinite`] for NaN or ∞ entries.
+    /// [`Error::NonFinite`] for NaN or ∞ entries, and when a generalized Stokes parameter
+    /// overflows (entries near `T::MAX`).
     ///
     /// # Examples
     /// ```
@@ -557,10 +657,18 @@ impl<T: Real> CsdMatrix<T> {
     /// ```
     pub fn two_point(m: Matrix2<Complex<T>>) -> Result<Self, Error> {
         ensure_finite("CSD matrix entry", m.iter().flat_map(|z| [z.re, z.im]))?;
-        Ok(Self {
+        let c = Self {
             m,
             one_point: false,
-        })
+        };
+        ensure_finite(
+            "generalized Stokes parameters of the CSD matrix (overflow)",
+            GeneralizedStokes::from_csd(&c)
+                .0
+                .iter()
+                .flat_map(|z| [z.re, z.im]),
+        )?;
+        Ok(c)
     }
 
     /// The one-point CSD `E E†` of a fully polarized, fully coherent field (Hermitian, rank 1).
@@ -571,20 +679,25 @@ impl<T: Real> CsdMatrix<T> {
     ///            ⎣ E_y E_x*   |E_y|²   ⎦
     /// ```
     ///
+    /// # Errors
+    /// [`Error::NonFinite`] if an entry or a Stokes parameter (`S0 = |E_x|² + |E_y|²`)
+    /// overflows: `|E|` above about `√(T::MAX/2)` (1.3e154 in f64, 1.3e19 in f32).
+    ///
     /// # Examples
     /// ```
     /// use gmueller::{jones::JonesVector, stokes::CsdMatrix};
     /// use num_complex::Complex;
     /// let h = core::f64::consts::FRAC_1_SQRT_2;
     /// let e = JonesVector::new(Complex::new(h, 0.0), Complex::new(0.0, h)).unwrap();
-    /// let s = CsdMatrix::from_jones_vector(&e).to_stokes().unwrap();
+    /// let s = CsdMatrix::from_jones_vector(&e).unwrap().to_stokes().unwrap();
     /// assert!((s.s3() - 1.0).abs() < 1e-15); // (1, i)/√2 has S3 = +1
+    /// let big = JonesVector::new(Complex::new(1e200, 0.0), Complex::new(0.0, 0.0)).unwrap();
+    /// assert!(CsdMatrix::from_jones_vector(&big).is_err());
     /// ```
-    #[must_use]
-    pub fn from_jones_vector(e: &JonesVector<T>) -> Self {
+    pub fn from_jones_vector(e: &JonesVector<T>) -> Result<Self, Error> {
         let (x, y) = (e.ex(), e.ey());
         let xy = x * y.conj();
-        Self {
+        let c = Self {
             m: Matrix2::new(
                 Complex::new(x.norm_sqr(), T::zero()),
                 xy,
@@ -592,7 +705,17 @@ impl<T: Real> CsdMatrix<T> {
                 Complex::new(y.norm_sqr(), T::zero()),
             ),
             one_point: true,
-        }
+        };
+        let stokes = GeneralizedStokes::from_csd(&c).0.map(|z| z.re);
+        let (_, pol, sm) = normalized_parts(&stokes);
+        ensure_finite(
+            "|E|² of the Jones vector (overflow)",
+            c.m.iter()
+                .flat_map(|z| [z.re, z.im])
+                .chain(stokes.iter().copied())
+                .chain([pol * sm]),
+        )?;
+        Ok(c)
     }
 
     /// The entries `[[C_xx, C_xy], [C_yx, C_yy]]`.

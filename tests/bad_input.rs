@@ -1,8 +1,12 @@
 //! Bad input (DESIGN §7): every validated constructor rejects NaN, ∞, non-SPD shape matrices,
 //! zero or parallel basis vectors, non-positive wavelengths, `S0 < |S|` and `|μ| > 1` with an
 //! `Error` whose message names the input and the violated condition; and a property test feeds
-//! arbitrary finite values (plus ±0 and 1e±300) to every public constructor and function and
-//! asserts that nothing panics (each call runs under `catch_unwind`, the failing call is named).
+//! arbitrary finite values (plus ±0 and 1e±300) to every public constructor and function — the
+//! PSD constructors and gratings, the Gaussian transforms, CSD/Stokes conversions, the Mueller
+//! analysis functions and the importance sampler included — and asserts that nothing panics
+//! (each call runs under `catch_unwind`, the failing call is named), that accepted Stokes
+//! vectors have finite DoP, Gaussians are never NaN at finite points, Jones-derived coherency
+//! eigenvalues are never NaN and every sample has `pdf > 0` above the horizon.
 #![allow(clippy::doc_markdown, reason = "math notation in test docs")]
 
 mod common;
@@ -13,6 +17,7 @@ use gmueller::Error;
 use gmueller::frame::{self, Frame};
 use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
+use gmueller::interaction::sampling::LobeSampler;
 use gmueller::interaction::{
     FresnelReflection, Full, Geometry, IdealDiffuse, Incoherent, Kernel, OneShape, Partial,
     PhaseScreen, PlaneWave, RayleighRice, RoughSurface, Scalar, exitant_packet,
@@ -23,10 +28,11 @@ use gmueller::jones::{JonesMatrix, JonesVector};
 use gmueller::mueller::{GeneralizedMueller, Mueller};
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
 use gmueller::psd::{
-    Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd, Smooth,
+    Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, Grating,
+    KCorrelation, OrderCutoff, Psd, Smooth,
 };
 use gmueller::stokes::{CsdMatrix, GeneralizedStokes, Stokes};
-use nalgebra::{Matrix2, Matrix3, Matrix4, Vector2, Vector3, Vector4};
+use nalgebra::{Matrix2, Matrix3, Matrix4, Rotation2, Vector2, Vector3, Vector4};
 use num_complex::Complex;
 use proptest::prelude::*;
 
@@ -418,6 +424,9 @@ fn no_panic(name: &str, f: impl FnOnce()) -> Result<(), TestCaseError> {
 /// How many proptest cases reached the kernel (the strategy must get there, or the property
 /// says nothing about it).
 static KERNEL_CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+/// How many proptest cases built an importance sampler, and a grating.
+static SAMPLER_CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+static GRATING_CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
     let t = |i: usize| T::lit(v[i % v.len()]);
@@ -430,12 +439,19 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
         if let Ok(s) = Stokes::new(t(0), t(1), t(2), t(3)) {
             let _ = (
                 s.degree_of_polarization(),
+                s.degree_of_linear_polarization(),
+                s.degree_of_circular_polarization(),
+                s.polarized_intensity(),
                 s.azimuth(),
                 s.ellipticity_angle(),
                 s.polarized_part(),
-                s.to_csd(),
+                s.unpolarized_part(),
+                s.to_csd().to_stokes(),
                 s.to_generalized(),
             );
+            // Accepted vectors have finite ratios at every scale.
+            assert!(s.degree_of_polarization().is_finite(), "DoP of {s:?}");
+            assert!(s.polarized_intensity().is_finite(), "|S| of {s:?}");
         }
         let _ = Stokes::from_vector_unchecked(Vector4::new(t(0), t(1), t(2), t(3)))
             .degree_of_polarization();
@@ -464,6 +480,18 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
         );
         if let Ok(j) = JonesMatrix::from_matrix(cm2(0)) {
             let m = Mueller::from_jones(&j);
+            if m.matrix().iter().all(|x| x.is_finite()) {
+                // Scale-invariant analysis: finite for every finite Jones-derived matrix.
+                let l = m.coherency_eigenvalues();
+                assert!(
+                    l.iter().all(|x| !x.to_f64().is_nan()),
+                    "λ(H) = {l:?} of {j:?}"
+                );
+                assert!(
+                    !m.diattenuation().to_f64().is_nan()
+                        && !m.depolarization_index().to_f64().is_nan()
+                );
+            }
             let _ = (
                 m.is_physically_realizable(t(3)),
                 m.diattenuation(),
@@ -489,6 +517,8 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
                 m.coherency_eigenvalues(),
                 m.is_physically_realizable(t(0)),
                 m.depolarization_index(),
+                m.diattenuation(),
+                m.polarizance(),
             );
         }
     })?;
@@ -508,8 +538,11 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
         );
     })?;
     no_panic("CSD", || {
-        let _ = CsdMatrix::one_point(cm2(0)).map(|m| m.to_stokes());
-        let _ = CsdMatrix::two_point(cm2(1)).map(|m| m.to_generalized_stokes());
+        let _ = CsdMatrix::one_point(cm2(0)).map(|m| (m.to_stokes(), m.to_generalized_stokes()));
+        let _ = CsdMatrix::two_point(cm2(1)).map(|m| (m.to_generalized_stokes(), m.to_stokes()));
+        let _ = JonesVector::new(c(0), c(2)).map(|e| CsdMatrix::from_jones_vector(&e));
+        let _ = GeneralizedStokes::new(Vector4::new(c(0), c(2), c(4), c(6)))
+            .map(|g| (g.to_csd(), g.to_csd().to_stokes()));
     })?;
     no_panic("Gaussian", || {
         if let Ok(g) = Gaussian::<T, 2>::new(m2(0)) {
@@ -524,6 +557,23 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
                 g.fourier(),
                 g.lemma_s2_1(&m2(6), &x),
                 g.compose_linear(&m2(1)),
+            );
+            let y = Vector2::new(t(10), t(11));
+            let rot = Rotation2::new(t(12));
+            let _ = (
+                g.mahalanobis_sq(&x),
+                g.log_value_of_inverse(&x),
+                g.log_fourier_at(&x),
+                g.log_density(&x),
+                g.product_shifted(&x, &g, &y),
+                g.fourier_shifted_modulated(&x, &y, &Vector2::new(t(13), t(14))),
+                g.corollary_s2_2(&rot, &x, &y),
+                g.convolve(&g).map(|s| (s.value(&x), s.log_value(&y))),
+            );
+            // Never NaN at finite points (0 and −∞ where out of range).
+            assert!(
+                !g.value(&x).to_f64().is_nan() && !g.log_value(&x).to_f64().is_nan(),
+                "g at {x:?}"
             );
         }
         let _ = Gaussian::<T, 3>::isotropic(t(0)).map(|g| (g.section_xy(), g.marginal_xy()));
@@ -543,9 +593,64 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
             let _ = GaussHermite::<T>::new(6).map(|gh| gh.normalized_blur(&p, &cov, &h));
         }
         if let Ok(k) = KCorrelation::<T, 2>::new(t(0), t(1), t(2)) {
-            let _ = (k.value(&h), k.peak_value());
+            let _ = (k.value(&h), k.peak_value(), k.mixture_fit(4));
         }
-        let _ = Smooth::new(t(0));
+        let _ = KCorrelation::<T, 2>::from_abc(t(5), t(6), t(7)).map(|k| k.abc());
+        let unit = Gaussian::<T, 2>::isotropic(T::one()).unwrap();
+        let _ = Smooth::new(t(0)).map(|s| ClosedForm.blur(&s, &unit, &h));
+        let _ = GaussianPsd::<T, 2>::from_scatmech(t(8), t(9));
+        if let Ok(g) = Gaussian::<T, 2>::new(m2(10)) {
+            let a = GaussianPsd::from_autocorrelation(t(14), &g);
+            let b = GaussianPsd::from_spectral_shape(t(15), g);
+            if let (Ok(a), Ok(b)) = (a, b) {
+                let _ = GaussianMixturePsd::new(vec![a, b]).map(|m| m.value(&h));
+            }
+        }
+        let cut = OrderCutoff {
+            max_frequency: t(16),
+            tail: t(17),
+        };
+        let dir = Vector2::new(t(18), t(19));
+        let gratings = [
+            Grating::<T, 2>::sinusoidal(t(20), &dir, t(21), cut),
+            Grating::<T, 2>::rectangular(t(20), &dir, t(21), t(22), cut),
+        ];
+        for g in gratings.iter().flatten() {
+            GRATING_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let _ = (Grating::crossed(g, g, t(23)), Grating::crossed(g, g, t(24)));
+            if let Ok(cov) = Gaussian::<T, 2>::isotropic(t(25)) {
+                let _ = (
+                    ClosedForm.blur(g, &cov, &h),
+                    ClosedForm.normalized_blur(g, &cov, &h),
+                );
+            }
+        }
+    })?;
+    no_panic("sampling", || {
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let src = Vector3::new(t(0), t(1), t(2).abs());
+        let u = [t(3), t(4)];
+        let (k, w) = (t(7).abs(), t(8).abs());
+        if let Ok(p) = GaussianPsd::<T, 2>::isotropic(t(5).abs(), t(6).abs())
+            && let Ok(s) = LobeSampler::gaussian(&p, &surface, &src, k, w)
+        {
+            SAMPLER_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let d = s.sample(u);
+            assert!(
+                d.pdf > T::zero() && d.direction.z > T::zero(),
+                "sample {d:?}"
+            );
+            let _ = s.pdf(&v3(9));
+        }
+        if let Ok(kc) = KCorrelation::<T, 2>::new(t(5).abs(), t(6).abs(), t(10).abs())
+            && let Ok(s) = LobeSampler::k_correlation(&kc, &surface, &src, k, w)
+        {
+            let d = s.sample(u);
+            assert!(
+                d.pdf > T::zero() && d.direction.z > T::zero(),
+                "sample {d:?}"
+            );
+        }
     })?;
     no_panic("packet & kernel", || {
         let Ok(frame) = Frame::from_direction_and_x(Vector3::new(t(0), t(1), -t(2).abs()), v3(3))
@@ -633,7 +738,8 @@ proptest! {
 }
 
 /// Same, on moderate values (|x| ≤ 10 and the special magnitudes), where the kernel is
-/// actually reached; asserts that it was, in at least 5 % of 512 cases.
+/// actually reached; asserts that it was, in at least 5 % of 512 cases (and that samplers and
+/// gratings were built as often).
 #[test]
 fn nothing_panics_and_kernel_is_reached() {
     let mut runner = proptest::test_runner::TestRunner::new(common::proptest_config(512));
@@ -642,6 +748,10 @@ fn nothing_panics_and_kernel_is_reached() {
         32,
     );
     let before = KERNEL_CALLS.load(std::sync::atomic::Ordering::Relaxed);
+    let (s0, g0) = (
+        SAMPLER_CALLS.load(std::sync::atomic::Ordering::Relaxed),
+        GRATING_CALLS.load(std::sync::atomic::Ordering::Relaxed),
+    );
     runner
         .run(&strat, |v| {
             exercise::<f64>(&v)?;
@@ -650,4 +760,8 @@ fn nothing_panics_and_kernel_is_reached() {
         .unwrap();
     let reached = KERNEL_CALLS.load(std::sync::atomic::Ordering::Relaxed) - before;
     assert!(reached >= 50, "kernel reached only {reached} times");
+    let samplers = SAMPLER_CALLS.load(std::sync::atomic::Ordering::Relaxed) - s0;
+    let gratings = GRATING_CALLS.load(std::sync::atomic::Ordering::Relaxed) - g0;
+    assert!(samplers >= 50, "a sampler was built only {samplers} times");
+    assert!(gratings >= 50, "a grating was built only {gratings} times");
 }

@@ -250,7 +250,7 @@ fn corollary_s2_2_matches_quadrature_2d() {
         Vector2::new(0.3, 0.2),
     ] {
         let quad = fourier_quad(f, &q, 12.0, 301);
-        let cor = g.corollary_s2_2(&rot, &ks, &q);
+        let cor = g.corollary_s2_2(&rot, &ks, &q).unwrap();
         assert_close("Corollary S2.2 re", cor, quad.re, QUAD);
         assert_close("Corollary S2.2 im", quad.im, 0.0, QUAD);
         // Ξ = Q Θ⁻¹ Qᵀ (S2.18): the same value from the world-frame Gaussian g^Ξ.
@@ -265,8 +265,8 @@ fn corollary_s2_2_matches_quadrature_2d() {
     // The opposite shift (q − kŝ) and the opposite direction of Q both fail.
     let q = Vector2::new(-0.6, 1.0);
     let quad = fourier_quad(f, &q, 12.0, 301).re;
-    let wrong_shift = g.corollary_s2_2(&rot, &(-ks), &q);
-    let wrong_q = g.corollary_s2_2(&rot.inverse(), &ks, &q);
+    let wrong_shift = g.corollary_s2_2(&rot, &(-ks), &q).unwrap();
+    let wrong_q = g.corollary_s2_2(&rot.inverse(), &ks, &q).unwrap();
     assert!(
         (wrong_shift - quad).abs() > 0.05 * quad,
         "{wrong_shift} vs {quad}"
@@ -288,7 +288,7 @@ fn corollary_s2_2_matches_quadrature_3d() {
     let quad = fourier_quad(f, &q, 10.0, 81);
     assert_close(
         "Corollary S2.2 (3-D) re",
-        g.corollary_s2_2(&rot, &ks, &q),
+        g.corollary_s2_2(&rot, &ks, &q).unwrap(),
         quad.re,
         QUAD,
     );
@@ -303,7 +303,7 @@ fn shift_and_modulation_match_quadrature() {
     let f = |x: &Vector2<f64>| literal(&cov, &(x - a)) * Complex::from_polar(1.0, k.dot(x));
     let q = Vector2::new(0.2, -0.4);
     let quad = fourier_quad(f, &q, 12.0, 301);
-    let cf = g.fourier_shifted_modulated(&a, &k, &q);
+    let cf = g.fourier_shifted_modulated(&a, &k, &q).unwrap();
     assert_close("shift/modulation re", cf.re, quad.re, QUAD);
     assert_close("shift/modulation im", cf.im, quad.im, QUAD);
 }
@@ -437,4 +437,203 @@ fn stability_extreme_scales() {
             }
         }
     }
+}
+
+// ------------------------------------------------------------------ bad input (f32 and f64)
+
+/// The transforms return `Err(NonFinite)` naming the argument for NaN and ±∞ (they returned
+/// `Ok(NaN)` before).
+fn transforms_reject_non_finite<T: gmueller::Real>() {
+    let g = Gaussian::<T, 2>::new(Matrix2::new(2.0, 0.5, 0.5, 1.0).map(T::lit)).unwrap();
+    let one = Vector2::new(T::lit(0.3), T::lit(-0.2));
+    let rot = Rotation2::new(T::lit(0.4));
+    let names = |r: Result<(), Error>, name: &str, case: &str| match r {
+        Err(Error::NonFinite { what }) => assert!(what.contains(name), "{case}: {what}"),
+        other => panic!("{case}: expected NonFinite naming {name}, got {other:?}"),
+    };
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY].map(T::lit) {
+        let v = Vector2::new(bad, T::one());
+        let m = Matrix2::new(T::one(), T::zero(), bad, T::one());
+        names(g.lemma_s2_1(&m, &one).map(drop), "linear map B", "lemma B");
+        names(
+            g.lemma_s2_1(&Matrix2::identity(), &v).map(drop),
+            "frequency q",
+            "lemma q",
+        );
+        names(
+            g.product_shifted(&v, &g, &one).map(drop),
+            "shift a",
+            "product a",
+        );
+        names(
+            g.product_shifted(&one, &g, &v).map(drop),
+            "shift b",
+            "product b",
+        );
+        names(
+            g.fourier_shifted_modulated(&v, &one, &one).map(drop),
+            "shift a",
+            "fsm a",
+        );
+        names(
+            g.fourier_shifted_modulated(&one, &v, &one).map(drop),
+            "modulation k",
+            "fsm k",
+        );
+        names(
+            g.fourier_shifted_modulated(&one, &one, &v).map(drop),
+            "frequency q",
+            "fsm q",
+        );
+        names(
+            g.corollary_s2_2(&rot, &v, &one).map(drop),
+            "k ŝ",
+            "corollary k_s",
+        );
+        names(
+            g.corollary_s2_2(&rot, &one, &v).map(drop),
+            "frequency q",
+            "corollary q",
+        );
+    }
+}
+
+#[test]
+fn transforms_reject_non_finite_input() {
+    transforms_reject_non_finite::<f32>();
+    transforms_reject_non_finite::<f64>();
+}
+
+/// At huge finite points the value is 0 and the log-value −∞ (the plain substitution gave NaN
+/// from 0·∞ when an off-diagonal Cholesky entry is 0); the same for `density`,
+/// `mahalanobis_sq` (+∞) and `ScaledGaussian::value`. Moderate points keep the literal value.
+fn huge_points_give_zero<T: gmueller::Real>(huge: f64) {
+    let g = Gaussian::<T, 2>::new(Matrix2::new(1e-20, 0.0, 0.0, 1.0).map(T::lit)).unwrap();
+    let conv = g.convolve(&g).unwrap();
+    for x in [
+        Vector2::new(huge, 1.0),
+        Vector2::new(huge, -huge),
+        Vector2::new(-huge, 0.0),
+        Vector2::new(0.0, huge),
+    ] {
+        let x = x.map(T::lit);
+        let what = format!("{} at {x:?}", std::any::type_name::<T>());
+        assert_eq!(
+            g.mahalanobis_sq(&x).to_f64(),
+            f64::INFINITY,
+            "mahalanobis {what}"
+        );
+        assert_eq!(
+            g.log_value(&x).to_f64(),
+            f64::NEG_INFINITY,
+            "log_value {what}"
+        );
+        assert_eq!(g.value(&x).to_f64(), 0.0, "value {what}");
+        assert_eq!(g.density(&x).to_f64(), 0.0, "density {what}");
+        assert_eq!(
+            g.log_density(&x).to_f64(),
+            f64::NEG_INFINITY,
+            "log_density {what}"
+        );
+        assert_eq!(conv.value(&x).to_f64(), 0.0, "ScaledGaussian::value {what}");
+        assert_eq!(
+            g.log_value_of_inverse(&x).to_f64(),
+            f64::NEG_INFINITY,
+            "inverse {what}"
+        );
+    }
+    // Oracle: the literal exp(−½ xᵀΣ⁻¹x) for Σ = diag(1e-20, 1), x = (1e-10, 2).
+    let x = Vector2::new(T::lit(1e-10), T::lit(2.0));
+    assert_close(
+        "mahalanobis",
+        g.mahalanobis_sq(&x).to_f64(),
+        5.0,
+        Tol::new(0.0, 1e-6),
+    );
+}
+
+#[test]
+fn huge_finite_points_give_zero_never_nan() {
+    huge_points_give_zero::<f32>(3e38);
+    huge_points_give_zero::<f64>(1e300);
+}
+
+/// `qᵀΣq` where the products `Lⱼᵢ qⱼ` overflow: Σ = L Lᵀ with L = [[2, 0], [2, 1]] and
+/// `q = (T::MAX, −T::MAX)` give `Lᵀq = (2·MAX − 2·MAX, −MAX)`, by hand `qᵀΣq = MAX²` = +∞, so
+/// `ln g^{Σ⁻¹}(q) = −∞` (the plain product gave ∞ − ∞ = NaN); with q scaled by 2⁻⁶⁰⁰ (f64)
+/// the same vector gives exactly `−½ (2⁻⁶⁰⁰·MAX)²`.
+fn inverse_at_overflowing_products<T: gmueller::Real>() {
+    let max = T::max_value().unwrap();
+    let g = Gaussian::<T, 2>::new(Matrix2::new(4.0, 4.0, 4.0, 5.0).map(T::lit)).unwrap();
+    let q = Vector2::new(max, -max);
+    assert_eq!(g.log_value_of_inverse(&q).to_f64(), f64::NEG_INFINITY);
+    assert_eq!(g.log_fourier_at(&q).to_f64(), f64::NEG_INFINITY);
+}
+
+#[test]
+fn log_value_of_inverse_at_overflowing_products_is_minus_infinity() {
+    inverse_at_overflowing_products::<f32>();
+    inverse_at_overflowing_products::<f64>();
+    let g = Gaussian::<f64, 2>::new(Matrix2::new(4.0, 4.0, 4.0, 5.0)).unwrap();
+    let m = f64::MAX * 2f64.powi(-600);
+    assert_close(
+        "−½ qᵀΣq",
+        g.log_value_of_inverse(&Vector2::new(m, -m)),
+        -0.5 * m * m,
+        Tol::new(0.0, 1e-15),
+    );
+}
+
+/// Lemma S2.1 for `B = 10⁻¹¹⁰ diag(1, 2, 3)` (|det B| = 6·10⁻³³⁰ underflows f64, so the
+/// unscaled inverse reported `Singular`): by hand, with Σ = I and `B⁻ᵀq = (40, 0, 0)`,
+/// `ln F = −½·40² − ln 6 + 330 ln 10`.
+#[test]
+fn lemma_s2_1_tiny_b_is_not_singular() {
+    let g = Gaussian::<f64, 3>::isotropic(1.0).unwrap();
+    let b = Matrix3::from_diagonal(&Vector3::new(1.0, 2.0, 3.0)) * 1e-110;
+    let q = Vector3::new(40e-110, 0.0, 0.0);
+    let expected = (-800.0 - 6f64.ln() + 330.0 * 10f64.ln()).exp();
+    let got = g.lemma_s2_1(&b, &q).unwrap();
+    assert!(got.is_finite(), "{got}");
+    assert_close("lemma, tiny B", got, expected, Tol::new(0.0, 1e-12));
+    // A truly singular B is still rejected.
+    let sing = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 0.0, 1.0);
+    assert!(matches!(
+        g.lemma_s2_1(&sing, &q),
+        Err(Error::Singular { .. })
+    ));
+}
+
+/// Overflowing intermediates of the shifted forms: an error naming the quantity, or 0 —
+/// never NaN. `c = ½(a + b)` for equal shapes overflows at `a = b = 0.9·T::MAX`; `q − k`
+/// overflowing gives 0 (far in the tail); a phase `(q − k)·a = 2·T::MAX` with a non-zero
+/// magnitude (`q − k = (1, 1)`) is an error.
+fn shifted_forms_overflow<T: gmueller::Real>() {
+    let max = T::max_value().unwrap();
+    let g = Gaussian::<T, 2>::new(Matrix2::new(2.0, 0.5, 0.5, 1.0).map(T::lit)).unwrap();
+    let big = Vector2::new(max * T::lit(0.9), T::zero());
+    match g.product_shifted(&big, &g, &big) {
+        Err(Error::NonFinite { what }) => assert!(what.contains("centre"), "{what}"),
+        other => panic!("product centre: {:?}", other.map(|(s, c)| (s.log_scale, c))),
+    }
+    let (sg, c) = g.product_shifted(&big, &g, &(-big)).unwrap();
+    assert_eq!(sg.log_scale.to_f64(), f64::NEG_INFINITY);
+    assert!(c.iter().all(|v| v.is_finite()));
+    let z = Vector2::zeros();
+    let far = g.fourier_shifted_modulated(&z, &(-big), &big).unwrap();
+    assert_eq!((far.re.to_f64(), far.im.to_f64()), (0.0, 0.0));
+    let rot = Rotation2::new(T::lit(0.4));
+    assert_eq!(g.corollary_s2_2(&rot, &big, &big).unwrap().to_f64(), 0.0);
+    let near = Vector2::new(T::one(), T::one());
+    let r = g.fourier_shifted_modulated(&Vector2::new(max, max), &z, &near);
+    assert!(
+        matches!(r, Err(Error::NonFinite { what }) if what.contains("phase")),
+        "{r:?}"
+    );
+}
+
+#[test]
+fn shifted_forms_overflow_to_an_error_or_zero() {
+    shifted_forms_overflow::<f32>();
+    shifted_forms_overflow::<f64>();
 }

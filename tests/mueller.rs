@@ -3,7 +3,10 @@
 //! Pauli-trace identity), realness for p₁ = p₂, the generalized Mueller matrix acting on gSP versus
 //! the Jones pair acting on a two-point CSD, a Monte Carlo check of S1.7 over field realizations,
 //! Cloude realizability, diattenuation / polarizance / depolarization index of known elements and
-//! the Lu–Chipman decomposition (recomposition and recovery of known factors).
+//! the Lu–Chipman decomposition (recomposition and recovery of known factors); scale invariance of
+//! every analysis function at `10^±30` (f32) and `10^±300` (f64), with D, P, `P_Δ` of
+//! `10¹⁰·diag(2, 1)` checked against the hand values; and finite coherency eigenvalues for 10⁵
+//! random f32 and f64 Jones-derived matrices (three within 64ε·tr H of 0).
 
 mod common;
 
@@ -347,4 +350,227 @@ fn distinct_points_give_complex_generalized_mueller() {
     let j2 = JonesMatrix::<f64>::linear_polarizer(0.9);
     let g = GeneralizedMueller::from_jones_pair(&j1, &j2).matrix();
     assert!(g.iter().any(|c| c.im.abs() > 0.1));
+}
+
+// ------------------------------------------------------------------ scale invariance, robustness
+
+/// splitmix64 (Steele, Lea & Flood 2014): seeded uniforms in [−1, 1).
+struct SplitMix(u64);
+impl SplitMix {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut x = self.0;
+        x = (x ^ (x >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        x = (x ^ (x >> 27)).wrapping_mul(0x94D049BB133111EB);
+        x ^= x >> 31;
+        2.0 * ((x >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+    }
+    fn jones<T: Real>(&mut self) -> JonesMatrix<T> {
+        let mut c = || Complex::new(T::lit(self.uniform()), T::lit(self.uniform()));
+        JonesMatrix::from_matrix(Matrix2::new(c(), c(), c(), c())).unwrap()
+    }
+}
+
+/// J = 10¹⁰·diag(2, 1) in f32 (|J₀₀|² = 4e20, and the squares of the Mueller entries overflow):
+/// by hand, the intensity transmittances are 4·10²⁰ and 10²⁰, so D = P = (4 − 1)/(4 + 1) = 0.6,
+/// and `M = ½·10²⁰ [[5, 3, 0, 0], [3, 5, 0, 0], [0, 0, 4, 0], [0, 0, 0, 4]]` gives
+/// `Σ M_ij² − M₀₀² = (25 − 6.25)·10⁴⁰`, so `P_Δ = √18.75 / (√3 · 2.5) = 1` (`D = ∞`, `P_Δ = 0` before).
+#[test]
+fn analysis_of_a_huge_f32_diattenuator_matches_the_hand_values() {
+    let j = JonesMatrix::from_matrix(Matrix2::new(
+        Complex::new(2e10f32, 0.0),
+        Complex::new(0.0, 0.0),
+        Complex::new(0.0, 0.0),
+        Complex::new(1e10, 0.0),
+    ))
+    .unwrap();
+    let m = Mueller::from_jones(&j);
+    // (assert_close accepts ∞ against a finite value through its relative term: check finiteness.)
+    assert!(
+        [m.diattenuation(), m.polarizance(), m.depolarization_index()]
+            .iter()
+            .all(|x| x.is_finite())
+    );
+    assert_close("M00", f64::from(m.matrix()[(0, 0)]), 2.5e20, F32);
+    assert_close("D", f64::from(m.diattenuation()), 0.6, F32);
+    assert_close("P", f64::from(m.polarizance()), 0.6, F32);
+    assert_close("P_Δ", f64::from(m.depolarization_index()), 1.0, F32);
+    assert!(m.is_physically_realizable(64.0 * f32::EPSILON));
+    let l = m.coherency_eigenvalues();
+    assert_close("λ₀ = M00", f64::from(l[0]), 2.5e20, F32);
+    for k in 1..4 {
+        assert!(
+            f64::from(l[k]).abs() <= 64.0 * f64::from(f32::EPSILON) * 2.5e20,
+            "λ{k} = {}",
+            l[k]
+        );
+    }
+}
+
+/// Every analysis function of `Mueller` gives the same answer for `s·M` as for `M` at
+/// `s = 10^±30` (f32) and `10^±300` (f64): D, P, `P_Δ`, `λ(H)/s`, realizability, and the Lu–Chipman
+/// retardance and diattenuation.
+fn analysis_scale_invariance<T: Real>(scales: [f64; 2], tol: Tol) {
+    let cast = |m: &Mueller<f64>| Mueller::from_matrix(m.matrix().map(T::lit)).unwrap();
+    let mj = |j: &JonesMatrix<f64>| Mueller::from_jones(j);
+    let bases = [
+        mj(&diattenuator(0.3, 0.5)),
+        mj(&JonesMatrix::linear_retarder(0.7, 1.1)) * mj(&diattenuator(-0.4, 0.2)),
+        diag(1.0, 0.5, 0.3, 0.2) * mj(&diattenuator(1.0, 0.7)),
+        diag(1.0, 0.0, 0.0, 0.0),
+        diag(1.0, 1.0, 1.0, -1.0), // not realizable
+    ];
+    for base in &bases {
+        let b = cast(base);
+        let blc = b.lu_chipman();
+        let bl = b.coherency_eigenvalues();
+        let eps = T::EPSILON.to_f64();
+        for &sc in &scales {
+            let m = Mueller::from_matrix(b.matrix() * T::lit(sc)).unwrap();
+            let what = format!(
+                "{} × {sc:e}: {:?}",
+                std::any::type_name::<T>(),
+                base.matrix()
+            );
+            for (name, got, want) in [
+                ("D", m.diattenuation(), b.diattenuation()),
+                ("P", m.polarizance(), b.polarizance()),
+                ("P_Δ", m.depolarization_index(), b.depolarization_index()),
+            ] {
+                assert!(got.is_finite(), "{name} = {got:?}: {what}");
+                assert_close(&format!("{name} {what}"), got.to_f64(), want.to_f64(), tol);
+            }
+            let l = m.coherency_eigenvalues();
+            assert!(l.iter().all(|x| x.is_finite()), "λ = {l:?}: {what}");
+            for k in 0..4 {
+                let t = Tol::new(64.0 * eps, 0.0);
+                assert_close(
+                    &format!("λ{k}/s {what}"),
+                    l[k].to_f64() / sc,
+                    bl[k].to_f64(),
+                    t,
+                );
+            }
+            let tol_real = T::lit(64.0) * T::EPSILON;
+            assert_eq!(
+                m.is_physically_realizable(tol_real),
+                b.is_physically_realizable(tol_real),
+                "{what}"
+            );
+            match (m.lu_chipman(), &blc) {
+                (Ok(lc), Ok(b0)) => {
+                    let t = Tol::new(1e3 * eps, 1e3 * eps);
+                    assert_close(
+                        &format!("retardance {what}"),
+                        lc.retardance().to_f64(),
+                        b0.retardance().to_f64(),
+                        t,
+                    );
+                    assert_close(
+                        &format!("LC D {what}"),
+                        lc.diattenuation().to_f64(),
+                        b0.diattenuation().to_f64(),
+                        t,
+                    );
+                }
+                (r, b0) => assert_eq!(r.is_ok(), b0.is_ok(), "Lu–Chipman {what}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn analysis_is_scale_invariant() {
+    analysis_scale_invariance::<f32>([1e30, 1e-30], Tol::new(0.0, 2e-6));
+    analysis_scale_invariance::<f64>([1e300, 1e-300], Tol::new(0.0, 1e-14));
+}
+
+/// The checks on one Jones-derived matrix: every coherency eigenvalue finite, H rank 1
+/// (λ₀ = M₀₀ and the other three within 64ε·tr H of 0), realizable with tolerance 64ε.
+fn check_rank_one<T: Real>(j: &JonesMatrix<T>, what: &str) {
+    let m = Mueller::from_jones(j);
+    let l = m.coherency_eigenvalues();
+    let tr = m.matrix()[(0, 0)].to_f64();
+    let eps = T::EPSILON.to_f64();
+    let what = format!(
+        "{} {what}: J = {:?}",
+        std::any::type_name::<T>(),
+        j.matrix()
+    );
+    assert!(l.iter().all(|x| x.is_finite()), "λ = {l:?}: {what}");
+    assert!(
+        (l[0].to_f64() - tr).abs() <= 64.0 * eps * tr,
+        "λ₀ = {:e} vs {tr:e}: {what}",
+        l[0].to_f64()
+    );
+    for k in 1..4 {
+        assert!(
+            l[k].to_f64().abs() <= 64.0 * eps * tr,
+            "λ{k} = {:e}: {what}",
+            l[k].to_f64()
+        );
+    }
+    assert!(
+        m.is_physically_realizable(T::lit(64.0) * T::EPSILON),
+        "{what}"
+    );
+}
+
+/// 10⁵ random Jones matrices (entries uniform in the unit square of ℂ) and 10⁵ nearly singular
+/// upper-triangular ones `[[10⁻⁴ a, b], [0, d]]`: nalgebra's Hermitian eigensolver returned
+/// NaN for 32 of the latter in f32 (so `is_physically_realizable` reported false).
+fn coherency_robustness<T: Real>(seed: u64) {
+    let mut rng = SplitMix(seed);
+    for i in 0..100_000 {
+        check_rank_one(&rng.jones::<T>(), &format!("random {i}"));
+        let j = rng.jones::<T>().matrix();
+        let tri = Matrix2::new(
+            j[(0, 0)] * T::lit(1e-4),
+            j[(0, 1)],
+            Complex::new(T::zero(), T::zero()),
+            j[(1, 1)],
+        );
+        check_rank_one(
+            &JonesMatrix::from_matrix(tri).unwrap(),
+            &format!("triangular {i}"),
+        );
+    }
+}
+
+#[test]
+fn coherency_eigenvalues_are_finite_for_random_jones_matrices() {
+    coherency_robustness::<f32>(1);
+    coherency_robustness::<f64>(2);
+}
+
+/// Every Jones matrix with entries from {0, ±1, ±i, ½, 1 + i, 0.3 − 0.7i, 10⁻⁴, 1 + 10⁻⁴i}
+/// (10⁴ matrices, with exact zeros and repeated eigenvalues of H): e.g. f32
+/// `[[10⁻⁴, 1 + 10⁻⁴i], [0, 1]]` gave NaN eigenvalues before.
+fn coherency_structured<T: Real>() {
+    let vals = [
+        (0.0, 0.0),
+        (1.0, 0.0),
+        (-1.0, 0.0),
+        (0.0, 1.0),
+        (0.0, -1.0),
+        (0.5, 0.0),
+        (1.0, 1.0),
+        (0.3, -0.7),
+        (1e-4, 0.0),
+        (1.0, 1e-4),
+    ];
+    let z = |k: usize| Complex::new(T::lit(vals[k].0), T::lit(vals[k].1));
+    for i in 0..10_000 {
+        let j = Matrix2::new(z(i / 1000), z(i / 100 % 10), z(i / 10 % 10), z(i % 10));
+        check_rank_one(
+            &JonesMatrix::from_matrix(j).unwrap(),
+            &format!("structured {i}"),
+        );
+    }
+}
+
+#[test]
+fn coherency_eigenvalues_are_finite_for_structured_jones_matrices() {
+    coherency_structured::<f32>();
+    coherency_structured::<f64>();
 }

@@ -435,7 +435,7 @@ fn grating_orders_and_cutoff() {
     // Crossed: product efficiencies, total 1.
     let gx = Grating::<f64, 2>::sinusoidal(1.0, &Vector2::new(1.0, 0.0), 1.0, cut).unwrap();
     let gy = Grating::<f64, 2>::sinusoidal(1.5, &Vector2::new(0.0, 1.0), 0.5, cut).unwrap();
-    let xg = Grating::crossed(&gx, &gy, 0.0);
+    let xg = Grating::crossed(&gx, &gy, 0.0).unwrap();
     assert_close("crossed Σ η", xg.variance(), 1.0, Tol::new(1e-12, 0.0));
     // Blur = Σ η_m g(h − ζ_m).
     let cov = Gaussian::new(Matrix2::new(0.2, 0.0, 0.0, 0.2)).unwrap();
@@ -710,8 +710,14 @@ fn normalized_blur_value_is_exp_of_log_form() {
                     } else {
                         0.0
                     });
-                    // f32 where the parameters are representable.
-                    if rms < 1e15 && (1e-15..1e15).contains(&len) && (1e-15..1e15).contains(&w) {
+                    // f32 where the parameters and the peak p(0) = σ²ℓ² are representable
+                    // (a larger peak is rejected at construction).
+                    let peak = rms * rms * len * len;
+                    if rms < 1e15
+                        && (1e-15..1e15).contains(&len)
+                        && (1e-15..1e15).contains(&w)
+                        && peak < 1e38
+                    {
                         let p = GaussianPsd::<f32, 2>::isotropic(rms as f32, len as f32).unwrap();
                         let cov =
                             Gaussian::new(Matrix2::new(1.0f32, 0.3, 0.3, 2.0) / (w * w) as f32);

@@ -1,7 +1,9 @@
 //! Verifies S1.2–S1.3 and the Stokes/CSD types: `A_mül vec(C)` of a sample CSD equals the
 //! sample average of the per-field Stokes formulas; `A_mül⁻¹ = ½ A_mül†`; CSD and Stokes
 //! validation errors; degree of polarization and ellipse parameters of known states; and the
-//! round trips CSD ↔ generalized Stokes. Generic checks run in f64 and f32.
+//! round trips CSD ↔ generalized Stokes; scale invariance of every validity check (vectors and
+//! matrices scaled by powers of two from the subnormal range to `T::MAX`: same verdict, finite
+//! ratios) and errors where a derived quantity would overflow. Generic checks run in f64 and f32.
 
 mod common;
 
@@ -77,7 +79,7 @@ fn sample_average_matches<T: Real>(seed: u64, mix: f64, tol: Tol) {
     let inv_n = Complex::new(T::lit(1.0 / n), T::zero());
     for (ex, ey) in &fields {
         let e = JonesVector::new(cz::<T>(*ex), cz::<T>(*ey)).unwrap();
-        c += CsdMatrix::from_jones_vector(&e).matrix() * inv_n;
+        c += CsdMatrix::from_jones_vector(&e).unwrap().matrix() * inv_n;
     }
     let csd = CsdMatrix::one_point(c).unwrap();
     // Literal S1.2: A_mül vec(C).
@@ -276,7 +278,10 @@ fn known_states() {
     let h = FRAC_1_SQRT_2;
     // (1, i)/√2: S3 = +1 (crate convention), fully circular.
     let e = JonesVector::new(z(h, 0.0), z(0.0, h)).unwrap();
-    let s = CsdMatrix::from_jones_vector(&e).to_stokes().unwrap();
+    let s = CsdMatrix::from_jones_vector(&e)
+        .unwrap()
+        .to_stokes()
+        .unwrap();
     assert_all_close(
         "circular",
         s.vector().iter().copied(),
@@ -290,14 +295,20 @@ fn known_states() {
     assert_eq!(s.azimuth(), 0.0, "undefined azimuth returns 0");
     // Linear at 22.5°: E = (cos, sin), ψ = π/8, χ = 0.
     let e = JonesVector::new(z(FRAC_PI_8.cos(), 0.0), z(FRAC_PI_8.sin(), 0.0)).unwrap();
-    let s = CsdMatrix::from_jones_vector(&e).to_stokes().unwrap();
+    let s = CsdMatrix::from_jones_vector(&e)
+        .unwrap()
+        .to_stokes()
+        .unwrap();
     assert_close("ψ", s.azimuth(), FRAC_PI_8, F64);
     assert_close("χ", s.ellipticity_angle(), 0.0, F64);
     assert_close("DoLP", s.degree_of_linear_polarization(), 1.0, F64);
     // Linear at −60°: ψ = −π/3.
     let t = -std::f64::consts::FRAC_PI_3;
     let e = JonesVector::new(z(t.cos(), 0.0), z(t.sin(), 0.0)).unwrap();
-    let s = CsdMatrix::from_jones_vector(&e).to_stokes().unwrap();
+    let s = CsdMatrix::from_jones_vector(&e)
+        .unwrap()
+        .to_stokes()
+        .unwrap();
     assert_close("ψ", s.azimuth(), t, F64);
     // Unpolarized and zero light: no NaN.
     let u = Stokes::unpolarized(2.0_f64).unwrap();
@@ -367,4 +378,198 @@ fn generalized_stokes_arithmetic() {
         ))
         .is_err()
     );
+}
+
+// ------------------------------------------------------------------ scale invariance, overflow
+
+/// The powers of two from the smallest normal `T` up to `top`, and `top` itself.
+fn scales<T: Real>(top: T) -> Vec<T> {
+    let min_normal = T::max_value().unwrap().to_f64().recip() * 4.0; // 2⁻¹²⁶ f32, 2⁻¹⁰²² f64
+    let mut out: Vec<T> = (-1100..1100)
+        .map(|k| 2f64.powi(k))
+        .filter(|&s| s >= min_normal && s <= top.to_f64())
+        .map(T::lit)
+        .collect();
+    out.push(top);
+    out
+}
+
+/// `Stokes::new` gives the same verdict at every scale, and every accepted vector has finite
+/// degrees of polarization equal to the unscaled ones (`DoP = ∞` at MAX before: the polarized
+/// norm overflowed and `∞ > S0·(1 + 64ε)` was false).
+fn stokes_scale_invariance<T: Real>(tol: Tol) {
+    let bases = [
+        [1.0, 0.9, 0.9, 0.0],  // |S| = 1.27: invalid
+        [1.0, 0.6, 0.8, 0.0],  // |S| = 1: valid, fully polarized
+        [1.0, 0.6, 0.0, -0.8], // circular part
+        [1.0, 0.3, -0.2, 0.1], // partially polarized
+        [1.0, 0.6, 0.8, 0.01], // |S| = 1.00005: invalid
+        [-1.0, 0.0, 0.0, 0.0], // S0 < 0
+        [0.5, 0.0, 0.0, 0.0],  // unpolarized
+    ];
+    for b in bases {
+        // Bases with max|Sₖ| = 1, so that the top scale is T::MAX itself.
+        let max_entry = b.iter().fold(0.0f64, |m: f64, x: &f64| m.max(x.abs()));
+        let b = b.map(|x| x / max_entry);
+        let base = Stokes::new(T::lit(b[0]), T::lit(b[1]), T::lit(b[2]), T::lit(b[3]));
+        for sc in scales(T::max_value().unwrap()) {
+            let v = b.map(|x| T::lit(x) * sc);
+            let r = Stokes::new(v[0], v[1], v[2], v[3]);
+            let what = format!("{b:?} × {:e} ({})", sc.to_f64(), std::any::type_name::<T>());
+            assert_eq!(r.is_ok(), base.is_ok(), "verdict changed: {what}: {r:?}");
+            if let (Ok(s), Ok(b0)) = (r, &base) {
+                for (name, got, want) in [
+                    (
+                        "DoP",
+                        s.degree_of_polarization(),
+                        b0.degree_of_polarization(),
+                    ),
+                    (
+                        "DoLP",
+                        s.degree_of_linear_polarization(),
+                        b0.degree_of_linear_polarization(),
+                    ),
+                    (
+                        "DoCP",
+                        s.degree_of_circular_polarization(),
+                        b0.degree_of_circular_polarization(),
+                    ),
+                    ("χ", s.ellipticity_angle(), b0.ellipticity_angle()),
+                    ("ψ", s.azimuth(), b0.azimuth()),
+                    (
+                        "|S|/scale",
+                        s.polarized_intensity() / sc,
+                        b0.polarized_intensity(),
+                    ),
+                ] {
+                    assert!(got.is_finite(), "{name} not finite: {what}");
+                    assert_close(&format!("{name} {what}"), got.to_f64(), want.to_f64(), tol);
+                }
+                let c = s.to_csd();
+                assert!(
+                    c.matrix()
+                        .iter()
+                        .all(|z| z.re.is_finite() && z.im.is_finite()),
+                    "CSD {what}"
+                );
+                let back = c.to_stokes().unwrap();
+                assert!(back.vector().iter().all(|x| x.is_finite()), "back {what}");
+                for (k, &bk) in b.iter().enumerate() {
+                    assert_close(
+                        &format!("S{k} back {what}"),
+                        (back.vector()[k] / sc).to_f64(),
+                        bk,
+                        tol,
+                    );
+                }
+            }
+        }
+    }
+    let m = T::max_value().unwrap();
+    let nine = T::lit(0.9);
+    assert!(matches!(
+        Stokes::new(m, nine * m, nine * m, T::zero()),
+        Err(Error::InvalidStokes { .. })
+    ));
+}
+
+#[test]
+fn stokes_validity_is_scale_invariant() {
+    stokes_scale_invariance::<f32>(Tol::new(0.0, 1e-6));
+    stokes_scale_invariance::<f64>(Tol::new(0.0, 1e-15));
+}
+
+/// `CsdMatrix::one_point` gives the same verdict at every scale (a Hermitian PSD, a
+/// non-Hermitian and an indefinite matrix), and the Stokes vector scales with the matrix.
+fn csd_scale_invariance<T: Real>(tol: Tol) {
+    let bases = [
+        ([z(0.5, 0.0), z(0.1, -0.3), z(0.1, 0.3), z(0.25, 0.0)], true),
+        (
+            [z(0.5, 0.0), z(0.1, -0.3), z(0.1, 0.31), z(0.25, 0.0)],
+            false,
+        ), // not Hermitian
+        ([z(0.5, 0.0), z(0.5, 0.0), z(0.5, 0.0), z(0.25, 0.0)], false), // det < 0
+        ([z(0.0, 0.0), z(1.0, 1.0), z(0.0, 0.0), z(0.0, 0.0)], false),  // not Hermitian
+    ];
+    for (b, valid) in bases {
+        let bm = Matrix2::new(b[0], b[1], b[2], b[3]);
+        let base = CsdMatrix::one_point(bm.map(cz::<T>));
+        assert_eq!(base.is_ok(), valid, "{bm:?}");
+        // Stokes parameters reach 2·max part: keep them finite at the top scale.
+        for sc in scales(T::max_value().unwrap() * T::lit(0.5)) {
+            let c = CsdMatrix::one_point(bm.map(|x| cz::<T>(x) * sc));
+            let what = format!(
+                "{bm:?} × {:e} ({})",
+                sc.to_f64(),
+                std::any::type_name::<T>()
+            );
+            assert_eq!(c.is_ok(), valid, "verdict changed: {what}: {c:?}");
+            if let (Ok(c), Ok(b0)) = (c, &base) {
+                let (s, s0) = (c.to_stokes().unwrap(), b0.to_stokes().unwrap());
+                for k in 0..4 {
+                    let (got, want) = ((s.vector()[k] / sc).to_f64(), s0.vector()[k].to_f64());
+                    assert_close(&format!("S{k} {what}"), got, want, tol);
+                }
+                assert!(s.degree_of_polarization().is_finite(), "DoP {what}");
+            }
+        }
+    }
+}
+
+#[test]
+fn csd_validity_is_scale_invariant() {
+    csd_scale_invariance::<f32>(Tol::new(0.0, 1e-6));
+    csd_scale_invariance::<f64>(Tol::new(0.0, 1e-15));
+}
+
+/// Entries near `T::MAX`: the asymmetry of `[[0, MAX + MAX·i], [0, 0]]` overflowed (∞ > tol·∞
+/// is false) and it was accepted as Hermitian; `diag(MAX, MAX)` is Hermitian PSD but its
+/// `S0 = 2·MAX` overflows (it was accepted, `to_stokes` gave S0 = ∞); the same for the
+/// two-point CSD and for `E E†` with `|E| = 1e200`. The Stokes → CSD maps halve before adding.
+fn csd_overflow<T: Real>() {
+    let m = T::max_value().unwrap();
+    let zc = |re: T, im: T| Complex::new(re, im);
+    let (o, big) = (zc(T::zero(), T::zero()), zc(m, m));
+    assert!(matches!(
+        CsdMatrix::one_point(Matrix2::new(o, big, o, o)),
+        Err(Error::NotHermitian { .. })
+    ));
+    let diag = Matrix2::new(zc(m, T::zero()), o, o, zc(m, T::zero()));
+    for r in [CsdMatrix::one_point(diag), CsdMatrix::two_point(diag)] {
+        assert!(
+            matches!(r, Err(Error::NonFinite { what }) if what.contains("Stokes")),
+            "{r:?}"
+        );
+    }
+    let half = T::lit(0.5);
+    let ok = Matrix2::new(zc(m * half, T::zero()), o, o, zc(m * half, T::zero()));
+    let s = CsdMatrix::one_point(ok).unwrap().to_stokes().unwrap();
+    assert_eq!(s.s0(), m);
+    let e = JonesVector::new(zc(T::lit(1e200f64.min(m.to_f64())), T::zero()), o).unwrap();
+    assert!(matches!(
+        CsdMatrix::from_jones_vector(&e),
+        Err(Error::NonFinite { .. })
+    ));
+    // Stokes → CSD at the top of the range: C_xx = (S0 + S1)/2 = MAX, finite.
+    let c = Stokes::new(m, m, T::zero(), T::zero()).unwrap().to_csd();
+    assert_eq!(c.matrix()[(0, 0)].re, m);
+    assert!(
+        c.matrix()
+            .iter()
+            .all(|z| z.re.is_finite() && z.im.is_finite())
+    );
+    let g = GeneralizedStokes::new(Vector4::new(big, big, big, big))
+        .unwrap()
+        .to_csd();
+    assert!(
+        g.matrix()
+            .iter()
+            .all(|z| z.re.is_finite() && z.im.is_finite())
+    );
+}
+
+#[test]
+fn csd_overflow_is_rejected_or_avoided() {
+    csd_overflow::<f32>();
+    csd_overflow::<f64>();
 }

@@ -111,7 +111,8 @@ pub fn height_grating(amplitude: f64, period: f64) -> Grating<f64, 2> {
         },
     )
     .expect("grating");
-    let out = Grating::crossed(&base, &scale, 1e-6 * amplitude * amplitude);
+    let out =
+        Grating::crossed(&base, &scale, 1e-6 * amplitude * amplitude).expect("crossed grating");
     assert_eq!(out.orders().len(), 2, "expected the ±1 orders only");
     assert!((out.variance() / (0.5 * amplitude * amplitude) - 1.0).abs() < 1e-9);
     out

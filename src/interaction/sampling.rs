@@ -44,8 +44,16 @@
 //! interpolant's antiderivative, inverted by safeguarded Newton. Then `ρ = F⁻¹(v F(ρ_max(ψ)))` in
 //! closed form. The density of the returned direction is therefore `pdf` up to the tabulation
 //! error (≤ 1e-13 relative to the peak, far below any Monte Carlo resolution); `Sample::pdf` is
-//! `pdf(direction)` itself, so the two agree to the last bit. A draw that rounding puts on the
-//! horizon is pulled in by a few ulps (probability O(ε)), so `pdf > 0` for every sample.
+//! `pdf(direction)` itself, so the two agree to the last bit.
+//!
+//! # The unit interval's endpoint
+//! Both inversions take their uniform in `[0, 1)`: an input is clamped into `[0, 1 − ε/2]`
+//! (the largest `T` below 1; NaN becomes 0). `v = 1` would be the truncation boundary
+//! `ρ = ρ_max`, the horizon, where `p_ω = 0`: for every lobe whose mass inside the disk rounds
+//! to 1 (`F⁻¹(1) = ∞`, clamped to the boundary) `[v, 1]` drew a horizon direction with
+//! `pdf = 0`. From `1 − ε/2` the radial draw stays at `1 − F ≥ ε/2`, where the density is a
+//! normal number. A draw that rounding still puts within a few ulps of the horizon is pulled in
+//! by a few ulps, so `pdf > 0` for every sample.
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 
@@ -62,6 +70,9 @@ const DEG: usize = 16;
 const TABLE_TOL: f64 = 1e-13;
 /// The most panels a table may use.
 const MAX_PANELS: usize = 1 << 14;
+/// The narrowest lobe a sampler accepts, in machine epsilons of the scalar type (see
+/// [`LobeSampler::gaussian`]).
+const MIN_WIDTH_ULPS: f64 = 8.0;
 /// The weight of the K-correlation lobe in its mixture with the Gaussian (incoherent) lobe.
 pub const K_CORRELATION_LOBE_WEIGHT: f64 = 0.5;
 
@@ -209,6 +220,22 @@ impl<T: Real> TruncatedLobe<T> {
                 gamma: gamma.to_f64(),
             },
         };
+        // The lobe's width in u (|det L|/‖L‖_F ≤ the smallest singular value of L, times the
+        // profile's own width, 1/√(γ + 1) for the power profile) must resolve on the disk's
+        // float grid (spacing ≤ ε): a narrower lobe puts every representable direction but its
+        // centre so many widths out that its density underflows to 0.
+        let profile_width = match prof64 {
+            RadialProfile::Gaussian => 1.0,
+            RadialProfile::Power { gamma } => (gamma + 1.0).sqrt().recip(),
+        };
+        let frob = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        let width = (l[0] * l[2]).abs() / frob * profile_width;
+        if width.is_nan() || width < MIN_WIDTH_ULPS * T::EPSILON.to_f64() {
+            return Err(Error::Unrealizable {
+                reason: "sampling lobe narrower than 8ε in the projected disk (not resolvable \
+                         in the scalar type): use a smaller minimum coherence width, or f64",
+            });
+        }
         let a = |psi: f64| {
             let rho = rho_max(&centre, &l, inside, psi);
             radial_cdf(&prof64, half_exp, rho * rho)
@@ -223,6 +250,15 @@ impl<T: Real> TruncatedLobe<T> {
         }
         let det_l = l[0] * l[2];
         let log_norm = norm_q.ln() - mass.ln() - det_l.ln();
+        // Everything the sampler evaluates in T must be a finite T (f32: a lobe wider than
+        // 3e38, or γ above 3e38, is not).
+        let in_t = [l[0], l[1], l[2], mass, total, log_norm, half_exp, neg_exp];
+        if !in_t.iter().all(|&x| T::lit(x).is_finite()) {
+            return Err(Error::Unrealizable {
+                reason: "sampling lobe not representable in the scalar type (width or exponent \
+                         overflows)",
+            });
+        }
         let panels = panels64
             .iter()
             .map(|p| Panel {
@@ -353,9 +389,12 @@ impl<T: Real> TruncatedLobe<T> {
     }
 }
 
+/// A uniform clamped into `[0, 1⁻]`, `1⁻ = 1 − ε/2` the largest `T` below 1 (NaN → 0): the
+/// inverse CDFs are defined on `[0, 1)`, whose image is the open support (the endpoint 1 is the
+/// truncation boundary, the horizon, where `p_ω = cos θ_o p_u = 0`).
 #[inline]
 fn clamp01<T: Real>(v: T) -> T {
-    v.max(T::zero()).min(T::one())
+    v.max(T::zero()).min(T::one() - T::lit(0.5) * T::EPSILON)
 }
 
 /// The distance along `d = L (cos ψ, sin ψ)` from `c` to the unit circle, in units of `|d|`
@@ -582,7 +621,12 @@ impl<T: Real> LobeSampler<T> {
     /// # Errors
     /// [`Error::OutOfRange`] for `ŝ·n̂ ≤ 0`, `k ≤ 0` or `w_min ≤ 0`; [`Error::NonFinite`],
     /// [`Error::InvalidBasis`] for a bad ŝ; [`Error::NotPositiveDefinite`] if the lobe
-    /// covariance under- or overflows; [`Error::Unrealizable`] if the table does not converge.
+    /// covariance under- or overflows; [`Error::Unrealizable`] if the table does not converge,
+    /// or if the lobe is narrower than `8ε` (machine epsilons of `T`) in the projected disk —
+    /// too narrow for the float grid of directions there, so that drawn directions would have
+    /// `pdf = 0` (f64: widths below 1.8e-15, i.e. `1/(k ℓ)` for `ℓ` above ~10¹⁴ λ; f32: below
+    /// 9.5e-7, `ℓ` above ~1.7·10⁵ λ), or too wide for `T` (f32: a width `√(1/w_min²)/k` above
+    /// `f32::MAX`).
     pub fn gaussian(
         psd: &GaussianPsd<T, 2>,
         surface: &Frame<T>,
@@ -683,9 +727,14 @@ impl<T: Real> LobeSampler<T> {
         cos_o * self.disk_pdf(&u)
     }
 
-    /// Draws an exit direction from two uniforms `u ∈ [0, 1]²` (clamped), exactly from
+    /// Draws an exit direction from two uniforms `u ∈ [0, 1)²`, exactly from
     /// [`LobeSampler::pdf`] (see the module docs). For a mixture the first uniform also
     /// selects the component (and is rescaled).
+    ///
+    /// Every input is accepted without panic: each uniform is clamped into `[0, 1 − ε/2]`
+    /// (values above, including 1 and `+∞`, act as the largest `T` below 1; values below 0,
+    /// `−∞` and NaN as 0). The result is always a finite unit direction strictly above the
+    /// surface with `pdf` finite and `> 0`, equal to [`LobeSampler::pdf`] of it.
     #[must_use]
     pub fn sample(&self, u: [T; 2]) -> Sample<T> {
         let mut v0 = clamp01(u[0]);

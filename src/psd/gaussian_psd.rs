@@ -4,7 +4,7 @@ use nalgebra::{SMatrix, SVector};
 
 use super::{BlurMethod, ClosedForm, Psd, log_sum_exp};
 use crate::error::Error;
-use crate::gaussian::{Gaussian, cholesky_of_sum, in_normal_range, solve_lower};
+use crate::gaussian::{Gaussian, cholesky_of_sum, in_normal_range, mahalanobis_from_cholesky};
 use crate::real::Real;
 
 /// The PSD of a Gaussian-correlated random field: `R(x) = σ² g^Λ(x)`, `p(ζ) = σ² |Λ|^{1/2} g^{Λ⁻¹}(ζ)`.
@@ -67,52 +67,152 @@ fn check_range<T: Real>(
     }
 }
 
+/// `Err(OutOfRange { what, value, expected })` unless `ok`.
+fn require(ok: bool, what: &'static str, value: f64, expected: &'static str) -> Result<(), Error> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::OutOfRange {
+            what,
+            value,
+            expected,
+        })
+    }
+}
+
+/// `σ²` from `σ`: finite, and positive unless `σ = 0`.
+fn variance_of<T: Real>(what: &'static str, rms_height: T) -> Result<T, Error> {
+    check_nonnegative(what, rms_height)?;
+    let v = rms_height * rms_height;
+    require(
+        v.is_finite() && (v > T::zero() || rms_height == T::zero()),
+        what,
+        rms_height.to_f64(),
+        "σ² a finite number, > 0 unless σ = 0",
+    )?;
+    Ok(v)
+}
+
+/// `g^{I/ℓ²}` from `ℓ`: `1/ℓ²` finite and positive.
+fn isotropic_spectrum<T: Real, const N: usize>(
+    what: &'static str,
+    length: T,
+) -> Result<Gaussian<T, N>, Error> {
+    check_positive(what, length)?;
+    let inv = T::one() / length;
+    let out_of_range = Error::OutOfRange {
+        what,
+        value: length.to_f64(),
+        expected: "1/ℓ² a finite number > 0",
+    };
+    if !(inv.is_finite() && (inv * inv).is_finite() && inv * inv > T::zero()) {
+        return Err(out_of_range);
+    }
+    Gaussian::isotropic(inv).map_err(|_| out_of_range)
+}
+
 impl<T: Real, const N: usize> GaussianPsd<T, N> {
     /// From the autocorrelation `R(x) = σ² g^Λ(x)`: variance `σ²` and correlation shape `Λ`.
     ///
+    /// The derived quantities are checked too (see [`GaussianPsd::from_spectral_shape`]).
+    ///
     /// # Errors
     /// [`Error::OutOfRange`]/[`Error::NonFinite`] for a negative or non-finite variance;
-    /// validation errors of `Λ⁻¹`.
+    /// [`Error::OutOfRange`] naming `Λ` if `Λ⁻¹` is not representable (a finite positive
+    /// definite matrix); as [`GaussianPsd::from_spectral_shape`] for the peak and integral.
     pub fn from_autocorrelation(variance: T, correlation: &Gaussian<T, N>) -> Result<Self, Error> {
         check_nonnegative("variance", variance)?;
-        let spectral = correlation.inverse()?;
-        Ok(Self::from_spectrum_parts(variance, spectral))
+        let spectral = correlation.inverse().map_err(|_| Error::OutOfRange {
+            what: "correlation shape Λ",
+            value: correlation.covariance().amax().to_f64(),
+            expected: "Λ⁻¹ representable (finite, positive definite)",
+        })?;
+        Self::from_spectrum_parts(variance, spectral, "variance σ² and correlation shape Λ")
     }
 
     /// From the spectral shape: `p(ζ) = σ² |Λ|^{1/2} g^{P}(ζ)` with `P = Λ⁻¹` given directly.
     ///
+    /// Derived quantities checked at construction: the peak `p(0) = σ² |Λ|^{1/2}` must be a
+    /// finite `T` and `∫p = (2π)^{n/2} σ²` finite. The peak may underflow: the amplitude is held
+    /// as a logarithm, so [`GaussianPsd::log_value`] and the log-space blurs stay exact while
+    /// [`Psd::value`] returns 0.
+    ///
     /// # Errors
-    /// [`Error::OutOfRange`]/[`Error::NonFinite`] for a negative or non-finite variance.
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] for a negative or non-finite variance;
+    /// [`Error::OutOfRange`] naming `σ²` and `P` when the peak or the integral overflows.
     pub fn from_spectral_shape(variance: T, spectral: Gaussian<T, N>) -> Result<Self, Error> {
         check_nonnegative("variance", variance)?;
-        Ok(Self::from_spectrum_parts(variance, spectral))
+        Self::from_spectrum_parts(variance, spectral, "variance σ² and spectral shape P")
     }
 
-    fn from_spectrum_parts(variance: T, spectral: Gaussian<T, N>) -> Self {
-        Self {
+    /// The PSD from validated parts, after checking the peak and the integral (see
+    /// [`GaussianPsd::from_spectral_shape`]); `scale_name` names the inputs in the error.
+    fn from_spectrum_parts(
+        variance: T,
+        spectral: Gaussian<T, N>,
+        scale_name: &'static str,
+    ) -> Result<Self, Error> {
+        let log_amplitude = variance.ln() - T::lit(0.5) * spectral.log_det();
+        // The amplitude is held as a logarithm: a peak below the range of T is fine (values
+        // underflow to 0 and the log forms stay exact); one above it is not.
+        require(
+            log_amplitude.exp().is_finite(),
+            scale_name,
+            (variance.to_f64().ln() - 0.5 * spectral.log_det().to_f64()).exp(),
+            "peak p(0) = σ²|Λ|^{1/2} finite",
+        )?;
+        let integral = super::two_pi_pow_half_n::<T>(N) * variance;
+        require(
+            integral.is_finite(),
+            scale_name,
+            integral.to_f64(),
+            "∫p = (2π)^{n/2} σ² finite",
+        )?;
+        Ok(Self {
             variance,
             spectral,
-            log_amplitude: variance.ln() - T::lit(0.5) * spectral.log_det(),
-        }
+            log_amplitude,
+        })
     }
 
     /// Isotropic: rms height `σ`, correlation length `ℓ` with `R(r) = σ² exp(−r²/(2ℓ²))`.
     ///
+    /// Besides the inputs, the derived quantities must be representable in `T`: `σ²` (finite,
+    /// and `> 0` unless `σ = 0`), the spectral covariance `I/ℓ²` (finite, `> 0`), the peak
+    /// `p(0) = σ² ℓⁿ` (finite; it may underflow, see [`GaussianPsd::from_spectral_shape`]) and
+    /// `∫p = (2π)^{n/2} σ²` (finite).
+    ///
     /// # Errors
-    /// [`Error::OutOfRange`] unless `σ ≥ 0` and `ℓ > 0`, finite.
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] unless `σ ≥ 0` and `ℓ > 0`, finite;
+    /// [`Error::OutOfRange`] naming the rms height when `σ²` over- or underflows (f32
+    /// `σ = 10²⁰` or `10⁻³⁰`), naming the correlation length when `1/ℓ²` does (f32
+    /// `ℓ = 10⁻²⁰` or `10²³`), naming both when the peak or the integral overflows.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::psd::GaussianPsd;
+    /// assert!(GaussianPsd::<f32, 2>::isotropic(1e20, 1.0).is_err()); // σ² = 1e40 > f32::MAX
+    /// assert!(GaussianPsd::<f32, 2>::isotropic(1e15, 1e15).is_err()); // p(0) = σ²ℓ² = 1e60
+    /// assert!(GaussianPsd::<f64, 2>::isotropic(1e15, 1e15).is_ok());
+    /// ```
     pub fn isotropic(rms_height: T, correlation_length: T) -> Result<Self, Error> {
-        check_nonnegative("rms height", rms_height)?;
-        check_positive("correlation length", correlation_length)?;
-        let spectral = Gaussian::isotropic(T::one() / correlation_length)?;
-        Ok(Self::from_spectrum_parts(rms_height * rms_height, spectral))
+        let variance = variance_of("rms height", rms_height)?;
+        let spectral = isotropic_spectrum("correlation length", correlation_length)?;
+        Self::from_spectrum_parts(variance, spectral, "rms height σ and correlation length ℓ")
     }
 
     /// SCATMECH's parameters: `C(r) = σ² exp(−r²/L²)`, L the 1/e correlation length (`ℓ = L/√2`).
     ///
     /// # Errors
-    /// As [`GaussianPsd::isotropic`].
+    /// As [`GaussianPsd::isotropic`], naming the 1/e correlation length.
     pub fn from_scatmech(rms_height: T, one_over_e_length: T) -> Result<Self, Error> {
-        Self::isotropic(rms_height, one_over_e_length / T::lit(2.0).sqrt())
+        let variance = variance_of("rms height", rms_height)?;
+        check_positive("1/e correlation length", one_over_e_length)?;
+        let spectral = isotropic_spectrum(
+            "1/e correlation length",
+            one_over_e_length / T::lit(2.0).sqrt(),
+        )?;
+        Self::from_spectrum_parts(variance, spectral, "rms height σ and 1/e length L")
     }
 
     /// The spectral shape `g^{Λ⁻¹}` (covariance in frequency space).
@@ -158,7 +258,7 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     #[inline]
     fn blur_parts(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> Option<(SMatrix<T, N, N>, T)> {
         let l = cholesky_of_sum(self.spectral.cholesky_factor(), cov.cholesky_factor())?;
-        let m = solve_lower(&l, h).norm_squared();
+        let m = mahalanobis_from_cholesky(&l, h);
         Some((l, m))
     }
 
@@ -253,8 +353,12 @@ pub struct GaussianMixturePsd<T: Real, const N: usize> {
 impl<T: Real, const N: usize> GaussianMixturePsd<T, N> {
     /// From its components.
     ///
+    /// The sums must stay representable: the total variance `Σⱼ σⱼ²`, the integral
+    /// `(2π)^{n/2} Σⱼ σⱼ²` and the peak `p(0) = Σⱼ pⱼ(0)` finite.
+    ///
     /// # Errors
-    /// [`Error::OutOfRange`] for an empty list.
+    /// [`Error::OutOfRange`] for an empty list, and naming the mixture components when one of
+    /// those sums overflows.
     pub fn new(components: Vec<GaussianPsd<T, N>>) -> Result<Self, Error> {
         if components.is_empty() {
             return Err(Error::OutOfRange {
@@ -266,6 +370,16 @@ impl<T: Real, const N: usize> GaussianMixturePsd<T, N> {
         let variance = components
             .iter()
             .fold(T::zero(), |acc, c| acc + c.variance());
+        let peak = components
+            .iter()
+            .fold(T::zero(), |acc, c| acc + c.log_amplitude.exp());
+        let integral = super::two_pi_pow_half_n::<T>(N) * variance;
+        require(
+            variance.is_finite() && integral.is_finite() && peak.is_finite(),
+            "mixture components",
+            variance.to_f64() + peak.to_f64(),
+            "Σⱼσⱼ², (2π)^{n/2}Σⱼσⱼ² and the peak Σⱼpⱼ(0) finite",
+        )?;
         Ok(Self {
             components,
             variance,
@@ -352,10 +466,19 @@ pub struct Smooth<T: Real> {
 impl<T: Real> Smooth<T> {
     /// A smooth surface carrying `weight` (`R(0)`) in its specular order.
     ///
+    /// The integral `∫p = (2π)^{n/2} w` must be finite for `n ≤ 3` (so `w ≤ T::MAX/(2π)^{3/2}`).
+    ///
     /// # Errors
-    /// [`Error::OutOfRange`]/[`Error::NonFinite`] unless `weight ≥ 0`, finite.
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] unless `weight ≥ 0`, finite;
+    /// [`Error::OutOfRange`] if `(2π)^{3/2} w` overflows.
     pub fn new(weight: T) -> Result<Self, Error> {
         check_nonnegative("specular weight", weight)?;
+        require(
+            (super::two_pi_pow_half_n::<T>(3) * weight).is_finite(),
+            "specular weight",
+            weight.to_f64(),
+            "∫p = (2π)^{n/2} w finite for n ≤ 3",
+        )?;
         Ok(Self { weight })
     }
 }

@@ -85,9 +85,12 @@ pub fn bessel_j(max_order: usize, a: f64) -> Vec<f64> {
 /// Which diffraction orders a [`Grating`] keeps.
 ///
 /// Rule: orders are taken in increasing `|m|` (both signs together), keeping only those with
-/// `|ζ_m| ≤ max_frequency`, and the enumeration stops once the efficiency not yet kept,
-/// `total − Σ_kept η`, is at most `tail`, or at `|m| = 100 000`. A typical `max_frequency` is `2k`
-/// (every order that can reach a propagating direction for some incidence), `tail = 1e-12`.
+/// `|ζ_m| ≤ max_frequency` (`+∞`: no frequency limit) and an efficiency that is positive in the
+/// scalar type, and the enumeration stops once the efficiency not yet kept,
+/// `total − Σ_kept η`, is at most `tail`, or at `|m| = 100 000`. If the rule keeps more than
+/// [`Grating::MAX_ORDERS`] orders, construction fails (see there). A typical `max_frequency`
+/// is `2k` (every order that can reach a propagating direction for some incidence),
+/// `tail = 1e-12`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrderCutoff<T: Real> {
     /// Largest kept order frequency `|ζ_m|` (rad/length).
@@ -118,11 +121,35 @@ pub struct Grating<T: Real, const N: usize> {
     dropped: T,
 }
 
+/// `Err(OutOfRange)` for more than [`Grating::MAX_ORDERS`] orders.
+fn too_many_orders(count: usize) -> Error {
+    Error::OutOfRange {
+        what: "number of grating orders kept by the cutoff",
+        value: count as f64,
+        expected: "≤ Grating::MAX_ORDERS = 10001 (narrow the OrderCutoff: max_frequency ≈ 2k, \
+                   or a larger tail)",
+    }
+}
+
 impl<T: Real, const N: usize> Grating<T, N> {
+    /// The most orders a grating may keep: `10 001` (`|m| ≤ 5000` of a 1-D grating; all
+    /// propagating orders, `max_frequency = 2k`, of periods up to 2500 λ).
+    ///
+    /// Every blur sums over the kept orders (≈ 40 ns each), so the cap bounds a blur by ≈ 0.4 ms.
+    /// A cutoff that would keep more is an error at construction rather than a silent
+    /// truncation: for a renderer, a scene that asks for an energy tail below what the cap can
+    /// deliver (e.g. a rectangular grating, `η_m ∝ 1/m²`, with `tail = 1e-12` and no frequency
+    /// limit, which silently built 200 001 orders) is better refused with the knob to turn than
+    /// rendered slowly or with unreported energy loss. [`Grating::dropped_efficiency`] reports
+    /// what an accepted cutoff drops.
+    pub const MAX_ORDERS: usize = 10_001;
+
+    /// The orders `m = 0, ±1, …` with efficiencies `eta(m)` (zero beyond `m_end`).
     fn from_efficiencies(
         period: T,
         direction: &SVector<T, N>,
         cutoff: OrderCutoff<T>,
+        m_end: usize,
         eta: impl Fn(usize) -> f64,
     ) -> Result<Self, Error> {
         if !(period.is_finite() && period > T::zero()) {
@@ -132,12 +159,15 @@ impl<T: Real, const N: usize> Grating<T, N> {
                 expected: "(0, ∞)",
             });
         }
-        let norm = direction.norm();
-        if !(norm.is_finite() && norm > T::zero()) {
+        // Normalised by the largest entry first: a direction of 1e-200 (or 1e200) is not zero
+        // (or infinite) because its squared norm under- (or over-)flows.
+        let scale = direction.amax();
+        if !(scale.is_finite() && scale > T::zero()) {
             return Err(Error::InvalidBasis {
                 reason: "grating direction must be a non-zero finite vector",
             });
         }
+        let unit = (direction / scale).normalize();
         if !(cutoff.max_frequency >= T::zero() && cutoff.tail >= T::zero()) {
             return Err(Error::OutOfRange {
                 what: "order cutoff",
@@ -145,25 +175,45 @@ impl<T: Real, const N: usize> Grating<T, N> {
                 expected: "max_frequency ≥ 0 and tail ≥ 0",
             });
         }
-        let g = direction / norm * (T::two_pi() / period);
-        let gnorm = g.norm().to_f64();
+        let gnorm = T::two_pi() / period;
+        let bad_period = Error::OutOfRange {
+            what: "grating period",
+            value: period.to_f64(),
+            expected: "order positions m·2π/Λ finite (Λ ≥ 2π·|m|/T::MAX)",
+        };
+        if !gnorm.is_finite() {
+            return Err(bad_period);
+        }
+        let g = unit * gnorm;
         let mut orders = Vec::new();
         let mut kept = 0.0_f64;
-        for m in 0..=100_000usize {
+        for m in 0..=m_end.min(100_000) {
             let remaining = 1.0 - kept;
             if m > 0 && remaining <= cutoff.tail.to_f64() {
                 break;
             }
-            if m as f64 * gnorm > cutoff.max_frequency.to_f64() {
+            if m as f64 * gnorm.to_f64() > cutoff.max_frequency.to_f64() {
                 break;
             }
             let e = eta(m);
-            let signs: &[f64] = if m == 0 { &[1.0] } else { &[1.0, -1.0] };
+            let et = T::lit(e);
+            if !(e > 0.0 && et > T::zero()) {
+                continue;
+            }
+            let signs: &[T] = if m == 0 {
+                &[T::one()]
+            } else {
+                &[T::one(), T::lit(-1.0)]
+            };
+            if orders.len() + signs.len() > Self::MAX_ORDERS {
+                return Err(too_many_orders(orders.len() + signs.len()));
+            }
+            let zeta = g * T::lit(m as f64);
+            if !zeta.iter().all(|v| v.is_finite()) {
+                return Err(bad_period);
+            }
             for &s in signs {
-                if e <= 0.0 {
-                    continue;
-                }
-                orders.push((g * T::lit(s * m as f64), T::lit(e)));
+                orders.push((zeta * s, et));
                 kept += e;
             }
         }
@@ -176,9 +226,23 @@ impl<T: Real, const N: usize> Grating<T, N> {
 
     /// A sinusoidal phase grating `φ(x) = a sin(2π d̂·x/Λ)`: `η_m = J_m(a)²`.
     ///
+    /// Derived quantities checked: the order positions `m (2π/Λ) d̂` finite (a period of
+    /// `10⁻³⁰⁸` gave `2π/Λ = ∞`), at most [`Grating::MAX_ORDERS`] orders kept.
+    ///
     /// # Errors
-    /// [`Error::OutOfRange`] for a non-positive period, a non-finite `a` or a negative cutoff;
-    /// [`Error::InvalidBasis`] for a zero direction.
+    /// [`Error::OutOfRange`] for a non-positive or non-finite period, `|a| > 10⁴` or non-finite,
+    /// a negative or NaN cutoff, order positions that overflow (naming the period), or more than
+    /// [`Grating::MAX_ORDERS`] orders; [`Error::InvalidBasis`] for a zero or non-finite direction.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::psd::{Grating, OrderCutoff};
+    /// use nalgebra::Vector2;
+    /// let cut = OrderCutoff { max_frequency: f64::INFINITY, tail: 1e-12 };
+    /// assert!(Grating::<f64, 2>::sinusoidal(1e-308, &Vector2::x(), 1.0, cut).is_err());
+    /// let g = Grating::<f64, 2>::sinusoidal(1.0, &Vector2::x(), 1.0, cut).unwrap();
+    /// assert!(g.orders().len() < 30 && g.dropped_efficiency() <= 1e-12);
+    /// ```
     pub fn sinusoidal(
         period: T,
         direction: &SVector<T, N>,
@@ -200,15 +264,35 @@ impl<T: Real, const N: usize> Grating<T, N> {
             0
         };
         let j = bessel_j(mmax.min(a.abs() as usize + 200), a);
-        Self::from_efficiencies(period, direction, cutoff, |m| {
+        Self::from_efficiencies(period, direction, cutoff, j.len() - 1, |m| {
             j.get(m).map_or(0.0, |v| v * v)
         })
     }
 
     /// A binary (rectangular) phase grating of depth `φ₀` and duty cycle `D ∈ (0, 1)`.
     ///
+    /// Its efficiencies decay only like `1/m²`, so the cutoff's `tail` is reached late: without
+    /// a frequency limit, `tail = 10⁻¹²` would need ~10¹¹ orders. Such a cutoff is an error
+    /// (more than [`Grating::MAX_ORDERS`] orders) — it used to build 200 001 orders silently
+    /// (milliseconds per blur); a frequency limit (`max_frequency ≈ 2k`) or a larger tail keeps
+    /// it within the cap, with [`Grating::dropped_efficiency`] reporting the rest.
+    ///
     /// # Errors
-    /// As [`Grating::sinusoidal`], plus [`Error::OutOfRange`] for `D ∉ (0, 1)`.
+    /// As [`Grating::sinusoidal`], plus [`Error::OutOfRange`] for `D ∉ (0, 1)` or a non-finite
+    /// phase depth.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::psd::{Grating, OrderCutoff};
+    /// use nalgebra::Vector2;
+    /// let loose = OrderCutoff { max_frequency: f64::INFINITY, tail: 1e-12 };
+    /// assert!(Grating::<f64, 2>::rectangular(1.0, &Vector2::x(), 1.0, 0.3, loose).is_err());
+    /// let k = std::f64::consts::TAU / 0.5; // λ = 0.5 µm
+    /// let cut = OrderCutoff { max_frequency: 2.0 * k, tail: 1e-12 };
+    /// let g = Grating::<f64, 2>::rectangular(1.0, &Vector2::x(), 1.0, 0.3, cut).unwrap();
+    /// assert_eq!(g.orders().len(), 9); // |m| ≤ 2Λ/λ = 4
+    /// assert!(g.dropped_efficiency() > 0.0 && g.dropped_efficiency() < 0.05);
+    /// ```
     pub fn rectangular(
         period: T,
         direction: &SVector<T, N>,
@@ -217,15 +301,20 @@ impl<T: Real, const N: usize> Grating<T, N> {
         cutoff: OrderCutoff<T>,
     ) -> Result<Self, Error> {
         let (p0, d) = (phase_depth.to_f64(), duty.to_f64());
-        if !(d > 0.0 && d < 1.0 && p0.is_finite()) {
+        if !p0.is_finite() {
+            return Err(Error::NonFinite {
+                what: "phase depth",
+            });
+        }
+        if !(d > 0.0 && d < 1.0) {
             return Err(Error::OutOfRange {
                 what: "duty cycle",
                 value: d,
-                expected: "(0, 1), with a finite phase depth",
+                expected: "(0, 1)",
             });
         }
         let c = 1.0 - p0.cos();
-        Self::from_efficiencies(period, direction, cutoff, |m| {
+        Self::from_efficiencies(period, direction, cutoff, usize::MAX, |m| {
             if m == 0 {
                 1.0 - 2.0 * d * (1.0 - d) * c
             } else {
@@ -236,26 +325,72 @@ impl<T: Real, const N: usize> Grating<T, N> {
     }
 
     /// A crossed grating from two 1-D gratings (phase profiles added): orders are sums, efficiencies
-    /// products. Orders whose product efficiency is below `min_efficiency` are dropped.
-    #[must_use]
-    pub fn crossed(a: &Self, b: &Self, min_efficiency: T) -> Self {
-        let mut orders = Vec::with_capacity(a.orders.len() * b.orders.len());
+    /// products. Orders whose product efficiency is below `min_efficiency` (or is 0 in `T`) are
+    /// dropped, and counted in [`Grating::dropped_efficiency`].
+    ///
+    /// The kept orders are counted before anything is allocated: two gratings of
+    /// [`Grating::MAX_ORDERS`] orders each would otherwise ask for 10⁸ orders.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] for a NaN or negative `min_efficiency`, for more than
+    /// [`Grating::MAX_ORDERS`] kept orders, and for order positions `ζ_a + ζ_b` that overflow.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::psd::{Grating, OrderCutoff};
+    /// use nalgebra::Vector2;
+    /// let cut = OrderCutoff { max_frequency: 20.0, tail: 1e-12 };
+    /// let gx = Grating::<f64, 2>::sinusoidal(1.0, &Vector2::x(), 1.0, cut).unwrap();
+    /// let gy = Grating::<f64, 2>::sinusoidal(1.5, &Vector2::y(), 0.5, cut).unwrap();
+    /// let xg = Grating::crossed(&gx, &gy, 0.0).unwrap();
+    /// assert_eq!(xg.orders().len(), gx.orders().len() * gy.orders().len());
+    /// assert!(Grating::crossed(&gx, &gy, f64::NAN).is_err());
+    /// ```
+    pub fn crossed(a: &Self, b: &Self, min_efficiency: T) -> Result<Self, Error> {
+        if min_efficiency.partial_cmp(&T::zero()).is_none() || min_efficiency < T::zero() {
+            return Err(Error::OutOfRange {
+                what: "minimum efficiency of a crossed grating",
+                value: min_efficiency.to_f64(),
+                expected: "[0, ∞)",
+            });
+        }
+        let keep = |ea: T, eb: T| {
+            let e = ea * eb;
+            e > T::zero() && e >= min_efficiency
+        };
+        let mut count = 0usize;
+        for (_, ea) in &a.orders {
+            for (_, eb) in &b.orders {
+                count += usize::from(keep(*ea, *eb));
+            }
+            if count > Self::MAX_ORDERS {
+                return Err(too_many_orders(count));
+            }
+        }
+        let mut orders = Vec::with_capacity(count);
         let mut kept = T::zero();
         for (za, ea) in &a.orders {
             for (zb, eb) in &b.orders {
-                let e = *ea * *eb;
-                if e > T::zero() && e >= min_efficiency {
-                    orders.push((za + zb, e));
-                    kept += e;
+                if keep(*ea, *eb) {
+                    let z = za + zb;
+                    if !z.iter().all(|v| v.is_finite()) {
+                        return Err(Error::OutOfRange {
+                            what: "crossed grating order positions ζ_a + ζ_b",
+                            value: f64::INFINITY,
+                            expected: "finite",
+                        });
+                    }
+                    orders.push((z, *ea * *eb));
+                    kept += *ea * *eb;
                 }
             }
         }
         let dropped = (T::one() - kept).max(T::zero());
-        Self {
+        Ok(Self {
             orders,
             kept,
             dropped,
-        }
+        })
     }
 
     /// The kept orders `(ζ_m, η_m)`.

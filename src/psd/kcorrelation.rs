@@ -2,7 +2,7 @@
 
 use nalgebra::SVector;
 
-use super::special::ln_gamma;
+use super::special::{ln_gamma, ln_gamma_ratio};
 use super::{GaussianMixturePsd, GaussianPsd, Psd};
 use crate::error::Error;
 use crate::gaussian::Gaussian;
@@ -39,27 +39,51 @@ pub struct KCorrelation<T: Real, const N: usize> {
     nu: T,
     /// `σ² c`, i.e. `p(0)`.
     peak_value: T,
-    /// `c`, the normalisation per unit variance.
-    norm: T,
+    /// `ln c`, the normalisation per unit variance (kept in f64: `c` alone may exceed `T`).
+    log_norm: f64,
+}
+
+/// `NonFinite` for NaN/∞, `OutOfRange` otherwise.
+fn bad<T: Real>(what: &'static str, v: T, expected: &'static str) -> Error {
+    if v.is_finite() {
+        Error::OutOfRange {
+            what,
+            value: v.to_f64(),
+            expected,
+        }
+    } else {
+        Error::NonFinite { what }
+    }
 }
 
 impl<T: Real, const N: usize> KCorrelation<T, N> {
     /// From the variance `σ²`, the squared length `T` and the exponent `γ > n − 1`.
     ///
+    /// Besides the inputs, the derived quantities are checked: the peak `p(0) = σ² c` must be a
+    /// finite `T`, and positive unless `σ² = 0` (not flushed to zero), and `∫p = (2π)^{n/2} σ²`
+    /// finite. `c` is computed in log space with `ln Γ(ν)/Γ(ν − n/2)` free of cancellation, so
+    /// every finite `γ > n − 1` gives a finite `ln c` (≈ (n/2) ln(2Tν) for large ν).
+    ///
     /// # Errors
-    /// [`Error::OutOfRange`]/[`Error::NonFinite`] unless `σ² ≥ 0`, `T > 0`, `γ > n − 1`.
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] unless `σ² ≥ 0`, `T > 0`, `γ > n − 1`, all
+    /// finite; [`Error::OutOfRange`] naming `σ², T, γ` when the peak `p(0)` over- or
+    /// underflows `T` (e.g. `T = 10³⁰⁸`, `γ = 3` in f64) or `∫p` overflows.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::psd::KCorrelation;
+    /// // n = 2: p(0) = σ² (γ − 1) T.
+    /// let k = KCorrelation::<f64, 2>::new(1.0, 1e308, 2.0).unwrap();
+    /// assert!((k.peak_value() / 1e308 - 1.0).abs() < 1e-13);
+    /// assert!(KCorrelation::<f64, 2>::new(1.0, 1e308, 3.0).is_err()); // p(0) = 2e308
+    /// assert!(KCorrelation::<f32, 2>::new(1.0, 1e38, 5.0).is_err()); // p(0) = 4e38
+    /// ```
     pub fn new(variance: T, t: T, gamma: T) -> Result<Self, Error> {
-        let bad = |what, v: T, expected| {
-            if v.is_finite() {
-                Error::OutOfRange {
-                    what,
-                    value: v.to_f64(),
-                    expected,
-                }
-            } else {
-                Error::NonFinite { what }
-            }
-        };
+        Self::build(variance, t, gamma, "K-correlation σ², T, γ")
+    }
+
+    /// [`Self::new`], with `scale_name` naming the parameters in the error on the peak.
+    fn build(variance: T, t: T, gamma: T, scale_name: &'static str) -> Result<Self, Error> {
         if !(variance.is_finite() && variance >= T::zero()) {
             return Err(bad("variance", variance, "[0, ∞)"));
         }
@@ -70,15 +94,45 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
         if !(gamma.is_finite() && gamma.to_f64() > n - 1.0) {
             return Err(bad("K-correlation γ", gamma, "(n − 1, ∞)"));
         }
-        let nu = 0.5 * (gamma.to_f64() + 1.0);
-        let log_c = 0.5 * n * (2.0 * t.to_f64()).ln() + ln_gamma(nu) - ln_gamma(nu - 0.5 * n);
+        let nu = 0.5 * gamma.to_f64() + 0.5;
+        // c = (2T)^{n/2} Γ(ν)/Γ(ν − n/2), in logs (2T itself may overflow).
+        let log_c =
+            0.5 * n * (core::f64::consts::LN_2 + t.to_f64().ln()) + ln_gamma_ratio(nu, 0.5 * n);
+        let sigma2 = variance.to_f64();
+        let log_peak = sigma2.ln() + log_c;
+        let plain = sigma2 * log_c.exp();
+        let peak_value = T::lit(if plain.is_finite() && plain > f64::MIN_POSITIVE {
+            plain
+        } else {
+            log_peak.exp()
+        });
+        let peak_ok = if sigma2 == 0.0 {
+            log_c.is_finite()
+        } else {
+            peak_value.is_finite() && peak_value > T::zero()
+        };
+        if !peak_ok {
+            return Err(Error::OutOfRange {
+                what: scale_name,
+                value: log_peak.exp(),
+                expected: "peak p(0) = σ²(2T)^{n/2}Γ(ν)/Γ(ν − n/2) finite, and > 0 unless σ² = 0",
+            });
+        }
+        let integral = super::two_pi_pow_half_n::<T>(N) * variance;
+        if !integral.is_finite() {
+            return Err(Error::OutOfRange {
+                what: scale_name,
+                value: integral.to_f64(),
+                expected: "∫p = (2π)^{n/2} σ² finite",
+            });
+        }
         Ok(Self {
             variance,
             t,
             gamma,
             nu: T::lit(nu),
-            peak_value: variance * T::lit(log_c.exp()),
-            norm: T::lit(log_c.exp()),
+            peak_value,
+            log_norm: log_c,
         })
     }
 
@@ -119,7 +173,9 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
     /// relative error grows, since every component decays like a Gaussian).
     ///
     /// # Errors
-    /// [`Error::OutOfRange`] unless `2 ≤ m ≤ 400`.
+    /// [`Error::OutOfRange`] unless `2 ≤ m ≤ 400`; [`Error::OutOfRange`] naming `T` and `γ` when
+    /// a component is not representable in `T` (its width `(2 sⱼ T)^{−1/2}` or variance over- or
+    /// underflows, e.g. f32 `T ≥ 10³⁶`) or the measured error is not finite.
     pub fn mixture_fit(&self, m: usize) -> Result<(GaussianMixturePsd<T, N>, f64), Error> {
         if !(2..=400).contains(&m) {
             return Err(Error::OutOfRange {
@@ -157,7 +213,6 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
         let h = hi;
         let (t_min, _) = range(h);
         let sigma2 = self.variance.to_f64();
-        let c = self.norm.to_f64();
         let n = N as f64;
         let tt = self.t.to_f64();
         let mut comps = Vec::with_capacity(m);
@@ -168,9 +223,28 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
             let rel = h * (nu * t - s - lg).exp();
             fit.push((rel, s));
             // Component: p(0)·rel·exp(−s T |ζ|²) = σⱼ² |Λⱼ|^{1/2} g^{Pⱼ},  Pⱼ = I / (2 s T).
-            let var_j = sigma2 * c * rel * (2.0 * s * tt).powf(-0.5 * n);
-            let shape = Gaussian::isotropic(T::lit((2.0 * s * tt).sqrt().recip()))?;
-            comps.push(GaussianPsd::from_spectral_shape(T::lit(var_j), shape)?);
+            // p(0)·rel·(2sT)^{−n/2}; in logs where the plain product leaves the f64 range.
+            let plain = self.peak_value.to_f64() * rel * (2.0 * s * tt).powf(-0.5 * n);
+            let two_st = core::f64::consts::LN_2 + s.ln() + tt.ln();
+            let var_j = if plain.is_finite() && plain > f64::MIN_POSITIVE {
+                plain
+            } else {
+                (sigma2.ln() + self.log_norm + rel.ln() - 0.5 * n * two_st).exp()
+            };
+            let width = T::lit((-0.5 * two_st).exp());
+            let unrepresentable = Error::OutOfRange {
+                what: "K-correlation T, γ (mixture component)",
+                value: tt,
+                expected: "components representable in the scalar type: width (2sT)^{−1/2} \
+                           and variance finite and > 0",
+            };
+            let var_t = T::lit(var_j);
+            if sigma2 > 0.0 && !(var_t > T::zero() && var_t.is_finite()) {
+                return Err(unrepresentable);
+            }
+            let shape = Gaussian::isotropic(width).map_err(|_| unrepresentable.clone())?;
+            comps
+                .push(GaussianPsd::from_spectral_shape(var_t, shape).map_err(|_| unrepresentable)?);
         }
         // A-posteriori uniform error, relative to p(0).
         let mut err = 0.0_f64;
@@ -183,6 +257,13 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
             let exact = (1.0 + x).powf(-nu);
             let approx: f64 = fit.iter().map(|&(w, s)| w * (-s * x).exp()).sum();
             err = err.max((exact - approx).abs());
+        }
+        if !err.is_finite() {
+            return Err(Error::OutOfRange {
+                what: "K-correlation T, γ (mixture fit)",
+                value: err,
+                expected: "a finite measured fit error",
+            });
         }
         Ok((GaussianMixturePsd::new(comps)?, err))
     }
@@ -217,28 +298,50 @@ impl<T: Real> KCorrelation<T, 2> {
     /// ```text
     /// T = B² / (4π²),   γ = C − 1,   σ² = 2π A / ((C − 2) B²)
     /// ```
+    /// The derived `T` and `σ²` must be finite, and positive where the inputs are; then the checks
+    /// of [`KCorrelation::new`] apply, with errors naming `A, B, C`.
     ///
     /// # Errors
-    /// [`Error::OutOfRange`] unless `A ≥ 0`, `B > 0`, `C > 2`.
+    /// [`Error::OutOfRange`]/[`Error::NonFinite`] unless `A ≥ 0`, `B > 0`, `C > 2`, all finite;
+    /// [`Error::OutOfRange`] naming `B` when `T = B²/(4π²)` over- or underflows, naming
+    /// `A, B, C` when `σ²` or the peak over- or underflows.
     pub fn from_abc(a: T, b: T, c: T) -> Result<Self, Error> {
         let two = T::lit(2.0);
         if !(c.is_finite() && c > two) {
-            return Err(Error::OutOfRange {
-                what: "ABC exponent C",
-                value: c.to_f64(),
-                expected: "(2, ∞)",
-            });
+            return Err(bad("ABC exponent C", c, "(2, ∞)"));
         }
         if !(b.is_finite() && b > T::zero()) {
+            return Err(bad("ABC length B", b, "(0, ∞)"));
+        }
+        if !(a.is_finite() && a >= T::zero()) {
+            return Err(bad("ABC amplitude A", a, "[0, ∞)"));
+        }
+        let t = b * b / (T::two_pi() * T::two_pi());
+        if !(t.is_finite() && t > T::zero()) {
             return Err(Error::OutOfRange {
                 what: "ABC length B",
                 value: b.to_f64(),
-                expected: "(0, ∞)",
+                expected: "T = B²/(4π²) finite and > 0",
             });
         }
-        let t = b * b / (T::two_pi() * T::two_pi());
-        let variance = T::two_pi() * a / ((c - two) * b * b);
-        Self::new(variance, t, c - T::one())
+        // σ² = 2π A/((C − 2) B²), in f64 logs (B² and C − 2 may over- or underflow T).
+        let (a64, b64, c64) = (a.to_f64(), b.to_f64(), c.to_f64());
+        let plain = core::f64::consts::TAU * a64 / ((c64 - 2.0) * b64 * b64);
+        let variance = T::lit(
+            if a == T::zero() || (plain.is_finite() && plain > f64::MIN_POSITIVE) {
+                plain
+            } else {
+                (core::f64::consts::TAU.ln() + a64.ln() - (c64 - 2.0).ln() - 2.0 * b64.ln()).exp()
+            },
+        );
+        if a > T::zero() && !(variance.is_finite() && variance > T::zero()) {
+            return Err(Error::OutOfRange {
+                what: "ABC parameters A, B, C",
+                value: variance.to_f64(),
+                expected: "σ² = 2πA/((C − 2)B²) finite and > 0",
+            });
+        }
+        Self::build(variance, t, c - T::one(), "ABC parameters A, B, C")
     }
 
     /// Back to SCATMECH's `(A, B, C)`.

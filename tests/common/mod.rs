@@ -34,7 +34,12 @@ impl Tol {
     pub const fn new(abs: f64, rel: f64) -> Self {
         Self { abs, rel }
     }
+    /// `|a − b| ≤ abs + rel·max(|a|, |b|)` for finite values; a non-finite value is accepted
+    /// only against the very same value (`rel·∞` would otherwise accept ∞ against anything).
     pub fn accepts(self, a: f64, b: f64) -> bool {
+        if !(a.is_finite() && b.is_finite()) {
+            return a == b;
+        }
         (a - b).abs() <= self.abs + self.rel * a.abs().max(b.abs())
     }
 }
