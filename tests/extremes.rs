@@ -591,33 +591,56 @@ fn bright_wide_lobe_overflows_without_nan() {
     }
 }
 
-/// Regression (CI failure with a random seed, the minimal input): λ = 1, w/λ = 0.2204,
-/// anisotropy 4.67e5, shape angle 2.138, Θ_y = 1.024 Θ_x, θ_i = 85.47°, exit 89.99° at φ =
-/// 1.244, ℓ/λ = 1, σ/λ = 0.05, S = (1e-3, −1.69e-4, 5.41e-4, 0): the f64 Full·Partial specular
-/// output was (3.26e-35, 3.13e-35, 2.96e-35, 0), DoP 1.32. Now valid at every level, in both
-/// precisions and at several azimuths.
+/// Regressions found by randomized runs of `two_shape_kernel_finite_nonnegative_valid` (kept as
+/// explicit scenes: a `.proptest-regressions` seed replays a different case once the strategy
+/// changes). (1) CI with a random seed, the minimal input: the f64 Full·Partial
+/// specular output was (3.26e-35, 3.13e-35, 2.96e-35, 0), DoP 1.32. (2) A ×20 search on the
+/// earlier kernel: anisotropy 7.99e5, θ_i = 80.69°, exit 89.99°: specular S0 = 1.2688e-10 <
+/// |S| = 1.296e-10. Now valid at every level, in both precisions and at several azimuths.
 #[test]
 fn two_shape_grazing_regression() {
-    for azimuth in [0.0, 1.0, -2.5] {
-        let s = Scene {
-            lambda: 1.0,
-            width_over_lambda: 0.2204,
-            anisotropy: 4.67e5,
-            shape_angle: 2.138,
-            ratio: 1.024,
-            theta_i_deg: 85.47,
-            azimuth,
-            exit: Exit::General {
-                theta_deg: 89.99,
-                phi: 1.244,
-            },
-            ell_over_lambda: 1.0,
-            sigma_over_lambda: 0.05,
-            stokes: Vector4::new(1e-3, -1.69e-4, 5.41e-4, 0.0),
-            s0_scale: 1.0,
-        };
-        kernel_properties::<f64>(&s, true).unwrap();
-        kernel_properties::<f32>(&s, true).unwrap();
+    let cases = [
+        (
+            0.2204,
+            4.67e5,
+            2.138,
+            1.024,
+            85.47,
+            1.244,
+            [1e-3, -1.69e-4, 5.41e-4, 0.0],
+        ),
+        (
+            2.6945164352173556,
+            799176.5151926446,
+            1.0459807698106476,
+            1.5661073018952771,
+            80.68959861571572,
+            0.41517067311186784,
+            [0.001, -0.0002040667337120344, -0.0009668793632315, 0.0],
+        ),
+    ];
+    for (w, aniso, angle, ratio, ti, phi, st) in cases {
+        for azimuth in [0.0, 1.0, -2.5] {
+            let s = Scene {
+                lambda: 1.0,
+                width_over_lambda: w,
+                anisotropy: aniso,
+                shape_angle: angle,
+                ratio,
+                theta_i_deg: ti,
+                azimuth,
+                exit: Exit::General {
+                    theta_deg: 89.99,
+                    phi,
+                },
+                ell_over_lambda: 1.0,
+                sigma_over_lambda: 0.05,
+                stokes: Vector4::from(st),
+                s0_scale: 1.0,
+            };
+            kernel_properties::<f64>(&s, true).unwrap();
+            kernel_properties::<f32>(&s, true).unwrap();
+        }
     }
 }
 
