@@ -363,6 +363,65 @@ fn non_positive_wavelengths_are_rejected() {
     }
 }
 
+/// Regression (validation gaps): `Geometry::new` accepted a wavenumber `k` that is NaN, ±∞, 0,
+/// negative or subnormal (and its fields were public, so every check could be bypassed; they
+/// are read through accessors now); a subnormal wavelength gave `k = ∞` and a subnormal `σ_zz`
+/// gave `1/σ_zz² = ∞`. Each is now an `OutOfRange` error naming the input, in f32 and f64.
+#[test]
+fn wavenumbers_and_coherence_lengths_must_be_normal() {
+    fn check<T: gmueller::Real>() {
+        let f = Frame::<T>::new(
+            Vector3::new(T::one(), T::zero(), T::zero()),
+            Vector3::new(T::zero(), T::one(), T::zero()),
+            Vector3::new(T::zero(), T::zero(), T::one()),
+        )
+        .unwrap();
+        let (up, out) = (
+            Vector3::new(T::zero(), T::zero(), T::one()),
+            Vector3::new(T::lit(0.3), T::zero(), T::lit(0.9)),
+        );
+        let sub = T::MIN_POSITIVE * T::lit(0.25);
+        for k in [
+            T::lit(f64::NAN),
+            T::lit(f64::INFINITY),
+            T::lit(f64::NEG_INFINITY),
+            T::zero(),
+            -T::zero(),
+            -T::one(),
+            sub,
+        ] {
+            rejects(
+                &format!("Geometry::new k = {:e}", k.to_f64()),
+                Geometry::new(k, &f, up, out),
+                &["wavenumber"],
+            );
+        }
+        assert!(Geometry::new(T::MIN_POSITIVE, &f, up, out).is_ok());
+        let s = Stokes::<T>::unpolarized(T::one()).unwrap();
+        let w = CoherenceShape::isotropic(T::one()).unwrap();
+        for lambda in [sub, T::MIN_POSITIVE] {
+            rejects(
+                &format!("wavelength {:e}", lambda.to_f64()),
+                WavePacket::from_stokes(s, w, f, lambda),
+                &["wavelength"],
+            );
+        }
+        let p = WavePacket::from_stokes(s, w, f, T::lit(0.5)).unwrap();
+        for sz in [sub, T::MIN_POSITIVE] {
+            rejects(
+                &format!("σ_zz {:e}", sz.to_f64()),
+                p.with_longitudinal_coherence(sz),
+                &["longitudinal coherence"],
+            );
+        }
+        // Huge σ_zz: its square overflows, which is unbounded coherence (the limit).
+        let huge = p.with_longitudinal_coherence(T::MAX).unwrap();
+        assert_eq!(huge.inverse_longitudinal_variance(), T::zero());
+    }
+    check::<f32>();
+    check::<f64>();
+}
+
 #[test]
 fn overpolarized_stokes_and_mu_above_one_are_rejected() {
     rejects(

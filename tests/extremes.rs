@@ -181,14 +181,12 @@ fn build_rounded<T: Real>(s: &Scene, two_shapes: bool, round: fn(f64) -> f64) ->
     let mut st = s.stokes;
     if two_shapes {
         // Shrink (S2, S3) inside the realizability bound |μ|² ≤ √(|Θx||Θy|)/|Θ½| of the very
-        // matrices the packet holds (4r/(1+r)² before rounding; Θ½ = (Θx + Θy)/2 formed in T
-        // as the packet forms it), with determinants in f64 (exact products of f32 entries).
-        let det = |m: Matrix2<T>| {
-            let m = m.map(|x| x.to_f64());
-            m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)]
-        };
-        let half = (mx + my) * T::lit(0.5);
-        let bound = (det(mx) / det(half)).sqrt() * (det(my) / det(half)).sqrt();
+        // matrices the packet holds (4r/(1+r)² before rounding), Θ½ = (Θx + Θy)/2 and the
+        // determinants in f64 (exact for f32 entries, as the packet forms them).
+        let det = |m: Matrix2<f64>| m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+        let (x64, y64) = (mx.map(|x| x.to_f64()), my.map(|x| x.to_f64()));
+        let half = (x64 + y64) * 0.5;
+        let bound = (det(x64) / det(half)).sqrt() * (det(y64) / det(half)).sqrt();
         st[2] *= bound.sqrt() * 0.999;
         st[3] *= bound.sqrt() * 0.999;
     }
@@ -357,6 +355,8 @@ proptest! {
     fn heavy_kernel_sweep(s in scene(1e6)) {
         kernel_properties::<f64>(&s, false)?;
         kernel_properties::<f32>(&s, false)?;
+        kernel_properties::<f64>(&s, true)?;
+        kernel_properties::<f32>(&s, true)?;
         realizability::<f64>(&s)?;
         realizability::<f32>(&s)?;
     }
