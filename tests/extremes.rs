@@ -1316,6 +1316,18 @@ fn error_table(n: usize) -> Vec<Row> {
         if kappa > 1e-2 {
             continue;
         }
+        // Directions within 1e-3 rad of the normal but not on it: the s/p frames of the two
+        // precisions differ there (`Frame::sp` switches to a tangent of n̂ below √ε, 3.5e-4 rad
+        // in f32, 1.5e-8 in f64), so the same Stokes numbers describe different light. The
+        // switch itself is tested by `normal_incidence_switch_is_invisible_in_a_fixed_frame`.
+        let (travel, exit) = directions(&s);
+        let near_normal = |v: Vector3<f64>| {
+            let t = v.x.hypot(v.y) / v.norm();
+            t > 0.0 && t < 1e-3
+        };
+        if near_normal(travel) || near_normal(exit) {
+            continue;
+        }
         used += 1;
         let b64 = build_rounded::<f64>(&s, false, r32);
         let b32 = build_rounded::<f32>(&s, false, r32);
