@@ -764,7 +764,13 @@ pub(crate) fn det2<T: Real>(m: &Matrix2<T>) -> T {
 /// `κ ε₃₂ ≈ 6 %`).
 #[inline]
 pub(crate) fn pow2_scale<T: Real>(x: T) -> T {
-    T::lit(2f64.powi(x.to_f64().log2().floor() as i32))
+    // The exponent bits of x as an f64 (exact for f32 and f64 values): 2^⌊log₂ x⌋ for normal
+    // x; subnormal or zero x (exponent field 0) take the slow path.
+    let bits = x.to_f64().to_bits() & 0x7ff0_0000_0000_0000;
+    if bits == 0 {
+        return T::lit(2f64.powi(x.to_f64().log2().floor() as i32));
+    }
+    T::lit(f64::from_bits(bits))
 }
 
 /// Inverse of a 2×2 matrix by its adjugate (the callers pass SPD matrices).

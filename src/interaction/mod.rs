@@ -202,6 +202,12 @@ fn ln_two_pi<T: Real>() -> T {
     T::lit(core::f64::consts::TAU.ln())
 }
 
+/// `ln` of the smallest positive subnormal number of `T` (`ln(ε · MIN_POSITIVE)`).
+#[inline]
+fn ln_smallest_subnormal<T: Real>() -> f64 {
+    (T::EPSILON.to_f64() * T::MIN_POSITIVE.to_f64()).ln()
+}
+
 /// `−∞` (the logarithm of a zero weight).
 #[inline]
 fn neg_infinity<T: Real>() -> T {
@@ -444,11 +450,12 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         Sc: Pbsdf<T>,
     {
         let psd = &material.psd;
-        // ln(cos θ_o/λ² · α), λ = 2π/k: ln cos θ_o + 2 ln k − 2 ln 2π − (vσ)².
+        // ln(α/λ²), λ = 2π/k: 2 ln k − 2 ln 2π − (vσ)². The factor cos θ_o ∈ (0, 1] multiplies
+        // the Stokes vector instead (one logarithm less per exit; it cannot underflow it).
         let v = g.k * (g.cos_i + g.cos_o);
         let ln_alpha = -(v * v) * psd.variance();
         let attenuation = ln_alpha.exp();
-        let ln_front = g.cos_o.ln() + prepared.two_ln_k_over_2pi + ln_alpha;
+        let ln_front = prepared.two_ln_k_over_2pi + ln_alpha;
         let log_weights = |xi: &Option<Gaussian<T, 2>>| {
             (
                 Coh::log_specular_weight(xi.as_ref(), &g.h_t),
@@ -462,9 +469,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
                 let (ls, ld) = log_weights(xi_half);
                 // Off the specular lobe (and always for a plane wave) its weight is 0.
                 let scalar = |ln_e: T, m00: T| {
-                    Stokes(
-                        prepared.scaled(Vector4::new(m00, T::zero(), T::zero(), T::zero()), ln_e),
-                    )
+                    let u = Vector4::new(m00 * g.cos_o, T::zero(), T::zero(), T::zero());
+                    Stokes(prepared.scaled(u, ln_e))
                 };
                 let (ls, ld) = (ln_front + ls, ln_front + ld);
                 Response {
@@ -523,9 +529,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         }
     }
 
-    /// `M · v · e^{ln_e} · S0` for the specular and scattered parts: `v` is the effective
-    /// (normalised, valid) Stokes vector in the incident s/p frame and `ln_e` the logarithm of
-    /// the remaining scalar factor, applied last ([`PreparedPacket::scaled`]).
+    /// `M · v cos θ_o · e^{ln_e} · S0` for the specular and scattered parts: `v` is the
+    /// effective (normalised, valid) Stokes vector in the incident s/p frame and `ln_e` the
+    /// logarithm of the remaining scalar factor, applied last ([`PreparedPacket::scaled`]).
     fn finish<T: Real, P, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
         &self,
         material: &RoughSurface<P, Sp, Sc>,
@@ -537,14 +543,14 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
     ) -> Response<T> {
         // Off the specular lobe its weight underflows: skip the specular pBSDF there.
         let specular = if Coh::USES_SHAPE && !prepared.is_dark(spec_ln) {
-            prepared.scaled(material.specular.mueller(g).0 * spec_in, spec_ln)
+            prepared.scaled(material.specular.mueller(g).0 * (spec_in * g.cos_o), spec_ln)
         } else {
             Vector4::zeros()
         };
         let scattered = if prepared.is_dark(scat_ln) {
             Vector4::zeros()
         } else {
-            prepared.scaled(material.scatter.mueller(g).0 * scat_in, scat_ln)
+            prepared.scaled(material.scatter.mueller(g).0 * (scat_in * g.cos_o), scat_ln)
         };
         Response {
             specular: Stokes(specular),
@@ -611,21 +617,35 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
             PolarizationLevel::Scalar => Matrix4::identity(),
             _ => frame_change_mueller(packet.frame(), incident_sp).0,
         };
-        let half = T::lit(0.5);
-        let c = hat[2].hypot(hat[3]);
-        let phase = if c > T::zero() {
-            (hat[2] / c, hat[3] / c)
+        // The channel intensities in log form, for the Full level's channel mix only.
+        let (ln_sx, ln_sy, ln_c, phase) = if matches!(Pol::LEVEL, PolarizationLevel::Full)
+            && Coh::USES_SHAPE
+        {
+            let half = T::lit(0.5);
+            let c = hat[2].hypot(hat[3]);
+            let phase = if c > T::zero() {
+                (hat[2] / c, hat[3] / c)
+            } else {
+                (T::zero(), T::zero())
+            };
+            (
+                ((hat[0] + hat[1]) * half).ln(),
+                ((hat[0] - hat[1]) * half).ln(),
+                (c * half).ln(),
+                phase,
+            )
         } else {
-            (T::zero(), T::zero())
+            (T::zero(), T::zero(), T::zero(), (T::zero(), T::zero()))
         };
         let k = packet.wavenumber();
+        let ln_s0 = s0.ln();
         Self {
-            ln_s0: s0.ln(),
-            dark_below: (T::MIN_POSITIVE * T::EPSILON).ln() - s0.ln(),
+            ln_s0,
+            dark_below: T::lit(ln_smallest_subnormal::<T>()) - ln_s0,
             two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
-            ln_sx: ((hat[0] + hat[1]) * half).ln(),
-            ln_sy: ((hat[0] - hat[1]) * half).ln(),
-            ln_c: (c * half).ln(),
+            ln_sx,
+            ln_sy,
+            ln_c,
             phase,
             t,
             t_stokes: t * hat,
