@@ -487,32 +487,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
                     attenuation,
                 }
             }
-            PolarizationLevel::OneShape => {
-                let (ls, ld) = log_weights(xi_half);
-                let t = prepared.t_stokes;
-                self.finish(
-                    material,
-                    g,
-                    prepared,
-                    (t, ln_front + ls),
-                    (t, ln_front + ld),
-                    attenuation,
-                )
-            }
-            PolarizationLevel::Full if !Coh::USES_SHAPE => {
-                // Without shapes the three channels' weights are one and the same: M T S K.
-                let (ls, ld) = log_weights(xi_half);
-                let t = prepared.t_stokes;
-                self.finish(
-                    material,
-                    g,
-                    prepared,
-                    (t, ln_front + ls),
-                    (t, ln_front + ld),
-                    attenuation,
-                )
-            }
-            PolarizationLevel::Full => {
+            PolarizationLevel::Full if Coh::USES_SHAPE => {
                 let ((xs, xd), (ys, yd), (hs, hd)) =
                     (log_weights(xi_x), log_weights(xi_y), log_weights(xi_half));
                 let spec = prepared.channel_mix(xs, ys, hs);
@@ -523,6 +498,20 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
                     prepared,
                     (spec.0, ln_front + spec.1),
                     (scat.0, ln_front + scat.1),
+                    attenuation,
+                )
+            }
+            // OneShape, and Full without shapes (the three channels' weights are then one and
+            // the same): M T S K.
+            PolarizationLevel::OneShape | PolarizationLevel::Full => {
+                let (ls, ld) = log_weights(xi_half);
+                let t = prepared.t_stokes;
+                self.finish(
+                    material,
+                    g,
+                    prepared,
+                    (t, ln_front + ls),
+                    (t, ln_front + ld),
                     attenuation,
                 )
             }
@@ -543,7 +532,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
     ) -> Response<T> {
         // Off the specular lobe its weight underflows: skip the specular pBSDF there.
         let specular = if Coh::USES_SHAPE && !prepared.is_dark(spec_ln) {
-            prepared.scaled(material.specular.mueller(g).0 * (spec_in * g.cos_o), spec_ln)
+            prepared.scaled(
+                material.specular.mueller(g).0 * (spec_in * g.cos_o),
+                spec_ln,
+            )
         } else {
             Vector4::zeros()
         };
@@ -618,25 +610,24 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
             _ => frame_change_mueller(packet.frame(), incident_sp).0,
         };
         // The channel intensities in log form, for the Full level's channel mix only.
-        let (ln_sx, ln_sy, ln_c, phase) = if matches!(Pol::LEVEL, PolarizationLevel::Full)
-            && Coh::USES_SHAPE
-        {
-            let half = T::lit(0.5);
-            let c = hat[2].hypot(hat[3]);
-            let phase = if c > T::zero() {
-                (hat[2] / c, hat[3] / c)
+        let (ln_sx, ln_sy, ln_c, phase) =
+            if matches!(Pol::LEVEL, PolarizationLevel::Full) && Coh::USES_SHAPE {
+                let half = T::lit(0.5);
+                let c = hat[2].hypot(hat[3]);
+                let phase = if c > T::zero() {
+                    (hat[2] / c, hat[3] / c)
+                } else {
+                    (T::zero(), T::zero())
+                };
+                (
+                    ((hat[0] + hat[1]) * half).ln(),
+                    ((hat[0] - hat[1]) * half).ln(),
+                    (c * half).ln(),
+                    phase,
+                )
             } else {
-                (T::zero(), T::zero())
+                (T::zero(), T::zero(), T::zero(), (T::zero(), T::zero()))
             };
-            (
-                ((hat[0] + hat[1]) * half).ln(),
-                ((hat[0] - hat[1]) * half).ln(),
-                (c * half).ln(),
-                phase,
-            )
-        } else {
-            (T::zero(), T::zero(), T::zero(), (T::zero(), T::zero()))
-        };
         let k = packet.wavenumber();
         let ln_s0 = s0.ln();
         Self {

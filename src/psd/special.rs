@@ -1,50 +1,40 @@
 //! Special functions used at construction time (f64): ln Γ and ln Γ(x)/Γ(x − a).
 
+/// The Lanczos approximation's shift `g` (g = 7, n = 9).
+const LANCZOS_G: f64 = 7.0;
+
+/// The Lanczos coefficients for `g = 7`, `n = 9`.
+const LANCZOS_C: [f64; 9] = [
+    0.99999999999980993,
+    676.5203681218851,
+    -1259.1392167224028,
+    771.32342877765313,
+    -176.61502916214059,
+    12.507343278686905,
+    -0.13857109526572012,
+    9.9843695780195716e-6,
+    1.5056327351493116e-7,
+];
+
 /// `ln Γ(x)` for `x > 0` (Lanczos, g = 7, n = 9; relative error ≈ 1e-15).
 pub(crate) fn ln_gamma(x: f64) -> f64 {
-    const G: f64 = 7.0;
-    const C: [f64; 9] = [
-        0.99999999999980993,
-        676.5203681218851,
-        -1259.1392167224028,
-        771.32342877765313,
-        -176.61502916214059,
-        12.507343278686905,
-        -0.13857109526572012,
-        9.9843695780195716e-6,
-        1.5056327351493116e-7,
-    ];
     if x < 0.5 {
         // Reflection: Γ(x) Γ(1 − x) = π / sin(πx).
         let pi = core::f64::consts::PI;
         return (pi / (pi * x).sin()).abs().ln() - ln_gamma(1.0 - x);
     }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + G + 0.5;
-    for (i, c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * core::f64::consts::TAU.ln() + (x + 0.5) * t.ln() - t + a.ln()
+    let z = x - 1.0;
+    let t = z + LANCZOS_G + 0.5;
+    0.5 * core::f64::consts::TAU.ln() + (z + 0.5) * t.ln() - t + lanczos_series(z).ln()
 }
 
 /// The Lanczos series `A(z) = c₀ + Σᵢ cᵢ/(z + i)` of [`ln_gamma`] (`z = x − 1`).
 fn lanczos_series(z: f64) -> f64 {
-    const C: [f64; 9] = [
-        0.99999999999980993,
-        676.5203681218851,
-        -1259.1392167224028,
-        771.32342877765313,
-        -176.61502916214059,
-        12.507343278686905,
-        -0.13857109526572012,
-        9.9843695780195716e-6,
-        1.5056327351493116e-7,
-    ];
-    C.iter()
+    LANCZOS_C
+        .iter()
         .enumerate()
         .skip(1)
-        .fold(C[0], |acc, (i, c)| acc + c / (z + i as f64))
+        .fold(LANCZOS_C[0], |acc, (i, c)| acc + c / (z + i as f64))
 }
 
 /// `ln Γ(x) − ln Γ(x − a)` for `x − a > 0`, `a ≥ 0`, without the cancellation of the plain
@@ -61,7 +51,7 @@ pub(crate) fn ln_gamma_ratio(x: f64, a: f64) -> f64 {
     if y < 0.5 {
         return ln_gamma(x) - ln_gamma(y);
     }
-    let tx = x + 7.0 - 0.5;
+    let tx = x + LANCZOS_G - 0.5;
     a * tx.ln() - (y - 0.5) * (-a / tx).ln_1p() - a
         + (lanczos_series(x - 1.0) / lanczos_series(y - 1.0)).ln()
 }
