@@ -112,26 +112,46 @@ pub(crate) fn cholesky<T: Real, const N: usize>(
     Ok(l)
 }
 
-/// The Cholesky factor of `A + B` from the Cholesky factors `L_a`, `L_b` of `A` and `B`,
-/// without forming the sum where that loses digits; `None` unless it is positive definite.
+/// The Cholesky factor of the sum of two Gaussians' covariances, `A + B`; `None` unless it is
+/// positive definite.
 ///
 /// # Formula (N = 2)
 /// ```text
-/// A + B = M Mᵀ,   M = [L_a  L_b]  (2×4, columns c₁ … c₄)
-/// ℓ₁₁ = |M₁|,   ℓ₂₁ = M₁·M₂ / ℓ₁₁,   ℓ₂₂ = √|A + B| / ℓ₁₁,   |A + B| = Σ_{i<j} det[cᵢ cⱼ]²
+/// plain:  L = chol(A + B), kept when its last pivot ℓ₂₂² ≥ (A + B)₂₂ / 16 (≤ 16 ε lost to the
+///         cancellation in (A + B)₂₂ − ℓ₂₁²)
+/// else:   A + B = M Mᵀ,   M = [L_a  L_b]  (2×4, columns c₁ … c₄)
+///         ℓ₁₁ = |M₁|,   ℓ₂₁ = M₁·M₂ / ℓ₁₁,   ℓ₂₂ = √|A + B| / ℓ₁₁,   |A + B| = Σ_{i<j} det[cᵢ cⱼ]²
 /// ```
 /// (`M₁`, `M₂` the rows of `M`; Cauchy–Binet for the determinant, each minor by
 /// [`Real::diff_of_products`]). Why: the section of the coherence by the surface at grazing
 /// incidence has a condition number of `1/cos²θ_i` ≈ 3·10⁷ at 89.99°, beyond `1/ε₃₂`; adding
 /// it to the PSD's spectral covariance as matrices and factoring the sum lost the small
-/// eigenvalue in `f32` (the blur came out 0). Other `N`: the sum is formed and factored.
+/// eigenvalue in `f32` (the blur came out 0). The plain factorisation is kept where it is
+/// accurate, which is almost everywhere, because it is cheaper. Other `N`: the plain one.
+#[inline]
 pub(crate) fn cholesky_of_sum<T: Real, const N: usize>(
+    a: &Gaussian<T, N>,
+    b: &Gaussian<T, N>,
+) -> Option<SMatrix<T, N, N>> {
+    let sum = a.cov + b.cov;
+    let plain = cholesky(&sum).ok();
+    if N != 2 {
+        return plain;
+    }
+    if let Some(l) = plain
+        && l[(1, 1)] * l[(1, 1)] * T::lit(16.0) >= sum[(1, 1)]
+    {
+        return Some(l);
+    }
+    cholesky_of_sum_from_factors(&a.chol, &b.chol)
+}
+
+/// The Cauchy–Binet branch of [`cholesky_of_sum`] (`N = 2`).
+#[cold]
+fn cholesky_of_sum_from_factors<T: Real, const N: usize>(
     la: &SMatrix<T, N, N>,
     lb: &SMatrix<T, N, N>,
 ) -> Option<SMatrix<T, N, N>> {
-    if N != 2 {
-        return cholesky(&(la * la.transpose() + lb * lb.transpose())).ok();
-    }
     let (r1, r2) = (
         [la[(0, 0)], la[(0, 1)], lb[(0, 0)], lb[(0, 1)]],
         [la[(1, 0)], la[(1, 1)], lb[(1, 0)], lb[(1, 1)]],

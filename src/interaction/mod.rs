@@ -162,7 +162,8 @@ pub trait CoherenceModel: sealed::Sealed + Copy + Default {
     #[must_use]
     fn log_specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T;
 
-    /// The scattered-channel weight `K = exp(ln K)`.
+    /// The scattered-channel weight `K` itself (`exp(ln K)` by default; the models of this
+    /// crate override it with the cheaper linear forms, 0 where `K` underflows).
     #[inline]
     #[must_use]
     fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
@@ -235,6 +236,15 @@ impl CoherenceModel for PlaneWave {
     fn log_specular_weight<T: Real>(_xi: Option<&Gaussian<T, 2>>, _h_t: &Vector2<T>) -> T {
         neg_infinity()
     }
+    #[inline]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        _blur: &B,
+        _xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T {
+        T::two_pi() * psd.value(h_t)
+    }
 }
 
 impl CoherenceModel for Partial {
@@ -251,6 +261,18 @@ impl CoherenceModel for Partial {
             // which never forms the tiny (p * g^Ξ) of a wide coherence area.
             Some(xi) => ln_two_pi::<T>() + blur.log_normalized_blur(psd, xi, h_t),
             None => ln_two_pi::<T>() + psd.log_value(h_t),
+        }
+    }
+    #[inline]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        blur: &B,
+        xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T {
+        match xi {
+            Some(xi) => T::two_pi() * blur.normalized_blur(psd, xi, h_t),
+            None => T::two_pi() * psd.value(h_t),
         }
     }
     #[inline]
@@ -456,6 +478,28 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         let ln_alpha = -(v * v) * psd.variance();
         let attenuation = ln_alpha.exp();
         let ln_front = prepared.two_ln_k_over_2pi + ln_alpha;
+        // The scattered part at the one-weight levels: the linear weight (one exponential) where
+        // it and the whole scale S0 α K/λ² are safely normal, the log form otherwise.
+        let one_weight_scatter = |u: Vector4<T>| {
+            let kd = Coh::scatter_weight(psd, &self.blur, prepared.sections[2].as_ref(), &g.h_t);
+            match prepared.linear_scale(kd, attenuation) {
+                Some(e) => u * e,
+                None => {
+                    let ld = ln_front
+                        + Coh::log_scatter_weight(
+                            psd,
+                            &self.blur,
+                            prepared.sections[2].as_ref(),
+                            &g.h_t,
+                        );
+                    if prepared.is_dark(ld) {
+                        Vector4::zeros()
+                    } else {
+                        prepared.scaled(u, ld)
+                    }
+                }
+            }
+        };
         let log_weights = |xi: &Option<Gaussian<T, 2>>| {
             (
                 Coh::log_specular_weight(xi.as_ref(), &g.h_t),
@@ -466,24 +510,16 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
         let zero = Stokes(Vector4::zeros());
         match Pol::LEVEL {
             PolarizationLevel::Scalar => {
-                let (ls, ld) = log_weights(xi_half);
                 // Off the specular lobe (and always for a plane wave) its weight is 0.
-                let scalar = |ln_e: T, m00: T| {
-                    let u = Vector4::new(m00 * g.cos_o, T::zero(), T::zero(), T::zero());
-                    Stokes(prepared.scaled(u, ln_e))
-                };
-                let (ls, ld) = (ln_front + ls, ln_front + ld);
+                let ls = ln_front + Coh::log_specular_weight(xi_half.as_ref(), &g.h_t);
+                let s0 = |m00: T| Vector4::new(m00 * g.cos_o, T::zero(), T::zero(), T::zero());
                 Response {
                     specular: if prepared.is_dark(ls) {
                         zero
                     } else {
-                        scalar(ls, material.specular.m00(g))
+                        Stokes(prepared.scaled(s0(material.specular.m00(g)), ls))
                     },
-                    scattered: if prepared.is_dark(ld) {
-                        zero
-                    } else {
-                        scalar(ld, material.scatter.m00(g))
-                    },
+                    scattered: Stokes(one_weight_scatter(s0(material.scatter.m00(g)))),
                     attenuation,
                 }
             }
@@ -504,16 +540,18 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
             // OneShape, and Full without shapes (the three channels' weights are then one and
             // the same): M T S K.
             PolarizationLevel::OneShape | PolarizationLevel::Full => {
-                let (ls, ld) = log_weights(xi_half);
-                let t = prepared.t_stokes;
-                self.finish(
-                    material,
-                    g,
-                    prepared,
-                    (t, ln_front + ls),
-                    (t, ln_front + ld),
+                let ls = ln_front + Coh::log_specular_weight(xi_half.as_ref(), &g.h_t);
+                let t = prepared.t_stokes * g.cos_o;
+                let specular = if Coh::USES_SHAPE && !prepared.is_dark(ls) {
+                    prepared.scaled(material.specular.mueller(g).0 * t, ls)
+                } else {
+                    Vector4::zeros()
+                };
+                Response {
+                    specular: Stokes(specular),
+                    scattered: Stokes(one_weight_scatter(material.scatter.mueller(g).0 * t)),
                     attenuation,
-                )
+                }
             }
         }
     }
@@ -561,8 +599,11 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, B> Kernel<Pol, Coh, B> {
 /// factor. No heap allocation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedPacket<T: Real, Pol, Coh> {
-    /// `ln S0` (−∞ for a dark packet).
+    /// `S0` and `ln S0` (−∞ for a dark packet).
+    s0: T,
     ln_s0: T,
+    /// `1/λ² = (k/2π)²`.
+    inv_lambda_sq: T,
     /// `ln(smallest subnormal) − ln S0`: a part whose `ln_e` lies below is 0.
     dark_below: T,
     /// `2 ln(k/2π) = −2 ln λ`.
@@ -630,8 +671,11 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
             };
         let k = packet.wavenumber();
         let ln_s0 = s0.ln();
+        let k_over_2pi = k / T::two_pi();
         Self {
+            s0,
             ln_s0,
+            inv_lambda_sq: k_over_2pi * k_over_2pi,
             dark_below: T::lit(ln_smallest_subnormal::<T>()) - ln_s0,
             two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
             ln_sx,
@@ -683,6 +727,21 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> PreparedPacket<T, Pol
             two_rh * self.phase.1,
         );
         (self.t * v, m)
+    }
+
+    /// `S0 α K/λ²` when the weight `K` lies in [1e-30, 1e30] (so it has not lost digits to
+    /// underflow) and the product is a normal number: the linear form of the scale of a
+    /// one-weight part. `None` otherwise (the caller then takes the log form).
+    #[inline]
+    fn linear_scale(&self, weight: T, attenuation: T) -> Option<T> {
+        if !crate::gaussian::in_normal_range(weight) {
+            return None;
+        }
+        // Every partial product normal too: a subnormal one would keep only a few digits.
+        let normal = |x: T| x >= T::MIN_POSITIVE && x <= T::MAX;
+        let p = weight * attenuation * self.inv_lambda_sq;
+        let e = p * self.s0;
+        (normal(p) && normal(e)).then_some(e)
     }
 
     /// `true` when `S0 e^{ln_e}` is below the smallest subnormal number, so that the part is 0

@@ -257,7 +257,7 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     /// [`crate::gaussian::cholesky_of_sum`]) and `|L⁻¹h|²` (`None` when the sum overflows).
     #[inline]
     fn blur_parts(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> Option<(SMatrix<T, N, N>, T)> {
-        let l = cholesky_of_sum(self.spectral.cholesky_factor(), cov.cholesky_factor())?;
+        let l = cholesky_of_sum(&self.spectral, cov)?;
         let m = mahalanobis_from_cholesky(&l, h);
         Some((l, m))
     }
@@ -438,6 +438,9 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianMixturePsd<T, N>> for Clo
             acc + ClosedForm.normalized_blur(c, cov, h)
         })
     }
+    /// The logarithm of the linear sum where that is a safely normal number (one logarithm for
+    /// the mixture), log-sum-exp of the components' logarithms otherwise (tails far below the
+    /// type's range).
     #[inline]
     fn log_normalized_blur(
         &self,
@@ -445,7 +448,12 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianMixturePsd<T, N>> for Clo
         cov: &Gaussian<T, N>,
         h: &SVector<T, N>,
     ) -> T {
-        log_sum_exp(psd.components.iter().map(|c| c.log_normalized_blur(cov, h)))
+        let v = ClosedForm.normalized_blur(psd, cov, h);
+        if in_normal_range(v) {
+            v.ln()
+        } else {
+            log_sum_exp(psd.components.iter().map(|c| c.log_normalized_blur(cov, h)))
+        }
     }
 }
 

@@ -432,7 +432,8 @@ impl<T: Real, const N: usize> BlurMethod<T, N, Grating<T, N>> for ClosedForm {
             acc + *e * (cov.log_value(&(h - z)) - half_log_det).exp()
         })
     }
-    /// Log-sum-exp over the orders of `ln e_m + ln g^Σ(h − ζ_m) − ½ ln|Σ|`.
+    /// The logarithm of the linear sum where that is a safely normal number, log-sum-exp over
+    /// the orders of `ln e_m + ln g^Σ(h − ζ_m) − ½ ln|Σ|` otherwise.
     #[inline]
     fn log_normalized_blur(
         &self,
@@ -440,6 +441,10 @@ impl<T: Real, const N: usize> BlurMethod<T, N, Grating<T, N>> for ClosedForm {
         cov: &Gaussian<T, N>,
         h: &SVector<T, N>,
     ) -> T {
+        let v = ClosedForm.normalized_blur(psd, cov, h);
+        if crate::gaussian::in_normal_range(v) {
+            return v.ln();
+        }
         let half_log_det = T::lit(0.5) * cov.log_det();
         super::log_sum_exp(
             psd.orders
