@@ -255,7 +255,7 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
 
     /// The Cholesky factor `L` of `Λ⁻¹ + Σ` (from the two factors, see
     /// [`crate::gaussian::cholesky_of_sum`]) and `|L⁻¹h|²` (`None` when the sum overflows).
-    #[inline]
+    #[inline(always)]
     fn blur_parts(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> Option<(SMatrix<T, N, N>, T)> {
         let l = cholesky_of_sum(&self.spectral, cov)?;
         let m = mahalanobis_from_cholesky(&l, h);
