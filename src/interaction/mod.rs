@@ -296,6 +296,18 @@ impl CoherenceModel for Incoherent {
         }
     }
     #[inline]
+    fn scatter_weight<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P>>(
+        psd: &P,
+        _blur: &B,
+        xi: Option<&Gaussian<T, 2>>,
+        h_t: &Vector2<T>,
+    ) -> T {
+        match xi {
+            Some(xi) => log_smooth_lobe(xi, h_t).exp() * psd.integral() / T::two_pi(),
+            None => T::two_pi() * psd.value(h_t),
+        }
+    }
+    #[inline]
     fn log_specular_weight<T: Real>(xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
         xi.map_or(neg_infinity(), |xi| log_smooth_lobe(xi, h_t))
     }
