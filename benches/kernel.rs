@@ -1,5 +1,5 @@
 //! Criterion benches of the S2.20 kernel (`gmueller::interaction`): every model level
-//! (Scalar/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD and the closed-form
+//! (Intensity/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD and the closed-form
 //! blur, Partial with a K-correlation PSD through Gauss–Hermite (orders 3, 5, 8) and through a
 //! Gaussian-mixture fit (8 and 16 components), f32 and f64; a classical incoherent polarized
 //! baseline (Fresnel Mueller × PSD at the half vector × Stokes, geometry precomputed the same
@@ -19,13 +19,13 @@ use gmueller::frame::Frame;
 use gmueller::fresnel;
 use gmueller::interaction::batch::{DirectionsSoa, StokesSoa, plane_wave_rayleigh_rice};
 use gmueller::interaction::{
-    CoherenceModel, FresnelReflection, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
-    PlaneWave, PolarizationModel, RayleighRice, RoughSurface, Scalar,
+    CoherenceWeights, FresnelReflection, Full, Geometry, Incoherent, Intensity, Kernel, OneShape,
+    Partial, PlaneWave, PolarizationModel, RayleighRice, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::mueller::batch::padded_stride;
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
+use gmueller::psd::{ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector3};
 use num_complex::Complex;
@@ -105,21 +105,20 @@ fn glass<T: Real, P>(psd: P) -> RoughSurface<P, FresnelReflection<T>, RayleighRi
     }
 }
 
-fn bench_level<T, Pol, Coh, P, B>(
+fn bench_level<T, Pol, Coh, P>(
     c: &mut Criterion,
     group: &str,
     name: &str,
-    blur: B,
+    coherence: Coh,
     material: &RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
 ) where
     T: Real,
     Pol: PolarizationModel,
-    Coh: CoherenceModel,
+    Coh: CoherenceWeights<T, P>,
     P: Psd<T, 2>,
-    B: BlurMethod<T, 2, P> + Clone,
 {
     let mut g = c.benchmark_group(group);
-    let kernel = Kernel::<Pol, Coh, B>::new(blur);
+    let kernel = Kernel::<Pol, Coh>::new(coherence);
     let sc = scenes::<T>();
     g.bench_function(BenchmarkId::new(name, "seeded"), |b| {
         let mut i = 0;
@@ -181,18 +180,18 @@ fn levels_for<T: Real>(c: &mut Criterion, prec: &str) {
     let group = format!("kernel_gaussian/{prec}");
     macro_rules! lv {
         ($pol:ty, $coh:ty) => {
-            bench_level::<T, $pol, $coh, _, _>(
+            bench_level::<T, $pol, $coh, _>(
                 c,
                 &group,
                 concat!(stringify!($pol), "x", stringify!($coh)),
-                ClosedForm,
+                <$coh>::default(),
                 &m,
             )
         };
     }
-    lv!(Scalar, PlaneWave);
-    lv!(Scalar, Partial);
-    lv!(Scalar, Incoherent);
+    lv!(Intensity, PlaneWave);
+    lv!(Intensity, Partial);
+    lv!(Intensity, Incoherent);
     lv!(OneShape, PlaneWave);
     lv!(OneShape, Partial);
     lv!(OneShape, Incoherent);
@@ -205,22 +204,22 @@ fn levels_for<T: Real>(c: &mut Criterion, prec: &str) {
     let mk = glass(kc);
     let group = format!("kernel_kcorrelation/{prec}");
     for order in [3usize, 5, 8] {
-        bench_level::<T, Full, Partial, _, _>(
+        bench_level::<T, Full, _, _>(
             c,
             &group,
             &format!("FullxPartial/GaussHermite{order}"),
-            GaussHermite::<T>::new(order).unwrap(),
+            Partial(GaussHermite::<T>::new(order).unwrap()),
             &mk,
         );
     }
     for comps in [8usize, 16] {
         let (mix, err) = kc.mixture_fit(comps).unwrap();
         eprintln!("K-correlation mixture fit, {comps} components: sup error / p(0) = {err:.2e}");
-        bench_level::<T, Full, Partial, _, _>(
+        bench_level::<T, Full, Partial, _>(
             c,
             &group,
             &format!("FullxPartial/Mixture{comps}"),
-            ClosedForm,
+            Partial(ClosedForm),
             &glass(mix),
         );
     }
@@ -263,7 +262,7 @@ fn geometry_for<T: Real>(c: &mut Criterion, prec: &str) {
     // below, none for a plane wave.
     macro_rules! prepare {
         ($pol:ty, $coh:ty) => {{
-            let kernel = Kernel::<$pol, $coh, ClosedForm>::new(ClosedForm);
+            let kernel = Kernel::<$pol, $coh>::default();
             g.bench_function(
                 BenchmarkId::new("prepare", concat!(stringify!($pol), "x", stringify!($coh))),
                 |b| {
@@ -313,7 +312,7 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
     const M: usize = 1024;
     let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
     let material = glass::<T, _>(psd);
-    let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Full, PlaneWave>::default();
     let surf = surface::<T>();
     let mut g = c.benchmark_group(format!("kernel_batch/{prec}"));
     g.throughput(criterion::Throughput::Elements(M as u64));

@@ -12,7 +12,6 @@ use num_complex::Complex;
 
 use crate::error::{Error, ensure_finite};
 use crate::real::{Real, complex_is_finite};
-use crate::stokes::Stokes;
 
 /// The handedness of a circular polarization state, named by the sign of `S3`.
 ///
@@ -207,38 +206,6 @@ impl<T: Real> JonesVector<T> {
     #[must_use]
     pub fn intensity(&self) -> T {
         self.0[0].norm_sqr() + self.0[1].norm_sqr()
-    }
-
-    /// The Stokes vector of this fully polarized state (S1.2 with `C = E E†`).
-    ///
-    /// # Formula
-    /// ```text
-    /// S0 = |E_x|² + |E_y|²,   S1 = |E_x|² − |E_y|²,
-    /// S2 = 2 Re(E_x E_y*),    S3 = 2 Im(E_x* E_y)
-    /// ```
-    /// It satisfies `S0² = S1² + S2² + S3²` up to rounding, so it is returned without the
-    /// validation of [`Stokes::new`].
-    ///
-    /// # Examples
-    /// ```
-    /// use gmueller::jones::JonesVector;
-    /// use num_complex::Complex;
-    /// let v = JonesVector::new(Complex::new(1.0_f64, 0.0), Complex::new(0.0, 1.0)).unwrap();
-    /// let s = v.to_stokes().vector();
-    /// assert!((s[0] - 2.0).abs() < 1e-15 && (s[3] - 2.0).abs() < 1e-15);
-    /// ```
-    #[must_use]
-    pub fn to_stokes(&self) -> Stokes<T> {
-        let (ex, ey) = (self.0[0], self.0[1]);
-        let (xx, yy) = (ex.norm_sqr(), ey.norm_sqr());
-        let c = ex.conj() * ey; // E_x* E_y
-        let two = T::lit(2.0);
-        Stokes::from_vector_unchecked(nalgebra::Vector4::new(
-            xx + yy,
-            xx - yy,
-            two * c.re,
-            two * c.im,
-        ))
     }
 
     /// The state scaled by a complex factor `z` (amplitude `|z|`, phase `arg z`).

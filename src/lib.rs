@@ -45,8 +45,8 @@
 //! };
 //! let exit = Vector3::new(0.5, 0.1, 0.86);
 //! let g = Geometry::for_packet(&sun, &surface, exit)?;
-//! let partial = Kernel::<Full, Partial, ClosedForm>::default().evaluate(&material, &sun, &g);
-//! let classical = Kernel::<Full, PlaneWave, ClosedForm>::default().evaluate(&material, &sun, &g);
+//! let partial = Kernel::<Full, Partial>::default().evaluate(&material, &sun, &g);
+//! let classical = Kernel::<Full, PlaneWave>::default().evaluate(&material, &sun, &g);
 //! // Sunlight's coherence (≈ 34 µm) is far wider than the 1 µm correlation length: the partially
 //! // coherent kernel is within 1 % of the classical (plane-wave) BRDF here.
 //! let rel = (partial.scattered.s0() / classical.scattered.s0() - 1.0).abs();
@@ -85,6 +85,7 @@ pub mod gaussian;
 pub mod interaction;
 pub mod jones;
 pub mod mueller;
+mod numerics;
 pub mod packet;
 pub mod psd;
 pub mod real;

@@ -1,6 +1,6 @@
 //! Verifies that the S2.20 kernel allocates nothing per evaluation: a counting global allocator
 //! (wrapping `std::alloc::System`) counts heap allocations across many evaluations at every
-//! level (Scalar/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD + `ClosedForm`
+//! level (Intensity/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD + `ClosedForm`
 //! and with a K-correlation PSD + Gauss–Hermite blur, plus `Mueller::from_jones`, frame changes
 //! and `Geometry::for_packet`; the count must be zero.
 //!
@@ -21,12 +21,12 @@ use gmueller::Real;
 use gmueller::frame::{Frame, frame_change_mueller, stokes_to_frame};
 use gmueller::fresnel;
 use gmueller::interaction::{
-    CoherenceModel, FresnelReflection, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
-    PlaneWave, PolarizationModel, RayleighRice, RoughSurface, Scalar,
+    CoherenceWeights, FresnelReflection, Geometry, Kernel, KernelOutput, Level, LevelVisitor,
+    PolarizationModel, RayleighRice, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
+use gmueller::psd::{ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector3};
 use num_complex::Complex;
@@ -108,17 +108,16 @@ fn scene<T: Real>() -> Scene<T> {
     }
 }
 
-fn run_level<T, Pol, Coh, P, B>(
+fn run_level<T, Pol, Coh, P>(
     name: &str,
-    kernel: &Kernel<Pol, Coh, B>,
+    kernel: &Kernel<Pol, Coh>,
     material: &RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
     s: &Scene<T>,
 ) where
     T: Real,
     Pol: PolarizationModel,
-    Coh: CoherenceModel,
+    Coh: CoherenceWeights<T, P>,
     P: Psd<T, 2>,
-    B: BlurMethod<T, 2, P>,
 {
     let geometries: Vec<_> = s
         .exits
@@ -130,7 +129,7 @@ fn run_level<T, Pol, Coh, P, B>(
         for _ in 0..20 {
             for g in &geometries {
                 let r = kernel.evaluate(black_box(material), black_box(&s.packet), black_box(g));
-                acc += r.total().s0();
+                acc += r.total_intensity();
             }
         }
         acc
@@ -143,7 +142,7 @@ fn run_level<T, Pol, Coh, P, B>(
         let mut acc = T::zero();
         for g in &geometries {
             let r = kernel.evaluate_prepared(black_box(material), black_box(&prepared), g);
-            acc += r.total().s0();
+            acc += r.total_intensity();
         }
         acc
     });
@@ -152,6 +151,25 @@ fn run_level<T, Pol, Coh, P, B>(
         n, 0,
         "{name}: {n} heap allocations in prepare + 50 evaluations"
     );
+}
+
+/// [`run_level`] for the kernel of a level chosen at run time.
+struct RunLevel<'a, T: Real, P> {
+    name: &'a str,
+    material: &'a RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
+    scene: &'a Scene<T>,
+}
+
+impl<T: Real, P: Psd<T, 2>> LevelVisitor<T, P> for RunLevel<'_, T, P> {
+    type Output = ();
+    fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
+    where
+        Pol: PolarizationModel,
+        Coh: CoherenceWeights<T, P>,
+    {
+        let name = format!("{} {}", level.name(), self.name);
+        run_level(&name, &kernel, self.material, self.scene);
+    }
 }
 
 fn all_levels<T: Real>() {
@@ -168,32 +186,24 @@ fn all_levels<T: Real>() {
         scatter: RayleighRice::new(eta).unwrap(),
     };
     let gh = GaussHermite::<T>::new(6).unwrap();
-    macro_rules! level {
-        ($pol:ty, $coh:ty) => {{
-            let name = concat!(stringify!($pol), "×", stringify!($coh));
-            run_level(
-                &format!("{name} Gaussian/ClosedForm"),
-                &Kernel::<$pol, $coh, ClosedForm>::new(ClosedForm),
-                &gaussian,
-                &s,
-            );
-            run_level(
-                &format!("{name} KCorrelation/GaussHermite"),
-                &Kernel::<$pol, $coh, GaussHermite<T>>::new(gh.clone()),
-                &kc,
-                &s,
-            );
-        }};
+    for level in Level::ALL {
+        level.dispatch(
+            ClosedForm,
+            RunLevel {
+                name: "Gaussian/ClosedForm",
+                material: &gaussian,
+                scene: &s,
+            },
+        );
+        level.dispatch(
+            gh.clone(),
+            RunLevel {
+                name: "KCorrelation/GaussHermite",
+                material: &kc,
+                scene: &s,
+            },
+        );
     }
-    level!(Scalar, PlaneWave);
-    level!(Scalar, Partial);
-    level!(Scalar, Incoherent);
-    level!(OneShape, PlaneWave);
-    level!(OneShape, Partial);
-    level!(OneShape, Incoherent);
-    level!(Full, PlaneWave);
-    level!(Full, Partial);
-    level!(Full, Incoherent);
 
     // The building blocks on their own.
     let g0 = Geometry::for_packet(&s.packet, &s.surface, s.exits[3]).unwrap();

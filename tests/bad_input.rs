@@ -19,8 +19,8 @@ use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::sampling::LobeSampler;
 use gmueller::interaction::{
-    FresnelReflection, Full, Geometry, IdealDiffuse, Incoherent, Kernel, OneShape, Partial,
-    PhaseScreen, PlaneWave, RayleighRice, RoughSurface, Scalar, exitant_packet,
+    FresnelReflection, Full, Geometry, IdealDiffuse, Incoherent, Intensity, Kernel, OneShape,
+    Partial, PhaseScreen, PlaneWave, RayleighRice, RoughSurface, exitant_packet,
     roughness_attenuation, surface_coherence_term, surface_inverse_coherence,
     volume_coherence_term,
 };
@@ -755,11 +755,9 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
             scatter: sc,
         };
         KERNEL_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let _ = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm).evaluate(&mat, &packet, &g);
-        let _ =
-            Kernel::<OneShape, Incoherent, ClosedForm>::new(ClosedForm).evaluate(&mat, &packet, &g);
-        let _ =
-            Kernel::<Scalar, PlaneWave, ClosedForm>::new(ClosedForm).evaluate(&mat, &packet, &g);
+        let _ = Kernel::<Full, Partial>::default().evaluate(&mat, &packet, &g);
+        let _ = Kernel::<OneShape, Incoherent>::default().evaluate(&mat, &packet, &g);
+        let _ = Kernel::<Intensity, PlaneWave>::default().evaluate(&mat, &packet, &g);
         let _ = (
             roughness_attenuation(&mat.psd, &g),
             surface_inverse_coherence(&packet, Channel::X, &surface),

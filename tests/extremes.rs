@@ -19,8 +19,8 @@ use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::{
-    CoherenceModel, FresnelReflection, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
-    PlaneWave, RayleighRice, Response, RoughSurface, Scalar, surface_coherence_term,
+    CoherenceWeights, FresnelReflection, Full, Geometry, Intensity, Kernel, KernelOutput, Level,
+    Partial, PlaneWave, RayleighRice, RoughSurface, surface_coherence_term,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
@@ -213,38 +213,59 @@ fn build_rounded<T: Real>(s: &Scene, two_shapes: bool, round: fn(f64) -> f64) ->
     }
 }
 
-/// Every model level of the kernel, `(name, response)`.
-fn all_levels<T: Real>(b: &Built<T>) -> Vec<(&'static str, Response<T>)> {
-    macro_rules! lv {
-        ($p:ty, $c:ty, $name:expr) => {
-            (
-                $name,
-                Kernel::<$p, $c, ClosedForm>::new(ClosedForm).evaluate(
-                    &b.material,
-                    &b.packet,
-                    &b.g,
-                ),
-            )
-        };
+/// A part of a kernel's output as a plain 4-vector (the intensity level's `S0` as
+/// `(S0, 0, 0, 0)`, so that one validity check covers every level: finite, `S0 ≥ 0`).
+#[derive(Debug, Clone, Copy)]
+struct Part<T: Real>(Vector4<T>);
+
+impl<T: Real> Part<T> {
+    fn vector(&self) -> Vector4<T> {
+        self.0
     }
-    vec![
-        lv!(Scalar, PlaneWave, "Scalar/PlaneWave"),
-        lv!(Scalar, Partial, "Scalar/Partial"),
-        lv!(Scalar, Incoherent, "Scalar/Incoherent"),
-        lv!(OneShape, PlaneWave, "OneShape/PlaneWave"),
-        lv!(OneShape, Partial, "OneShape/Partial"),
-        lv!(OneShape, Incoherent, "OneShape/Incoherent"),
-        lv!(Full, PlaneWave, "Full/PlaneWave"),
-        lv!(Full, Partial, "Full/Partial"),
-        lv!(Full, Incoherent, "Full/Incoherent"),
-    ]
+    fn s0(&self) -> T {
+        self.0[0]
+    }
+}
+
+/// The two parts of one level's output, and its attenuation.
+#[derive(Debug, Clone, Copy)]
+struct Parts<T: Real> {
+    specular: Part<T>,
+    scattered: Part<T>,
+    attenuation: T,
+}
+
+/// Every model level of the kernel ([`Level::ALL`]), `(name, parts)`.
+fn all_levels<T: Real>(b: &Built<T>) -> Vec<(&'static str, Parts<T>)> {
+    Level::ALL
+        .into_iter()
+        .map(|level| {
+            let r = level.evaluate(ClosedForm, &b.material, &b.packet, &b.g);
+            let intensity = |x: T| Part(Vector4::new(x, T::zero(), T::zero(), T::zero()));
+            let (specular, scattered) = r.stokes().map_or_else(
+                || {
+                    (
+                        intensity(r.specular_intensity()),
+                        intensity(r.scattered_intensity()),
+                    )
+                },
+                |(sp, sc)| (Part(sp.vector()), Part(sc.vector())),
+            );
+            let parts = Parts {
+                specular,
+                scattered,
+                attenuation: r.attenuation(),
+            };
+            (level.name(), parts)
+        })
+        .collect()
 }
 
 /// Stated Stokes-validity tolerance: `|S| ≤ S0 (1 + 64 ε) + 4 u` and `S0 ≥ −(64 ε |S| + 4 u)`,
 /// `u = ε · MIN_POSITIVE` the subnormal spacing (results below `MIN_POSITIVE` keep only an
 /// absolute precision of `u`).
-fn check_stokes<T: Real>(what: &str, s: &Stokes<T>) -> Result<(), TestCaseError> {
-    let v = s.vector().map(|x| x.to_f64());
+fn check_stokes<T: Real>(what: &str, s: Vector4<T>) -> Result<(), TestCaseError> {
+    let v = s.map(|x| x.to_f64());
     prop_assert!(v.iter().all(|x| x.is_finite()), "{what}: not finite {v:?}");
     let rel = 64.0 * T::EPSILON.to_f64();
     let min_pos = if T::EPSILON.to_f64() > 1e-10 {
@@ -272,8 +293,8 @@ fn kernel_properties<T: Real>(s: &Scene, two_shapes: bool) -> Result<(), TestCas
     }
     for (name, r) in all_levels(&b) {
         prop_assert!(r.attenuation.is_finite() && r.attenuation >= T::zero());
-        check_stokes(&format!("{name} specular"), &r.specular)?;
-        check_stokes(&format!("{name} scattered"), &r.scattered)?;
+        check_stokes(&format!("{name} specular"), r.specular.vector())?;
+        check_stokes(&format!("{name} scattered"), r.scattered.vector())?;
     }
     Ok(())
 }
@@ -437,7 +458,7 @@ fn full_level_is_valid_at_the_realizability_bound() {
         };
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
         let g = Geometry::for_packet(&p, &surface, e).unwrap();
-        let r = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm).evaluate(&m, &p, &g);
+        let r = Kernel::<Full, Partial>::default().evaluate(&m, &p, &g);
         [
             (r.specular.s0().to_f64(), dop(&r.specular)),
             (r.scattered.s0().to_f64(), dop(&r.scattered)),
@@ -683,9 +704,9 @@ fn gauss_hermite_channels_stay_valid() {
             );
             let g = Geometry::for_packet(&p, &surface, e).unwrap();
             for order in [2, 3, 4, 8, 16, 32] {
-                let kernel = Kernel::<Full, Partial, GaussHermite<f64>>::new(
+                let kernel = Kernel::<Full, Partial<GaussHermite<f64>>>::new(Partial(
                     GaussHermite::new(order).unwrap(),
-                );
+                ));
                 let r = kernel.evaluate(&material, &p, &g);
                 let d = dop(&r.scattered);
                 assert!(
@@ -695,7 +716,7 @@ fn gauss_hermite_channels_stay_valid() {
                 checked += 1;
             }
             let adaptive =
-                Kernel::<Full, Partial, Adaptive<f64>>::new(Adaptive::new(1e-9).unwrap())
+                Kernel::<Full, Partial<Adaptive<f64>>>::new(Partial(Adaptive::new(1e-9).unwrap()))
                     .evaluate(&material, &p, &g);
             assert!(dop(&adaptive.scattered) <= 1.0 + 64.0 * f64::EPSILON);
         }
@@ -804,8 +825,10 @@ fn partial_reaches_plane_wave_without_underflow_f32() {
         let xi = Gaussian::<T, 2>::isotropic(T::lit(1e-8)).unwrap();
         let h = Vector2::new(T::lit(110f64.sqrt()), T::zero());
         (
-            Partial::scatter_weight(&psd, &ClosedForm, Some(&xi), &h).to_f64(),
-            PlaneWave::scatter_weight(&psd, &ClosedForm, Some(&xi), &h).to_f64(),
+            Partial(ClosedForm)
+                .scatter_weight(&psd, Some(&xi), &h)
+                .to_f64(),
+            PlaneWave.scatter_weight(&psd, Some(&xi), &h).to_f64(),
         )
     }
     // Independent: 2π σ²ℓ² e^{−55} · a/(a + 1e-16) with a = 1.
@@ -882,10 +905,9 @@ fn grazing_anisotropic_section_is_continuous() {
                         .is_some(),
                     "f32 fallback at θ = {theta}, anisotropy {aniso}, shape angle {angle}, φ = {azimuth}"
                 );
-                let k = Kernel::<Scalar, Partial, ClosedForm>::new(ClosedForm)
+                let k = Kernel::<Intensity, Partial>::default()
                     .evaluate(&b64.material, &b64.packet, &b64.g)
-                    .scattered
-                    .s0();
+                    .scattered;
                 assert!(k.is_finite() && k > 0.0);
                 if let Some(p) = prev {
                     let slope = k.ln() - p.ln();
@@ -934,8 +956,7 @@ fn grazing_section_does_not_depend_on_the_azimuth() {
         };
         let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
         let has = surface_inverse_coherence(&packet, Channel::Half, &surface).is_some();
-        let r =
-            Kernel::<Full, Partial, ClosedForm>::new(ClosedForm).evaluate(&material, &packet, &g);
+        let r = Kernel::<Full, Partial>::default().evaluate(&material, &packet, &g);
         (has, r.specular.s0().to_f64())
     }
     for (w, lambda) in [(2.6, 27.44), (1.0, 0.5), (10.0, 0.1), (100.0, 1.0)] {
@@ -1481,8 +1502,7 @@ fn normal_incidence_switch_is_invisible_in_a_fixed_frame() {
             scatter: RayleighRice::new(eta).unwrap(),
         };
         let g = Geometry::for_packet(&packet, &surface, exit.map(l)).unwrap();
-        let r =
-            Kernel::<Full, Partial, ClosedForm>::new(ClosedForm).evaluate(&material, &packet, &g);
+        let r = Kernel::<Full, Partial>::default().evaluate(&material, &packet, &g);
         let fixed = Frame::from_direction_and_x(g.exit(), Vector3::y()).unwrap();
         let mut out = Vec::new();
         for s in [r.specular, r.scattered] {

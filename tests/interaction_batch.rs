@@ -32,7 +32,7 @@ use gmueller::interaction::{
 };
 use gmueller::mueller::batch::padded_stride;
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, GaussianPsd, Psd};
+use gmueller::psd::{GaussianPsd, Psd};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector2, Vector3, Vector4};
 use num_complex::Complex;
@@ -132,8 +132,8 @@ impl<T: Real> Built<T> {
     fn compare(&self, what: &str) -> usize {
         let got = self.batch().unwrap();
         let material = self.material();
-        let full = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
-        let one = Kernel::<OneShape, PlaneWave, ClosedForm>::new(ClosedForm);
+        let full = Kernel::<Full, PlaneWave>::default();
+        let one = Kernel::<OneShape, PlaneWave>::default();
         let eps = T::EPSILON.to_f64();
         let tiny = min_positive::<T>();
         let s0_in = self.packet.stokes().s0().to_f64();
@@ -380,7 +380,7 @@ fn index_one_and_smooth_surface_give_zero() {
             assert!(s.iter().all(|&v| v == 0.0), "{s:?}");
         }
         let b = Built::<f64>::new(&sc);
-        let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
+        let kernel = Kernel::<Full, PlaneWave>::default();
         for &e in &b.exits {
             let g = Geometry::for_packet(&b.packet, &b.surface, e).unwrap();
             let want = kernel.evaluate(&b.material(), &b.packet, &g).scattered;
@@ -435,7 +435,7 @@ fn extreme_index_takes_the_scalar_fallback() {
     let b = Built::<f64>::new(&sc);
     let got = b.batch().unwrap();
     let material = b.material();
-    let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Full, PlaneWave>::default();
     for (i, &e) in b.exits.iter().enumerate() {
         let g = Geometry::for_packet(&b.packet, &b.surface, e).unwrap();
         let want = kernel.evaluate(&material, &b.packet, &g).scattered.vector();

@@ -66,12 +66,12 @@ use common::{Tol, assert_all_close};
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    CoherenceModel, ConstantMueller, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
+    CoherenceWeights, ConstantMueller, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
     PlaneWave, PolarizationModel, RayleighRice, Response, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, GaussianPsd};
+use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3, Vector4};
 use num_complex::Complex;
@@ -335,13 +335,15 @@ fn crate_setup<T: Real>(sc: &Scene) -> (WavePacket<T>, Frame<T>, Material<T>) {
     (packet, surface, material)
 }
 
-fn run<T: Real, Pol: PolarizationModel, Coh: CoherenceModel>(
-    sc: &Scene,
-    exit: &Vector3<f64>,
-) -> Response<T> {
+fn run<T, Pol, Coh>(sc: &Scene, exit: &Vector3<f64>) -> Response<T>
+where
+    T: Real,
+    Pol: PolarizationModel<Output<T> = Response<T>>,
+    Coh: CoherenceWeights<T, GaussianPsd<T, 2>> + Default,
+{
     let (packet, surface, material) = crate_setup::<T>(sc);
     let g = Geometry::for_packet(&packet, &surface, exit.map(T::lit)).unwrap();
-    Kernel::<Pol, Coh, ClosedForm>::new(ClosedForm).evaluate(&material, &packet, &g)
+    Kernel::<Pol, Coh>::default().evaluate(&material, &packet, &g)
 }
 
 fn to64<T: Real>(s: Stokes<T>) -> Vector4<f64> {

@@ -14,11 +14,11 @@ use std::f64::consts::{PI, TAU};
 use common::scene::{DEG, dir, fresnel_rs_rp, glass, packet, surface};
 use common::{Tol, assert_close, gauss_legendre};
 use gmueller::interaction::{
-    ConstantMueller, Geometry, Kernel, OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave,
-    RoughSurface, Scalar,
+    ConstantMueller, Geometry, Intensity, Kernel, OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave,
+    RoughSurface,
 };
 use gmueller::mueller::Mueller;
-use gmueller::psd::{ClosedForm, GaussianPsd};
+use gmueller::psd::GaussianPsd;
 use nalgebra::{Vector2, Vector3};
 
 /// `∫ f(r̂) d²r_t` over the exit hemisphere `|r_t| < 1` (= `∫ f cos θ_o dω`), in polar coordinates
@@ -77,7 +77,7 @@ fn reflected_fraction<Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
 ) -> (f64, f64) {
     let pk = packet([1.0, 0.0, 0.0, 0.0], width, theta_i, 0.0, lambda);
     let r0 = Vector2::new(theta_i.sin(), 0.0);
-    let kernel = Kernel::<OneShape, Partial, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<OneShape, Partial>::default();
     let [spec, scat] = hemisphere_integral(r0, 96, &mut |exit| {
         let Ok(g) = Geometry::for_packet(&pk, &surface(), exit) else {
             return [0.0, 0.0];
@@ -218,14 +218,14 @@ fn lossless_screen(
 /// The kernel's plane-wave (w → ∞) reflected fractions (specular, scattered) of unpolarized
 /// light: the specular lobe is then a Dirac delta of weight `α M₀₀` (`M₀₀ = 1`, α the kernel's
 /// `attenuation` at the specular direction); the scattered part is `∫ L cos θ_o dω / cos θ_i` of
-/// `Kernel::<Scalar, PlaneWave, ClosedForm>` by the hemisphere quadrature above.
+/// `Kernel::<Intensity, PlaneWave, ClosedForm>` by the hemisphere quadrature above.
 fn plane_wave_fraction(sigma: f64, ell: f64, theta_i: f64, lambda: f64) -> (f64, f64) {
     // 4× the angles of `reflected_fraction`: at 85° the lobe hugs the horizon (96 angles were
     // 2.1e-7 off the oracle at ℓ = 2λ, 192 angles 3e-10 at ℓ = 10λ).
     const N_ANGLE: usize = 384;
     let material = lossless_screen(sigma, ell);
     let pk = packet([1.0, 0.0, 0.0, 0.0], 10.0, theta_i, 0.0, lambda);
-    let kernel = Kernel::<Scalar, PlaneWave, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Intensity, PlaneWave>::default();
     let g = Geometry::for_packet(&pk, &surface(), dir(theta_i, 0.0)).unwrap();
     let specular = kernel.evaluate(&material, &pk, &g).attenuation;
     let r0 = Vector2::new(theta_i.sin(), 0.0);
@@ -233,7 +233,7 @@ fn plane_wave_fraction(sigma: f64, ell: f64, theta_i: f64, lambda: f64) -> (f64,
         let Ok(g) = Geometry::for_packet(&pk, &surface(), exit) else {
             return [0.0, 0.0];
         };
-        [kernel.evaluate(&material, &pk, &g).scattered.s0(), 0.0]
+        [kernel.evaluate(&material, &pk, &g).scattered, 0.0]
     });
     (specular, scat / theta_i.cos())
 }

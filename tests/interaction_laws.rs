@@ -20,9 +20,9 @@ use gmueller::Real;
 use gmueller::error::Error;
 use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::interaction::{
-    CoherenceModel, ConstantMueller, FresnelReflection, Full, Geometry, Incoherent, Kernel,
-    OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave, PolarizationModel, RayleighRice,
-    RoughSurface, Scalar, surface_coherence_term, surface_inverse_coherence,
+    CoherenceModel, ConstantMueller, FresnelReflection, Full, Geometry, Incoherent, Intensity,
+    Kernel, OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave, PolarizationModel, RayleighRice,
+    Response, RoughSurface, surface_coherence_term, surface_inverse_coherence,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
@@ -103,11 +103,11 @@ fn plane_wave_level_equals_classical_evaluation() {
             expected.iter().copied(),
             tol,
         );
-        // Scalar: M₀₀ S0 only.
-        let scalar = eval::<Scalar, PlaneWave, _, _>(&material, &pk, exit);
+        // Intensity: M₀₀ S0 only.
+        let scalar = eval::<Intensity, PlaneWave, _, _>(&material, &pk, exit);
         assert_close(
-            &format!("Scalar scattered {what}"),
-            scalar.scattered.s0(),
+            &format!("Intensity scattered {what}"),
+            scalar.scattered,
             m[(0, 0)] * s[0] * co / (lambda * lambda) * alpha * TAU * p,
             Tol::new(0.0, 1e-11),
         );
@@ -139,7 +139,7 @@ fn partial_coherence_tends_to_plane_wave_and_incoherent_limits() {
         )
         .unwrap()
     };
-    fn level<Pol: PolarizationModel>(
+    fn level<Pol: PolarizationModel<Output<f64> = Response<f64>>>(
         material: &Glass,
         make: &dyn Fn(f64) -> WavePacket<f64>,
         exit: Vector3<f64>,
@@ -187,7 +187,7 @@ fn partial_coherence_tends_to_plane_wave_and_incoherent_limits() {
     level::<Full>(&material, &make, exit, "Full");
 }
 
-/// With `Θ_x = Θ_y`: `Full` equals `OneShape` to rounding; `Scalar` equals S0 of `OneShape` for
+/// With `Θ_x = Θ_y`: `Full` equals `OneShape` to rounding; `Intensity` equals S0 of `OneShape` for
 /// unpolarized light (any M), and for any light when M is a multiple of the identity (the scalar
 /// level ignores diattenuation by design: it keeps `M₀₀ S0`).
 #[test]
@@ -227,30 +227,30 @@ fn levels_agree_for_a_single_shape() {
                     );
                 }
                 let one = eval::<OneShape, $coh, _, _>(&material, &unpol, exit);
-                let sc = eval::<Scalar, $coh, _, _>(&material, &unpol, exit);
+                let sc = eval::<Intensity, $coh, _, _>(&material, &unpol, exit);
                 assert_close(
-                    "Scalar vs OneShape S0 (spec)",
-                    sc.specular.s0(),
+                    "Intensity vs OneShape S0 (spec)",
+                    sc.specular,
                     one.specular.s0(),
                     Tol::new(1e-300, 1e-13),
                 );
                 assert_close(
-                    "Scalar vs OneShape S0 (scat)",
-                    sc.scattered.s0(),
+                    "Intensity vs OneShape S0 (scat)",
+                    sc.scattered,
                     one.scattered.s0(),
                     Tol::new(1e-300, 1e-13),
                 );
                 let one = eval::<OneShape, $coh, _, _>(&screen, &pol, exit);
-                let sc = eval::<Scalar, $coh, _, _>(&screen, &pol, exit);
+                let sc = eval::<Intensity, $coh, _, _>(&screen, &pol, exit);
                 assert_close(
-                    "Scalar vs OneShape S0 (screen spec)",
-                    sc.specular.s0(),
+                    "Intensity vs OneShape S0 (screen spec)",
+                    sc.specular,
                     one.specular.s0(),
                     Tol::new(1e-300, 1e-13),
                 );
                 assert_close(
-                    "Scalar vs OneShape S0 (screen scat)",
-                    sc.scattered.s0(),
+                    "Intensity vs OneShape S0 (screen scat)",
+                    sc.scattered,
                     one.scattered.s0(),
                     Tol::new(1e-300, 1e-13),
                 );
@@ -297,8 +297,8 @@ fn diffraction_term_is_centred_on_the_specular_direction() {
                 &surface(),
                 &g.h_t(),
             );
-            let spec = Partial::specular_weight(Some(&xi), &g.h_t());
-            let full = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm)
+            let spec = Partial(ClosedForm).specular_weight(Some(&xi), &g.h_t());
+            let full = Kernel::<Full, Partial>::default()
                 .evaluate(&material, &pk, &g)
                 .total()
                 .s0();
@@ -374,8 +374,8 @@ fn diffraction_term_is_centred_on_the_specular_direction() {
             assert_close("𝒟(h) vs 𝒟(−h)", t(h), t(-h), Tol::new(1e-300, 1e-12));
             assert_close(
                 "lobe(h) vs lobe(−h)",
-                Partial::specular_weight(Some(&xi), &h),
-                Partial::specular_weight(Some(&xi), &(-h)),
+                Partial(ClosedForm).specular_weight(Some(&xi), &h),
+                Partial(ClosedForm).specular_weight(Some(&xi), &(-h)),
                 Tol::new(1e-300, 1e-12),
             );
         }
@@ -497,7 +497,7 @@ fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), T
     };
     macro_rules! level {
         ($pol:ty, $coh:ty) => {{
-            let r = Kernel::<$pol, $coh, ClosedForm>::new(ClosedForm).evaluate(&material, &pk, &g);
+            let r = Kernel::<$pol, $coh>::default().evaluate(&material, &pk, &g);
             let name = concat!(stringify!($pol), "×", stringify!($coh));
             check(&format!("{name} specular"), r.specular)?;
             check(&format!("{name} scattered"), r.scattered)?;
@@ -508,7 +508,12 @@ fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), T
     level!(Full, Incoherent);
     level!(Full, PlaneWave);
     level!(OneShape, Partial);
-    level!(Scalar, Partial);
+    // The intensity level: S0 only, finite and non-negative.
+    let r = Kernel::<Intensity, Partial>::default().evaluate(&material, &pk, &g);
+    for (what, x) in [("specular", r.specular), ("scattered", r.scattered)] {
+        let x = x.to_f64();
+        prop_assert!(x.is_finite() && x >= 0.0, "Intensity×Partial {what}: {x:e}");
+    }
     Ok(())
 }
 
@@ -547,8 +552,8 @@ fn scalar_brdf<Sc: Pbsdf<f64>>(scatter: Sc, src: Vector3<f64>, out: Vector3<f64>
         lambda,
     )
     .unwrap();
-    let r = eval::<Scalar, PlaneWave, _, _>(&material, &pk, out);
-    r.scattered.s0() / src.z
+    let r = eval::<Intensity, PlaneWave, _, _>(&material, &pk, out);
+    r.scattered / src.z
 }
 
 /// Helmholtz reciprocity `f(ŝ → r̂) = f(r̂ → ŝ)` of the plane-wave Rayleigh–Rice BRDF holds to

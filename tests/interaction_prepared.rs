@@ -15,12 +15,12 @@ use gmueller::error::Error;
 use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::fresnel;
 use gmueller::interaction::{
-    CoherenceModel, FresnelReflection, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
-    Pbsdf, PlaneWave, PolarizationModel, RayleighRice, RoughSurface, Scalar,
+    CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, KernelOutput, Level, LevelVisitor,
+    Partial, Pbsdf, PolarizationModel, RayleighRice, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
+use gmueller::psd::{ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector3};
 use num_complex::Complex;
@@ -56,16 +56,15 @@ fn exits<T: Real>(theta_i: f64) -> Vec<Vector3<T>> {
     v
 }
 
-fn same_as_evaluate<T, Pol, Coh, P, B>(
+fn same_as_evaluate<T, Pol, Coh, P>(
     name: &str,
-    kernel: &Kernel<Pol, Coh, B>,
+    kernel: &Kernel<Pol, Coh>,
     material: &RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
 ) where
     T: Real,
     Pol: PolarizationModel,
-    Coh: CoherenceModel,
+    Coh: CoherenceWeights<T, P>,
     P: Psd<T, 2>,
-    B: BlurMethod<T, 2, P>,
 {
     for theta_i in [0.0, 1e-9, 0.05, 0.6, 1.3] {
         let p = packet::<T>(theta_i);
@@ -75,8 +74,29 @@ fn same_as_evaluate<T, Pol, Coh, P, B>(
             let once = kernel.evaluate(material, &p, &g);
             let many = kernel.evaluate_prepared(material, &prepared, &g);
             assert_eq!(once, many, "{name}, θ_i = {theta_i}, exit {e:?}");
-            assert!(once.total().s0().is_finite(), "{name}: finite");
+            assert!(once.total_intensity().is_finite(), "{name}: finite");
         }
+    }
+}
+
+/// [`same_as_evaluate`] for the kernel of a level chosen at run time.
+struct SameAsEvaluate<'a, T: Real, P> {
+    name: &'a str,
+    material: &'a RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
+}
+
+impl<T: Real, P: Psd<T, 2>> LevelVisitor<T, P> for SameAsEvaluate<'_, T, P> {
+    type Output = ();
+    fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
+    where
+        Pol: PolarizationModel,
+        Coh: CoherenceWeights<T, P>,
+    {
+        same_as_evaluate(
+            &format!("{} {}", level.name(), self.name),
+            &kernel,
+            self.material,
+        );
     }
 }
 
@@ -92,30 +112,25 @@ fn all_levels<T: Real>() {
         specular: FresnelReflection::new(eta).unwrap(),
         scatter: RayleighRice::new(eta).unwrap(),
     };
-    macro_rules! level {
-        ($pol:ty, $coh:ty) => {{
-            let name = concat!(stringify!($pol), "×", stringify!($coh));
-            same_as_evaluate(
-                name,
-                &Kernel::<$pol, $coh, ClosedForm>::new(ClosedForm),
-                &gaussian,
-            );
-            same_as_evaluate(
-                name,
-                &Kernel::<$pol, $coh, GaussHermite<T>>::new(GaussHermite::new(4).unwrap()),
-                &kc,
-            );
-        }};
+    for level in Level::ALL {
+        let material = &gaussian;
+        level.dispatch(
+            ClosedForm,
+            SameAsEvaluate {
+                name: "Gaussian",
+                material,
+            },
+        );
+        let material = &kc;
+        let gh = GaussHermite::<T>::new(4).unwrap();
+        level.dispatch(
+            gh,
+            SameAsEvaluate {
+                name: "KCorrelation/GaussHermite",
+                material,
+            },
+        );
     }
-    level!(Scalar, PlaneWave);
-    level!(Scalar, Partial);
-    level!(Scalar, Incoherent);
-    level!(OneShape, PlaneWave);
-    level!(OneShape, Partial);
-    level!(OneShape, Incoherent);
-    level!(Full, PlaneWave);
-    level!(Full, Partial);
-    level!(Full, Incoherent);
 }
 
 #[test]
@@ -138,7 +153,7 @@ fn prepare_refuses_a_packet_leaving_the_surface() {
         0.5,
     )
     .unwrap();
-    let kernel = Kernel::<Full, Partial, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Full, Partial>::default();
     let err = kernel.prepare(&p, &surface()).unwrap_err();
     assert!(
         matches!(err, Error::OutOfRange { .. }),

@@ -16,11 +16,11 @@ mod common;
 use common::{Tol, assert_close, matrix4_from_rows};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    CoherenceModel, FresnelReflection, Full, Geometry, Kernel, Partial, PlaneWave,
-    PolarizationModel, RayleighRice, RoughSurface,
+    CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, Partial, PlaneWave,
+    PolarizationModel, RayleighRice, Response, RoughSurface,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, GaussianPsd};
+use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix4, Vector3};
 use num_complex::Complex;
@@ -62,10 +62,11 @@ fn label(c: &Value) -> String {
 /// The kernel's Mueller BRDF for one SCATMECH case: columns from the responses to the Stokes
 /// basis (1,0,0,0), (1,1,0,0), (1,0,1,0), (1,0,0,1), with the packet frame equal to the incident
 /// s/p frame (so that T = I), divided by the attenuation and by `cos θ_i`.
-fn kernel_mueller_brdf<Pol: PolarizationModel, Coh: CoherenceModel>(
-    c: &Value,
-    width: f64,
-) -> Matrix4<f64> {
+fn kernel_mueller_brdf<Pol, Coh>(c: &Value, width: f64) -> Matrix4<f64>
+where
+    Pol: PolarizationModel<Output<f64> = Response<f64>>,
+    Coh: CoherenceWeights<f64, GaussianPsd<f64, 2>> + Default,
+{
     let lambda = f(c, "lambda_um");
     let (ti, ts, ps) = (f(c, "theta_i"), f(c, "theta_s"), f(c, "phi_s"));
     // SCATMECH's geometry: incidence in the x–z plane, specular at φ_s = 0, z the normal.
@@ -79,7 +80,7 @@ fn kernel_mueller_brdf<Pol: PolarizationModel, Coh: CoherenceModel>(
         specular: FresnelReflection::new(eta).unwrap(),
         scatter: RayleighRice::new(eta).unwrap(),
     };
-    let kernel = Kernel::<Pol, Coh, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Pol, Coh>::default();
     let shape = CoherenceShape::isotropic(width).unwrap();
     let column = |s: [f64; 4]| {
         let stokes = Stokes::new(s[0], s[1], s[2], s[3]).unwrap();

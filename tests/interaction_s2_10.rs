@@ -42,7 +42,7 @@ use common::{Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::{
-    ConstantMueller, Geometry, Kernel, Partial, RoughSurface, Scalar, surface_coherence_term,
+    ConstantMueller, Geometry, Intensity, Kernel, Partial, RoughSurface, surface_coherence_term,
     volume_coherence_term,
 };
 use gmueller::mueller::Mueller;
@@ -491,7 +491,7 @@ fn kernel_equals_seed_prefactor_times_double_integral() {
             specular: ConstantMueller(Mueller::identity()),
             scatter: ConstantMueller(Mueller::identity()),
         };
-        let kernel = Kernel::<Scalar, Partial, ClosedForm>::new(ClosedForm);
+        let kernel = Kernel::<Intensity, Partial>::default();
         for r in [dir(0.5, 2.5), dir(0.2, -2.0), dir(1.0, -0.2)] {
             let g = Geometry::for_packet(&packet, &surface, r).unwrap();
             let resp = kernel.evaluate(&material, &packet, &g);
@@ -505,7 +505,7 @@ fn kernel_equals_seed_prefactor_times_double_integral() {
                 &surface,
                 &g.h_t(),
             );
-            let l_kernel = resp.scattered.s0() / resp.attenuation;
+            let l_kernel = resp.scattered / resp.attenuation;
             assert_close(
                 "kernel vs (cos θ_o/λ²) K S0",
                 l_kernel,

@@ -14,10 +14,10 @@ use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::sampling::{LobeSampler, RadialProfile, weight};
 use gmueller::interaction::{
-    FresnelReflection, Geometry, Kernel, Partial, RayleighRice, RoughSurface, Scalar,
+    FresnelReflection, Geometry, Intensity, Kernel, Partial, RayleighRice, RoughSurface,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, GaussianPsd, KCorrelation};
+use gmueller::psd::{GaussianPsd, KCorrelation};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector2, Vector3};
 use num_complex::Complex;
@@ -632,7 +632,7 @@ fn packet(deg: f64, width: f64, lambda: f64) -> WavePacket<f64> {
 fn weights_equal_value_over_pdf() {
     let psd = GaussianPsd::<f64, 2>::isotropic(0.02, 1.0).unwrap();
     let material = glass_material(psd);
-    let kernel = Kernel::<Scalar, Partial, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Intensity, Partial>::default();
     let sampler =
         LobeSampler::gaussian(&psd, &surface(), &to_source(35.0), k_of(0.5), 0.5).unwrap();
     let pk = packet(35.0, 1.5, 0.5);
@@ -642,11 +642,11 @@ fn weights_equal_value_over_pdf() {
             .sample_weighted(&kernel, &material, &pk, [rng.uniform(), rng.uniform()])
             .unwrap();
         let g = Geometry::for_packet(&pk, &surface(), w.sample.direction).unwrap();
-        let value = kernel.evaluate(&material, &pk, &g).total().s0();
+        let value = kernel.evaluate(&material, &pk, &g).total();
         let pdf = sampler.pdf(&w.sample.direction);
         assert_close(
             "weight",
-            w.weight.s0(),
+            w.weight.total(),
             value / pdf,
             Tol::new(1e-300, 1e-12),
         );
@@ -666,7 +666,7 @@ fn weights_equal_value_over_pdf() {
 fn importance_sampled_estimate_matches_quadrature() {
     let psd = GaussianPsd::<f64, 2>::isotropic(0.02, 1.0).unwrap();
     let material = glass_material(psd);
-    let kernel = Kernel::<Scalar, Partial, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Intensity, Partial>::default();
     let (deg, lambda) = (40.0, 0.5);
     let sampler =
         LobeSampler::gaussian(&psd, &surface(), &to_source(deg), k_of(lambda), 0.6).unwrap();
@@ -674,7 +674,7 @@ fn importance_sampled_estimate_matches_quadrature() {
         let pk = packet(deg, width, lambda);
         let value = |d: &Vector3<f64>| {
             Geometry::for_packet(&pk, &surface(), *d)
-                .map_or(0.0, |g| kernel.evaluate(&material, &pk, &g).total().s0())
+                .map_or(0.0, |g| kernel.evaluate(&material, &pk, &g).total())
         };
         let reference = hemisphere_integral(&value);
         let mut rng = SplitMix64(2024);
@@ -685,7 +685,7 @@ fn importance_sampled_estimate_matches_quadrature() {
                 .sample_weighted(&kernel, &material, &pk, [rng.uniform(), rng.uniform()])
                 .unwrap()
                 .weight
-                .s0();
+                .total();
             sum += w;
             sum2 += w * w;
         }

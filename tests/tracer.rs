@@ -1,7 +1,7 @@
 //! The scalar kernel against the brute-force reference of `examples/scalar_tracer`: a Gaussian
 //! rough surface (vσ = 0.1) under partially coherent Gaussian Schell-model light, far field summed
 //! explicitly on a grid and averaged over 32 height realizations (fixed seed), compared with
-//! `Kernel::<Scalar, Partial, ClosedForm>` + `PhaseScreen` at the specular direction (coherent
+//! `Kernel::<Intensity, Partial, ClosedForm>` + `PhaseScreen` at the specular direction (coherent
 //! lobe) and off specular (scattered lobe, in and out of the plane of incidence). Acceptance as
 //! in the issue: |kernel − brute| ≤ max(3 s.e., 2 % of brute). Also: a smooth surface (pure
 //! coherent lobe, no sampling noise) to 5e-4 relative; a deliberately wrong prediction

@@ -23,7 +23,7 @@
 //! **Errors.** S0: relative, `|S0 − S0_ref|/S0_ref`, over exit directions where `S0_ref` is at
 //! least 1e-6 of the scene's maximum (others are skipped and counted). Degree of polarization:
 //! the *absolute* difference `|DoP − DoP_ref|` (`DoP` is already a ratio in [0, 1]); "n/a" for the
-//! `Scalar` level, which outputs S0 only. Max and RMS are pooled over all kept (scene, direction)
+//! `Intensity` level, which outputs S0 only. Max and RMS are pooled over all kept (scene, direction)
 //! pairs a variant applies to.
 //!
 //! **Timing.** Per scene, repeated batches (every exit direction once) timed with
@@ -313,7 +313,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .filter(|(_, k)| **k)
                 .map(|((x, r), _)| Point {
                     s0: ((x[0] - r[0]) / r[0]).abs(),
-                    dop: (v.pol != Pol::Scalar).then(|| (dop(x) - dop(r)).abs()),
+                    dop: (v.pol != Pol::Intensity).then(|| (dop(x) - dop(r)).abs()),
                 })
                 .collect();
             results[vi].push(SceneResult {

@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use gmueller::Real;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::{
-    CoherenceModel, FresnelReflection, Full, Incoherent, Kernel, OneShape, Partial, Pbsdf,
-    PlaneWave, PolarizationModel, RayleighRice, RoughSurface, Scalar,
+    CoherenceLevel, CoherenceWeights, FresnelReflection, Full, Kernel, KernelOutput, Level,
+    LevelVisitor, Partial, Pbsdf, PolarizationLevel, PolarizationModel, RayleighRice, RoughSurface,
 };
 use gmueller::psd::{Adaptive, BlurMethod, ClosedForm, GaussHermite, Psd};
 use nalgebra::{Matrix2, Vector2};
@@ -19,7 +19,7 @@ use super::scenes::{HeightGrating, MIXTURES, Material, SceneData};
 /// Polarization level.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pol {
-    Scalar,
+    Intensity,
     OneShape,
     Full,
 }
@@ -66,7 +66,7 @@ impl Variant {
         format!(
             "{}·{}·{}·{}",
             match self.pol {
-                Pol::Scalar => "Scalar",
+                Pol::Intensity => "Intensity",
                 Pol::OneShape => "OneShape",
                 Pol::Full => "Full",
             },
@@ -110,7 +110,7 @@ impl Variant {
 pub fn all_variants() -> Vec<Variant> {
     let mut v = Vec::new();
     for prec in [Prec::F64, Prec::F32] {
-        for pol in [Pol::Full, Pol::OneShape, Pol::Scalar] {
+        for pol in [Pol::Full, Pol::OneShape, Pol::Intensity] {
             for coh in [Coh::PlaneWave, Coh::Incoherent] {
                 v.push(Variant {
                     pol,
@@ -155,8 +155,8 @@ pub struct Timing {
     pub max_batches: usize,
 }
 
-fn run<T, Pol2, Coh2, B, P, Sp, Sc>(
-    kernel: &Kernel<Pol2, Coh2, B>,
+fn run<T, Pol2, Coh2, P, Sp, Sc>(
+    kernel: &Kernel<Pol2, Coh2>,
     m: &RoughSurface<P, Sp, Sc>,
     s: &SceneData<T>,
     timing: Timing,
@@ -164,9 +164,8 @@ fn run<T, Pol2, Coh2, B, P, Sp, Sc>(
 where
     T: Real,
     Pol2: PolarizationModel,
-    Coh2: CoherenceModel,
+    Coh2: CoherenceWeights<T, P>,
     P: Psd<T, 2>,
-    B: BlurMethod<T, 2, P>,
     Sp: Pbsdf<T>,
     Sc: Pbsdf<T>,
 {
@@ -182,8 +181,15 @@ where
         .geoms
         .iter()
         .map(|g| {
-            let v = kernel.evaluate_prepared(m, &prepared, g).scattered.vector();
-            [v[0].to_f64(), v[1].to_f64(), v[2].to_f64(), v[3].to_f64()]
+            let r = kernel.evaluate_prepared(m, &prepared, g);
+            // The Intensity level computes S0 only (the other components are not compared).
+            r.stokes().map_or(
+                [r.scattered_intensity().to_f64(), 0.0, 0.0, 0.0],
+                |(_, scattered)| {
+                    let v = scattered.vector();
+                    [v[0].to_f64(), v[1].to_f64(), v[2].to_f64(), v[3].to_f64()]
+                },
+            )
         })
         .collect();
     let first = t0.elapsed();
@@ -226,64 +232,53 @@ pub fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// The harness's run as a [`LevelVisitor`]: the library's [`Level::dispatch`] picks the
+/// monomorphised kernel.
+struct Run<'a, T: Real, P, Sp, Sc> {
+    material: &'a RoughSurface<P, Sp, Sc>,
+    scene: &'a SceneData<T>,
+    timing: Timing,
+}
+
+impl<T: Real, P: Psd<T, 2>, Sp: Pbsdf<T>, Sc: Pbsdf<T>> LevelVisitor<T, P>
+    for Run<'_, T, P, Sp, Sc>
+{
+    type Output = Measured;
+    fn visit<Pol2, Coh2>(self, _level: Level, kernel: Kernel<Pol2, Coh2>) -> Measured
+    where
+        Pol2: PolarizationModel,
+        Coh2: CoherenceWeights<T, P>,
+    {
+        run(&kernel, self.material, self.scene, self.timing)
+    }
+}
+
+/// The library's level of a harness variant.
+fn level(pol: Pol, coh: Coh) -> Level {
+    Level::new(
+        match pol {
+            Pol::Intensity => PolarizationLevel::Intensity,
+            Pol::OneShape => PolarizationLevel::OneShape,
+            Pol::Full => PolarizationLevel::Full,
+        },
+        match coh {
+            Coh::PlaneWave => CoherenceLevel::PlaneWave,
+            Coh::Incoherent => CoherenceLevel::Incoherent,
+            Coh::Partial => CoherenceLevel::Partial,
+        },
+    )
+}
+
 macro_rules! levels {
     ($pol:expr, $coh:expr, $blur:expr, $mat:expr, $scene:expr, $timing:expr) => {
-        match ($pol, $coh) {
-            (Pol::Scalar, Coh::PlaneWave) => run(
-                &Kernel::<Scalar, PlaneWave, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::Scalar, Coh::Incoherent) => run(
-                &Kernel::<Scalar, Incoherent, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::Scalar, Coh::Partial) => run(
-                &Kernel::<Scalar, Partial, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::OneShape, Coh::PlaneWave) => run(
-                &Kernel::<OneShape, PlaneWave, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::OneShape, Coh::Incoherent) => run(
-                &Kernel::<OneShape, Incoherent, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::OneShape, Coh::Partial) => run(
-                &Kernel::<OneShape, Partial, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::Full, Coh::PlaneWave) => run(
-                &Kernel::<Full, PlaneWave, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::Full, Coh::Incoherent) => run(
-                &Kernel::<Full, Incoherent, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-            (Pol::Full, Coh::Partial) => run(
-                &Kernel::<Full, Partial, _>::new($blur),
-                $mat,
-                $scene,
-                $timing,
-            ),
-        }
+        level($pol, $coh).dispatch(
+            $blur,
+            Run {
+                material: $mat,
+                scene: $scene,
+                timing: $timing,
+            },
+        )
     };
 }
 
@@ -361,10 +356,22 @@ pub fn reference(mat: &Material<f64>, s: &SceneData<f64>) -> Measured {
         max_batches: 1,
     };
     match mat {
-        Material::Gauss(m) => run(&Kernel::<Full, Partial, _>::new(ClosedForm), m, s, timing),
-        Material::Grating(m) => run(&Kernel::<Full, Partial, _>::new(ClosedForm), m, s, timing),
+        Material::Gauss(m) => run(
+            &Kernel::<Full, Partial<_>>::new(Partial(ClosedForm)),
+            m,
+            s,
+            timing,
+        ),
+        Material::Grating(m) => run(
+            &Kernel::<Full, Partial<_>>::new(Partial(ClosedForm)),
+            m,
+            s,
+            timing,
+        ),
         Material::K { exact, .. } => run(
-            &Kernel::<Full, Partial, _>::new(Cached::new(Adaptive::new(1e-10).expect("valid"))),
+            &Kernel::<Full, Partial<_>>::new(Partial(Cached::new(
+                Adaptive::new(1e-10).expect("valid"),
+            ))),
             exact,
             s,
             timing,
@@ -377,6 +384,7 @@ type CacheEntry = (Matrix2<f64>, Vector2<f64>, f64);
 
 /// A blur method that remembers its last answer: the full level blurs three channels, which for
 /// a packet with one coherence shape are the same blur (saves 2/3 of the reference's cost).
+#[derive(Debug, Clone)]
 pub struct Cached<B> {
     inner: B,
     last: RefCell<Option<CacheEntry>>,
@@ -415,7 +423,7 @@ pub fn gaussian_adaptive(mat: &Material<f64>, s: &SceneData<f64>) -> Option<Vec<
     match mat {
         Material::Gauss(m) => Some(
             run(
-                &Kernel::<Full, Partial, _>::new(Adaptive::new(1e-10).expect("valid")),
+                &Kernel::<Full, Partial<_>>::new(Partial(Adaptive::new(1e-10).expect("valid"))),
                 m,
                 s,
                 timing,

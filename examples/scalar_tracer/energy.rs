@@ -20,7 +20,7 @@
 //!   `1/s_n² = 1/(2W²) + n/ℓ²` (the beam's autocorrelation `exp(−|ξ|²/(4W²))` times
 //!   `exp(−v²(σ² − R))` expanded in `R`, Fourier transformed term by term);
 //! - *model, first order*: the same with `n ≤ 1` — the model the kernel implements;
-//! - *kernel*: `Kernel::<Scalar, Partial, ClosedForm>` + `PhaseScreen` with the packet shape
+//! - *kernel*: `Kernel::<Intensity, Partial, ClosedForm>` + `PhaseScreen` with the packet shape
 //!   `Θ = 2W² diag(1, cos²θ_i)`, whose surface section is the beam's `Ξ = I/(2W²)`, so that its
 //!   specular lobe and blur are those of this beam: `Σ_m L Δh² / (k² cos θ_i)`.
 //!

@@ -15,7 +15,7 @@
 
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    ConstantMueller, Geometry, Kernel, Partial, PhaseScreen, Response, RoughSurface, Scalar,
+    ConstantMueller, Geometry, Intensity, Kernel, Partial, PhaseScreen, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
@@ -118,7 +118,7 @@ pub fn height_grating(amplitude: f64, period: f64) -> Grating<f64, 2> {
     out
 }
 
-fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
+fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P> + Clone + std::fmt::Debug>(
     scene: &Scene,
     psd: P,
     blur: B,
@@ -132,7 +132,7 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
         specular: ConstantMueller(Mueller::identity()),
         scatter: PhaseScreen::new(1.0).expect("phase screen"),
     };
-    let kernel = Kernel::<Scalar, Partial, B>::new(blur);
+    let kernel = Kernel::<Intensity, Partial<B>>::new(Partial(blur));
     let once = || -> Vec<Prediction> {
         // One packet, many exit directions: the per-packet work once.
         let prepared = kernel
@@ -143,10 +143,10 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P>>(
             .map(|r| {
                 let g = Geometry::for_packet(&packet, &surface, Vector3::new(r[0], r[1], r[2]))
                     .expect("geometry");
-                let resp: Response<f64> = kernel.evaluate_prepared(&material, &prepared, &g);
+                let resp = kernel.evaluate_prepared(&material, &prepared, &g);
                 Prediction {
-                    specular: resp.specular.s0(),
-                    scattered: resp.scattered.s0(),
+                    specular: resp.specular,
+                    scattered: resp.scattered,
                 }
             })
             .collect()
@@ -210,10 +210,10 @@ pub fn predict_timed(
 #[must_use]
 pub fn method_name(scene: &Scene) -> &'static str {
     match scene.matter {
-        Matter::Gaussian { .. } => "Scalar/Partial/ClosedForm, GaussianPsd",
+        Matter::Gaussian { .. } => "Intensity/Partial/ClosedForm, GaussianPsd",
         Matter::Exponential { .. } => {
-            "Scalar/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6"
+            "Intensity/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6"
         }
-        Matter::Sinusoid { .. } => "Scalar/Partial/ClosedForm, Grating ±1 orders",
+        Matter::Sinusoid { .. } => "Intensity/Partial/ClosedForm, Grating ±1 orders",
     }
 }

@@ -1,5 +1,5 @@
 //! `--render`: a small spectral ray-traced scene shaded with gmueller's scalar S2.20 kernel
-//! (`Kernel<Scalar, Partial, ClosedForm>`), rendered twice — under the sun (Ω = 6.8·10⁻⁵ sr,
+//! (`Kernel<Intensity, Partial>`), rendered twice — under the sun (Ω = 6.8·10⁻⁵ sr,
 //! coherence width w ≈ 34 µm at 0.5 µm) and under an equally bright but far less coherent disk
 //! source of Ω = 0.1 sr in the same direction (w = λ/√(πΩ) ≈ 0.9 µm, like a bright patch of
 //! overcast sky) — and written side by side into one PNG.
@@ -38,8 +38,8 @@ use std::time::Instant;
 
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    ConstantMueller, FresnelReflection, Geometry, Kernel, Partial, Pbsdf, PhaseScreen,
-    RayleighRice, RoughSurface, Scalar,
+    ConstantMueller, FresnelReflection, Geometry, Intensity, Kernel, Partial, Pbsdf, PhaseScreen,
+    RayleighRice, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::WavePacket;
@@ -294,8 +294,8 @@ where
     let Ok(g) = Geometry::for_packet(&packet, surface, *exit) else {
         return 0.0;
     };
-    let kernel = Kernel::<Scalar, Partial, ClosedForm>::new(ClosedForm);
-    let l = kernel.evaluate(material, &packet, &g).total().s0();
+    let kernel = Kernel::<Intensity, Partial>::default();
+    let l = kernel.evaluate(material, &packet, &g).total();
     if l.is_finite() { l.max(0.0) } else { 0.0 }
 }
 
@@ -512,7 +512,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Box<dyn Error>> {
             root.draw(&Text::new(label.clone(), (x0, 6), font.clone()))?;
             root.draw(&Text::new(
                 format!(
-                    "gmueller S2.20 Scalar/Partial/ClosedForm · {nl} λ, 0.40–0.70 µm · w at 0.5 µm"
+                    "gmueller S2.20 Intensity/Partial/ClosedForm · {nl} λ, 0.40–0.70 µm · w at 0.5 µm"
                 ),
                 (x0, 27),
                 small.clone(),

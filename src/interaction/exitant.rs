@@ -25,7 +25,8 @@ use nalgebra::Matrix2;
 
 use super::{Geometry, surface_inverse_coherence};
 use crate::error::Error;
-use crate::packet::{Channel, CoherenceShape, WavePacket, det2, pow2_scale};
+use crate::numerics::{det2, pow2_scale};
+use crate::packet::{Channel, CoherenceShape, WavePacket};
 use crate::real::Real;
 use crate::stokes::Stokes;
 

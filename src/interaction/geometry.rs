@@ -4,7 +4,19 @@ use nalgebra::{Vector2, Vector3};
 
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::packet::WavePacket;
 use crate::real::Real;
+
+/// The side of the interface the light leaves on. The geometry owns it, so that the pBSDFs,
+/// the roughness attenuation, the sampler and the exitant packet read the side-dependent
+/// quantities (the exit hemisphere, `h`, the phase factor, the specular direction) from
+/// [`Geometry`] rather than assuming reflection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Side {
+    /// Back into the medium of incidence: `r̂ · n̂ > 0`, `h = k (r̂ + ŝ)`.
+    Reflection,
+}
 
 /// Everything about the directions of one interaction that the kernel and the pBSDFs need.
 ///
@@ -157,6 +169,39 @@ impl<T: Real> Geometry<T> {
         &self.exit_sp
     }
 
+    /// The side of the interface the light leaves on (today always [`Side::Reflection`]).
+    #[inline]
+    #[must_use]
+    pub fn side(&self) -> Side {
+        Side::Reflection
+    }
+
+    /// The phase factor `v` of the interface: a height `z` changes the exit light's phase by
+    /// `v z`.
+    ///
+    /// # Formula
+    /// ```text
+    /// reflection:  v = k (cos θ_i + cos θ_o)      (the normal part of h = k(r̂ + ŝ))
+    /// ```
+    /// It sets the Debye–Waller attenuation `exp(−(vσ)²)`
+    /// ([`super::roughness_attenuation`]) and the phase-screen scattering `|r|² v²`.
+    #[inline]
+    #[must_use]
+    pub fn phase_factor(&self) -> T {
+        self.k * (self.cos_i + self.cos_o)
+    }
+
+    /// The s/p frame of the specular direction `r_spec = −ŝ + 2 cos θ_i n̂`
+    /// ([`Frame::sp`] without re-normalising its inputs: ŝ and n̂ are unit, so `r_spec` is unit
+    /// to rounding): the frame in which a mirror's Jones matrix leaves the light.
+    #[inline]
+    #[must_use]
+    pub fn specular_sp(&self) -> Frame<T> {
+        let n = self.surface.k();
+        let r_spec = n * (self.cos_i + self.cos_i) - self.to_source;
+        Frame::sp_unit(r_spec, n)
+    }
+
     /// The wavelength `λ = 2π/k`.
     #[inline]
     #[must_use]
@@ -192,6 +237,20 @@ impl<T: Real> Geometry<T> {
         let v = n.cross(&u);
         let s_out = self.exit_sp.x();
         (-s_out.dot(&v), s_out.dot(&u))
+    }
+}
+
+impl<T: Real> Geometry<T> {
+    /// The geometry of `packet` (its wavenumber, ŝ = −k̂) leaving along `exit`.
+    ///
+    /// # Errors
+    /// As [`Geometry::new`].
+    pub fn for_packet(
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+        exit: Vector3<T>,
+    ) -> Result<Self, Error> {
+        Self::new(packet.wavenumber(), surface, -packet.direction(), exit)
     }
 }
 

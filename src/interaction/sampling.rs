@@ -57,12 +57,14 @@
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 
-use super::{CoherenceModel, Geometry, Kernel, Pbsdf, PolarizationModel, Response, RoughSurface};
+use super::{
+    CoherenceWeights, Geometry, Kernel, KernelOutput, Pbsdf, PolarizationModel, Response,
+    RoughSurface,
+};
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::psd::{BlurMethod, GaussianPsd, KCorrelation, Psd};
+use crate::psd::{GaussianPsd, KCorrelation, Psd};
 use crate::real::Real;
-use crate::stokes::Stokes;
 
 /// Degree of the per-panel Chebyshev interpolants.
 const DEG: usize = 16;
@@ -97,15 +99,16 @@ pub struct Sample<T: Real> {
     pub pdf: T,
 }
 
-/// A sample together with the kernel's response and the Monte Carlo weight.
+/// A sample together with the kernel's response `R` (the output of the kernel's polarization
+/// level) and the Monte Carlo weight.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WeightedSample<T: Real> {
+pub struct WeightedSample<T: Real, R = Response<T>> {
     /// The exit direction and its pdf per solid angle.
     pub sample: Sample<T>,
     /// The kernel evaluated at the sample.
-    pub response: Response<T>,
-    /// `response.total() / pdf`: an unbiased estimate of `∫ L_o dω` over the hemisphere.
-    pub weight: Stokes<T>,
+    pub response: R,
+    /// `response / pdf` (both parts): an unbiased estimate of `∫ L_o dω` over the hemisphere.
+    pub weight: R,
 }
 
 /// `value / pdf`, the Monte Carlo weight of one sample (`0` when `pdf` is `0`, where the
@@ -767,29 +770,27 @@ impl<T: Real> LobeSampler<T> {
     /// `response` (it has to be handled by the caller). `None` only if the geometry is
     /// rejected ([`Geometry::for_packet`], e.g. a packet arriving from below).
     #[must_use]
-    pub fn sample_weighted<Pol, Coh, B, P, Sp, Sc>(
+    pub fn sample_weighted<Pol, Coh, P, Sp, Sc>(
         &self,
-        kernel: &Kernel<Pol, Coh, B>,
+        kernel: &Kernel<Pol, Coh>,
         material: &RoughSurface<P, Sp, Sc>,
         packet: &crate::packet::WavePacket<T>,
         u: [T; 2],
-    ) -> Option<WeightedSample<T>>
+    ) -> Option<WeightedSample<T, Pol::Output<T>>>
     where
         Pol: PolarizationModel,
-        Coh: CoherenceModel,
+        Coh: CoherenceWeights<T, P>,
         P: Psd<T, 2>,
-        B: BlurMethod<T, 2, P>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
         let sample = self.sample(u);
         let g = Geometry::for_packet(packet, &self.surface, sample.direction).ok()?;
         let response = kernel.evaluate(material, packet, &g);
-        let total = response.total().0;
         Some(WeightedSample {
             sample,
             response,
-            weight: Stokes(total.map(|x| weight(x, sample.pdf))),
+            weight: response.scaled(weight(T::one(), sample.pdf)),
         })
     }
 }

@@ -2,9 +2,10 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::{BlurMethod, ClosedForm, Psd, log_sum_exp};
+use super::{BlurMethod, ClosedForm, Psd};
 use crate::error::Error;
-use crate::gaussian::{Gaussian, cholesky_of_sum, in_normal_range, mahalanobis_from_cholesky};
+use crate::gaussian::{Gaussian, cholesky_of_sum, mahalanobis_from_cholesky};
+use crate::numerics::{in_normal_range, log_det_from_cholesky, log_sum_exp};
 use crate::real::Real;
 
 /// The PSD of a Gaussian-correlated random field: `R(x) = σ² g^Λ(x)`, `p(ζ) = σ² |Λ|^{1/2} g^{Λ⁻¹}(ζ)`.
@@ -265,7 +266,7 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     /// [`Self::log_normalized_blur`] from [`Self::blur_parts`].
     #[inline]
     fn log_normalized_from_parts(&self, l: &SMatrix<T, N, N>, m: T) -> T {
-        let log_det_sum = crate::gaussian::log_det_from_cholesky(l);
+        let log_det_sum = log_det_from_cholesky(l);
         self.log_amplitude + T::lit(0.5) * (self.spectral.log_det() - log_det_sum - m)
     }
 

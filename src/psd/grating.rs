@@ -442,11 +442,11 @@ impl<T: Real, const N: usize> BlurMethod<T, N, Grating<T, N>> for ClosedForm {
         h: &SVector<T, N>,
     ) -> T {
         let v = ClosedForm.normalized_blur(psd, cov, h);
-        if crate::gaussian::in_normal_range(v) {
+        if crate::numerics::in_normal_range(v) {
             return v.ln();
         }
         let half_log_det = T::lit(0.5) * cov.log_det();
-        super::log_sum_exp(
+        crate::numerics::log_sum_exp(
             psd.orders
                 .iter()
                 .map(|(z, e)| e.ln() + cov.log_value(&(h - z)) - half_log_det),

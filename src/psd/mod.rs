@@ -176,15 +176,6 @@ pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
     }
 }
 
-/// `ln Σᵢ e^{xᵢ}` without overflow or underflow (`−∞` for an empty or all-`−∞` list).
-#[inline]
-pub(crate) fn log_sum_exp<T: Real>(terms: impl Iterator<Item = T> + Clone) -> T {
-    // Start from the most negative finite number: with every term −∞ the sum is then 0 and
-    // the result −MAX + ln 0 = −∞, with no 0/0 or ∞ − ∞ on the way.
-    let m = terms.clone().fold(-T::MAX, |m, x| m.max(x));
-    m + terms.fold(T::zero(), |acc, x| acc + (x - m).exp()).ln()
-}
-
 /// The exact, closed-form blur (Gaussian, Gaussian-mixture, grating and smooth PSDs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ClosedForm;

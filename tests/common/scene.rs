@@ -7,11 +7,11 @@ use std::f64::consts::PI;
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    CoherenceModel, FresnelReflection, Geometry, Kernel, Pbsdf, PolarizationModel, RayleighRice,
+    CoherenceWeights, FresnelReflection, Geometry, Kernel, Pbsdf, PolarizationModel, RayleighRice,
     RoughSurface,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, GaussianPsd};
+use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
 use nalgebra::{Vector3, Vector4};
 use num_complex::Complex;
@@ -70,13 +70,19 @@ pub fn glass(sigma: f64, ell: f64) -> Glass {
     }
 }
 
-pub fn eval<Pol: PolarizationModel, Coh: CoherenceModel, Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
+pub fn eval<Pol, Coh, Sp, Sc>(
     material: &RoughSurface<GaussianPsd<f64, 2>, Sp, Sc>,
     packet: &WavePacket<f64>,
     exit: Vector3<f64>,
-) -> gmueller::interaction::Response<f64> {
+) -> Pol::Output<f64>
+where
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<f64, GaussianPsd<f64, 2>> + Default,
+    Sp: Pbsdf<f64>,
+    Sc: Pbsdf<f64>,
+{
     let g = Geometry::for_packet(packet, &surface(), exit).unwrap();
-    Kernel::<Pol, Coh, ClosedForm>::new(ClosedForm).evaluate(material, packet, &g)
+    Kernel::<Pol, Coh>::default().evaluate(material, packet, &g)
 }
 
 pub fn rel_diff(a: &Vector4<f64>, b: &Vector4<f64>) -> f64 {

@@ -19,11 +19,11 @@ use super::geometry::{self, Geometry};
 use super::{ConstantMueller, Full, Kernel, PlaneWave, RayleighRice, RoughSurface};
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
-use crate::fresnel::{HYPOT_PLAIN, principal_sqrt};
 use crate::mueller::Mueller;
 use crate::mueller::batch::{strided, strided_mut};
+use crate::numerics::{HYPOT_PLAIN, principal_sqrt};
 use crate::packet::WavePacket;
-use crate::psd::{ClosedForm, GaussianPsd, Psd};
+use crate::psd::{GaussianPsd, Psd};
 use crate::real::Real;
 
 mod lanes;
@@ -212,7 +212,7 @@ impl<'a, T> StokesSoa<'a, T> {
 /// };
 /// plane_wave_rayleigh_rice(&material, &packet, &surface, &exits, &mut out).unwrap();
 ///
-/// let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
+/// let kernel = Kernel::<Full, PlaneWave>::default();
 /// for i in 0..3 {
 ///     let g = Geometry::for_packet(&packet, &surface, Vector3::new(x[i], y[i], z[i])).unwrap();
 ///     let one = kernel.evaluate(&material, &packet, &g).scattered;
@@ -265,7 +265,7 @@ fn portable<T: Real>(
         specular: ConstantMueller(Mueller(nalgebra::Matrix4::zeros())),
         scatter,
     };
-    let kernel = Kernel::<Full, PlaneWave, ClosedForm>::new(ClosedForm);
+    let kernel = Kernel::<Full, PlaneWave>::new(PlaneWave);
     let prepared = kernel.prepare(packet, surface)?;
     for i in 0..exits.len() {
         let g = Geometry::for_packet(packet, surface, exit(i))?;

@@ -1,0 +1,175 @@
+//! The S2.20 kernel at a chosen model level.
+
+use core::marker::PhantomData;
+
+use super::coherence::{CoherenceModel, CoherenceWeights};
+use super::geometry::{self, Geometry};
+use super::material::RoughSurface;
+use super::pbsdf::Pbsdf;
+use super::polarization::PolarizationModel;
+use super::prepared::PreparedPacket;
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::packet::WavePacket;
+use crate::psd::Psd;
+use crate::real::Real;
+
+/// The S2.20 kernel at a chosen model level: polarization `Pol` ([`super::Intensity`],
+/// [`super::OneShape`], [`super::Full`]) and coherence `Coh` ([`super::PlaneWave`],
+/// [`super::Partial`]`<B>` with its blur method `B`, [`super::Incoherent`]).
+///
+/// `Kernel::<Full, Partial>::default()` blurs with [`crate::psd::ClosedForm`]; another blur
+/// method goes into the coherence model: `Kernel::<Full, _>::new(Partial(GaussHermite::new(8)?))`.
+/// To choose the level at run time, see [`super::Level`].
+///
+/// # Examples
+/// ```
+/// use gmueller::frame::Frame;
+/// use gmueller::interaction::{Full, Geometry, Kernel, Partial, FresnelReflection, RayleighRice, RoughSurface};
+/// use gmueller::packet::{CoherenceShape, WavePacket};
+/// use gmueller::psd::GaussianPsd;
+/// use gmueller::stokes::Stokes;
+/// use nalgebra::Vector3;
+/// use num_complex::Complex;
+///
+/// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+/// let travel = Vector3::new(0.5_f64, 0.0, -(0.75_f64).sqrt()); // 30° incidence
+/// let frame = Frame::sp(travel, Vector3::z()).unwrap();
+/// let packet = WavePacket::from_stokes(
+///     Stokes::unpolarized(1.0).unwrap(),
+///     CoherenceShape::isotropic(10.0).unwrap(), frame, 0.5).unwrap();
+/// let glass = Complex::new(1.5, 0.0);
+/// let material = RoughSurface {
+///     psd: GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap(), // σ = 10 nm, ℓ = 2 µm
+///     specular: FresnelReflection::new(glass).unwrap(),
+///     scatter: RayleighRice::new(glass).unwrap(),
+/// };
+/// let kernel = Kernel::<Full, Partial>::default();
+/// let exit = Vector3::new(0.6, 0.1, 0.79);
+/// let g = Geometry::new(packet.wavenumber(), &surface, -travel, exit).unwrap();
+/// let r = kernel.evaluate(&material, &packet, &g);
+/// assert!(r.scattered.s0() > 0.0 && r.scattered.s0().is_finite());
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Kernel<Pol, Coh> {
+    coherence: Coh,
+    _polarization: PhantomData<Pol>,
+}
+
+impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
+    /// A kernel with the coherence model `coherence` (e.g. `Partial(GaussHermite::new(8)?)`).
+    #[must_use]
+    pub fn new(coherence: Coh) -> Self {
+        Self {
+            coherence,
+            _polarization: PhantomData,
+        }
+    }
+
+    /// The coherence model (with its blur method for [`super::Partial`]).
+    #[must_use]
+    pub fn coherence(&self) -> &Coh {
+        &self.coherence
+    }
+
+    /// Evaluates S2.20 for `packet` leaving along `g.exit` (see the module formula).
+    ///
+    /// `g` must have been built for this packet: `g.k` its wavenumber and `g.to_source` its
+    /// reversed propagation direction (e.g. by [`Geometry::for_packet`]). For several exit
+    /// directions of one packet, [`Kernel::prepare`] once and [`Kernel::evaluate_prepared`]
+    /// per direction give the same result without repeating the per-packet work.
+    #[must_use]
+    pub fn evaluate<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        packet: &WavePacket<T>,
+        g: &Geometry<T>,
+    ) -> Pol::Output<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        let prepared = self.prepare_unchecked(packet, &g.surface, &g.incident_sp);
+        self.evaluate_prepared(material, &prepared, g)
+    }
+
+    /// The per-packet part of the kernel at this model level — the sections `Ξ_α` of the
+    /// packet's coherence by the surface (Cholesky-factored) and the rotation `T` from the
+    /// packet frame to the incident s/p frame — computed once for any number of exit
+    /// directions ([`Kernel::evaluate_prepared`]).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] when the packet does not travel toward the surface
+    /// (`k̂ · n̂ ≥ 0`), as [`Geometry::for_packet`] would report for every exit direction.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, PhaseScreen, RoughSurface};
+    /// use gmueller::packet::{CoherenceShape, WavePacket};
+    /// use gmueller::psd::GaussianPsd;
+    /// use gmueller::stokes::Stokes;
+    /// use nalgebra::Vector3;
+    ///
+    /// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    /// let travel = Vector3::new(0.5_f64, 0.0, -(0.75_f64).sqrt());
+    /// let packet = WavePacket::from_stokes(
+    ///     Stokes::unpolarized(1.0).unwrap(), CoherenceShape::isotropic(3.0).unwrap(),
+    ///     Frame::sp(travel, Vector3::z()).unwrap(), 0.5).unwrap();
+    /// let material = RoughSurface {
+    ///     psd: GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap(),
+    ///     specular: PhaseScreen::new(0.04).unwrap(),
+    ///     scatter: PhaseScreen::new(0.04).unwrap(),
+    /// };
+    /// let kernel = Kernel::<Full, Partial>::default();
+    /// let prepared = kernel.prepare(&packet, &surface).unwrap();
+    /// for exit in [Vector3::new(0.5, 0.0, 0.87), Vector3::new(0.3, 0.2, 0.93)] {
+    ///     let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+    ///     let once = kernel.evaluate(&material, &packet, &g).total().s0();
+    ///     let many = kernel.evaluate_prepared(&material, &prepared, &g).total().s0();
+    ///     assert!((once - many).abs() <= 1e-12 * once);
+    /// }
+    /// ```
+    pub fn prepare<T: Real>(
+        &self,
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+    ) -> Result<PreparedPacket<T, Pol, Coh>, Error> {
+        let to_source = geometry::unit(-packet.direction(), "direction to the source")?;
+        let (_, incident_sp) = geometry::incidence(&to_source, surface)?;
+        Ok(self.prepare_unchecked(packet, surface, &incident_sp))
+    }
+
+    /// [`Kernel::prepare`] with the incident s/p frame already built.
+    fn prepare_unchecked<T: Real>(
+        &self,
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+        incident_sp: &Frame<T>,
+    ) -> PreparedPacket<T, Pol, Coh> {
+        let plan = Pol::plan(packet, Coh::USES_SHAPE).0;
+        PreparedPacket::new(packet, surface, incident_sp, plan)
+    }
+
+    /// [`Kernel::evaluate`] with the per-packet work done by [`Kernel::prepare`]; `g` must be
+    /// a geometry of that packet on that surface (e.g. [`Geometry::for_packet`]).
+    #[must_use]
+    pub fn evaluate_prepared<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Pol, Coh>,
+        g: &Geometry<T>,
+    ) -> Pol::Output<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        Pol::evaluate(&self.coherence, material, prepared, g)
+    }
+}

@@ -1,0 +1,192 @@
+//! Run-time choice among the monomorphised model levels, in one place (as `RustFFT`'s planner
+//! keeps the choice among its algorithms in one library enum, not in every caller).
+
+use core::fmt::Debug;
+
+use super::coherence::{CoherenceLevel, CoherenceWeights, Incoherent, Partial, PlaneWave};
+use super::geometry::Geometry;
+use super::kernel::Kernel;
+use super::material::RoughSurface;
+use super::pbsdf::Pbsdf;
+use super::polarization::{
+    Full, Intensity, KernelOutput, LevelResponse, OneShape, PolarizationLevel, PolarizationModel,
+};
+use crate::packet::WavePacket;
+use crate::psd::{BlurMethod, Psd};
+use crate::real::Real;
+
+/// A model level as a value: polarization × coherence (the blur method of
+/// [`Partial`] aside). Types remain the way to fix a level at compile time (`Kernel<Full,
+/// Partial>`); a `Level` picks one of the nine monomorphised kernels at run time
+/// ([`Level::dispatch`], [`Level::evaluate`]).
+///
+/// # Examples
+/// ```
+/// use gmueller::interaction::{KernelOutput, Level};
+/// use gmueller::psd::ClosedForm;
+/// # use gmueller::frame::Frame;
+/// # use gmueller::interaction::{Geometry, PhaseScreen, RoughSurface};
+/// # use gmueller::packet::{CoherenceShape, WavePacket};
+/// # use gmueller::psd::GaussianPsd;
+/// # use gmueller::stokes::Stokes;
+/// # use nalgebra::Vector3;
+/// # let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+/// # let travel = Vector3::new(0.5_f64, 0.0, -(0.75_f64).sqrt());
+/// # let packet = WavePacket::from_stokes(Stokes::unpolarized(1.0).unwrap(),
+/// #     CoherenceShape::isotropic(3.0).unwrap(), Frame::sp(travel, Vector3::z()).unwrap(), 0.5).unwrap();
+/// # let material = RoughSurface { psd: GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap(),
+/// #     specular: PhaseScreen::new(0.04).unwrap(), scatter: PhaseScreen::new(0.04).unwrap() };
+/// # let g = Geometry::for_packet(&packet, &surface, Vector3::new(0.5, 0.0, 0.87)).unwrap();
+/// for level in Level::ALL {
+///     let r = level.evaluate(ClosedForm, &material, &packet, &g);
+///     assert!(r.scattered_intensity() >= 0.0, "{}", level.name());
+/// }
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Level {
+    /// The polarization level.
+    pub polarization: PolarizationLevel,
+    /// The coherence level.
+    pub coherence: CoherenceLevel,
+}
+
+/// A computation to run with the kernel of a [`Level`] chosen at run time: its method is
+/// instantiated for each of the nine monomorphised kernels ([`Level::dispatch`]).
+pub trait LevelVisitor<T: Real, P: Psd<T, 2>> {
+    /// What the computation returns.
+    type Output;
+    /// Runs the computation with `kernel`, the kernel of `level`.
+    fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>) -> Self::Output
+    where
+        Pol: PolarizationModel,
+        Coh: CoherenceWeights<T, P>;
+}
+
+impl Level {
+    /// The nine levels, from the cheapest polarization level up, coherence in the order
+    /// `PlaneWave`, `Partial`, `Incoherent`.
+    pub const ALL: [Self; 9] = {
+        use CoherenceLevel as C;
+        use PolarizationLevel as P;
+        [
+            Self::new(P::Intensity, C::PlaneWave),
+            Self::new(P::Intensity, C::Partial),
+            Self::new(P::Intensity, C::Incoherent),
+            Self::new(P::OneShape, C::PlaneWave),
+            Self::new(P::OneShape, C::Partial),
+            Self::new(P::OneShape, C::Incoherent),
+            Self::new(P::Full, C::PlaneWave),
+            Self::new(P::Full, C::Partial),
+            Self::new(P::Full, C::Incoherent),
+        ]
+    };
+
+    /// The level `polarization` × `coherence`.
+    #[must_use]
+    pub const fn new(polarization: PolarizationLevel, coherence: CoherenceLevel) -> Self {
+        Self {
+            polarization,
+            coherence,
+        }
+    }
+
+    /// `"Full/Partial"` and so on.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        use CoherenceLevel as C;
+        use PolarizationLevel as P;
+        match (self.polarization, self.coherence) {
+            (P::Intensity, C::PlaneWave) => "Intensity/PlaneWave",
+            (P::Intensity, C::Partial) => "Intensity/Partial",
+            (P::Intensity, C::Incoherent) => "Intensity/Incoherent",
+            (P::OneShape, C::PlaneWave) => "OneShape/PlaneWave",
+            (P::OneShape, C::Partial) => "OneShape/Partial",
+            (P::OneShape, C::Incoherent) => "OneShape/Incoherent",
+            (P::Full, C::PlaneWave) => "Full/PlaneWave",
+            (P::Full, C::Partial) => "Full/Partial",
+            (P::Full, C::Incoherent) => "Full/Incoherent",
+        }
+    }
+
+    /// Runs `visitor` with this level's kernel, `blur` the blur method of [`Partial`] (unused by
+    /// the other coherence levels). Every arm is a monomorphised kernel: the choice costs one
+    /// `match`, not a dynamic call per evaluation.
+    pub fn dispatch<T, P, B, V>(self, blur: B, visitor: V) -> V::Output
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        B: BlurMethod<T, 2, P> + Clone + Debug,
+        V: LevelVisitor<T, P>,
+    {
+        use CoherenceLevel as C;
+        use PolarizationLevel as Pl;
+        match (self.polarization, self.coherence) {
+            (Pl::Intensity, C::PlaneWave) => {
+                visitor.visit(self, Kernel::<Intensity, _>::new(PlaneWave))
+            }
+            (Pl::Intensity, C::Partial) => {
+                visitor.visit(self, Kernel::<Intensity, _>::new(Partial(blur)))
+            }
+            (Pl::Intensity, C::Incoherent) => {
+                visitor.visit(self, Kernel::<Intensity, _>::new(Incoherent))
+            }
+            (Pl::OneShape, C::PlaneWave) => {
+                visitor.visit(self, Kernel::<OneShape, _>::new(PlaneWave))
+            }
+            (Pl::OneShape, C::Partial) => {
+                visitor.visit(self, Kernel::<OneShape, _>::new(Partial(blur)))
+            }
+            (Pl::OneShape, C::Incoherent) => {
+                visitor.visit(self, Kernel::<OneShape, _>::new(Incoherent))
+            }
+            (Pl::Full, C::PlaneWave) => visitor.visit(self, Kernel::<Full, _>::new(PlaneWave)),
+            (Pl::Full, C::Partial) => visitor.visit(self, Kernel::<Full, _>::new(Partial(blur))),
+            (Pl::Full, C::Incoherent) => visitor.visit(self, Kernel::<Full, _>::new(Incoherent)),
+        }
+    }
+
+    /// [`super::Kernel::evaluate`] at this level (see [`Level::dispatch`]).
+    #[must_use]
+    pub fn evaluate<T, P, B, Sp, Sc>(
+        self,
+        blur: B,
+        material: &RoughSurface<P, Sp, Sc>,
+        packet: &WavePacket<T>,
+        g: &Geometry<T>,
+    ) -> LevelResponse<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        B: BlurMethod<T, 2, P> + Clone + Debug,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        struct Evaluate<'a, T: Real, P, Sp, Sc> {
+            material: &'a RoughSurface<P, Sp, Sc>,
+            packet: &'a WavePacket<T>,
+            g: &'a Geometry<T>,
+        }
+        impl<T: Real, P: Psd<T, 2>, Sp: Pbsdf<T>, Sc: Pbsdf<T>> LevelVisitor<T, P>
+            for Evaluate<'_, T, P, Sp, Sc>
+        {
+            type Output = LevelResponse<T>;
+            fn visit<Pol, Coh>(self, _level: Level, kernel: Kernel<Pol, Coh>) -> LevelResponse<T>
+            where
+                Pol: PolarizationModel,
+                Coh: CoherenceWeights<T, P>,
+            {
+                kernel
+                    .evaluate(self.material, self.packet, self.g)
+                    .into_level_response()
+            }
+        }
+        self.dispatch(
+            blur,
+            Evaluate {
+                material,
+                packet,
+                g,
+            },
+        )
+    }
+}

@@ -1,0 +1,54 @@
+//! Specular reflection by a planar interface (Fresnel).
+
+use num_complex::Complex;
+
+use super::{Geometry, Pbsdf, validate_eta};
+use crate::error::Error;
+use crate::frame::frame_change_mueller;
+use crate::fresnel;
+use crate::mueller::Mueller;
+use crate::real::Real;
+
+/// Specular reflection by a planar interface of relative index `η = n + iκ` (dielectric or
+/// conductor): the Mueller matrix of [`fresnel::reflection`] at `cos θ_i`, in s/p frames.
+///
+/// # Formula
+/// ```text
+/// M = T(F_spec → F_exit) · A_mül (J* ⊗ J) A_mül⁻¹,   J = fresnel::reflection(cos θ_i, η)
+/// F_spec = Frame::sp(r_spec, n̂),  r_spec = −ŝ + 2 cos θ_i n̂     (shares ŝ with the incident frame)
+/// ```
+/// `J` maps the incident s/p frame to the s/p frame of the *specular* direction; the coherent
+/// lobe's exit directions `r̂ ≠ r_spec` (finite coherence) receive it by the minimal rotation
+/// `r_spec → r̂` ([`crate::frame::frame_change_mueller`], the identity at `r̂ = r_spec`). Without
+/// that transport the output depended on the arbitrary choice of ŝ at normal incidence (a jump
+/// of the Stokes vector across the `Frame::sp` normal-incidence switch; `tests/extremes.rs`,
+/// `normal_incidence_switch_is_invisible_in_a_fixed_frame`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FresnelReflection<T: Real> {
+    eta: Complex<T>,
+}
+
+impl<T: Real> FresnelReflection<T> {
+    /// A Fresnel reflector.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] or [`Error::OutOfRange`] unless `Re η > 0`, `Im η ≥ 0`, finite.
+    pub fn new(eta: Complex<T>) -> Result<Self, Error> {
+        validate_eta(eta)?;
+        Ok(Self { eta })
+    }
+}
+
+impl<T: Real> Pbsdf<T> for FresnelReflection<T> {
+    #[inline]
+    fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
+        let m = Mueller::from_jones(&fresnel::reflection(g.cos_i, self.eta));
+        frame_change_mueller(&g.specular_sp(), &g.exit_sp) * m
+    }
+    /// `M₀₀` (the frame transport leaves it unchanged).
+    #[inline]
+    fn m00(&self, g: &Geometry<T>) -> T {
+        let c = fresnel::coefficients(g.cos_i, self.eta);
+        (c.reflectance_s() + c.reflectance_p()) * T::lit(0.5)
+    }
+}

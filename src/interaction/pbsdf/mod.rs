@@ -1,0 +1,55 @@
+//! Polarimetric BSDFs (S2.19): the classical Mueller matrix `M` of the interaction, from the
+//! incident beam's s/p frame to the exit beam's s/p frame.
+//!
+//! One file per pBSDF; a new one is a new file implementing [`Pbsdf`] (reading the side, the
+//! angles, `h`, the phase factor and the s/p frames from [`Geometry`]) and a `pub use` here.
+
+mod constant;
+mod fresnel_reflection;
+mod ideal_diffuse;
+mod phase_screen;
+mod rayleigh_rice;
+
+pub use constant::ConstantMueller;
+pub use fresnel_reflection::FresnelReflection;
+pub use ideal_diffuse::IdealDiffuse;
+pub use phase_screen::PhaseScreen;
+pub use rayleigh_rice::RayleighRice;
+
+use num_complex::Complex;
+
+use super::geometry::Geometry;
+use crate::error::Error;
+use crate::mueller::Mueller;
+use crate::real::Real;
+
+/// A pBSDF: the Mueller matrix `M(ŝ → r̂)` of S2.19, from the incident s/p frame
+/// ([`Geometry::incident_sp`]) to the exit s/p frame ([`Geometry::exit_sp`]).
+///
+/// `M` is dimensionless here: the kernel supplies the `cos θ_o / λ²` of S2.20.
+pub trait Pbsdf<T: Real> {
+    /// The Mueller matrix for this geometry.
+    #[must_use]
+    fn mueller(&self, g: &Geometry<T>) -> Mueller<T>;
+
+    /// `M₀₀` alone (what the scalar model level needs); override when cheaper than
+    /// [`Pbsdf::mueller`].
+    #[inline]
+    #[must_use]
+    fn m00(&self, g: &Geometry<T>) -> T {
+        self.mueller(g).0[(0, 0)]
+    }
+}
+
+/// `Ok` for a refractive index `η = n + iκ` with `n > 0`, `κ ≥ 0`, both finite.
+pub(super) fn validate_eta<T: Real>(eta: Complex<T>) -> Result<(), Error> {
+    crate::error::ensure_finite("refractive index", [eta.re, eta.im])?;
+    if !(eta.re > T::zero() && eta.im >= T::zero()) {
+        return Err(Error::OutOfRange {
+            what: "refractive index η = n + iκ",
+            value: eta.re.to_f64(),
+            expected: "Re η > 0 and Im η ≥ 0",
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,517 @@
+//! The polarization models of the kernel (a model level): what a level computes per packet and
+//! per exit direction, and what it returns.
+//!
+//! ```text
+//! Intensity:  L₀ = (cos θ_o/λ²) α M₀₀ K S0                     (K from Θ_½; no frames)
+//! OneShape:   L  = (cos θ_o/λ²) α M T K S                      (Θ_½ for every channel)
+//! Full:       L  = (cos θ_o/λ²) α M T Σ_α K_α S_α              (Θ_x, Θ_y, Θ_½; S2.20)
+//! ```
+//! `Full` on a packet with one shape (`Θ_x = Θ_y`, e.g. every packet from
+//! `WavePacket::from_stokes` and `exitant_packet`) has three equal weights and takes the
+//! one-weight path of `OneShape`: same result, same cost.
+
+use core::fmt::Debug;
+
+use nalgebra::Vector4;
+
+use super::coherence::CoherenceWeights;
+use super::geometry::Geometry;
+use super::material::RoughSurface;
+use super::pbsdf::Pbsdf;
+use super::prepared::{Plan, PreparedPacket};
+use crate::packet::WavePacket;
+use crate::psd::Psd;
+use crate::real::Real;
+use crate::stokes::Stokes;
+
+pub(crate) mod sealed {
+    pub trait Sealed {}
+}
+
+/// The polarization levels, as values (for reports and run-time selection, [`super::Level`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PolarizationLevel {
+    /// S0 only.
+    Intensity,
+    /// Full Stokes, one shape matrix (`Θ_½`) for every channel.
+    OneShape,
+    /// Full S2.20: `Θ_x`, `Θ_y`, `Θ_½`.
+    Full,
+}
+
+/// What a kernel returns for one exit direction, at any level: the intensities, and the
+/// Stokes vectors where the level computes them.
+pub trait KernelOutput<T: Real>: Copy + Debug + PartialEq {
+    /// `S0` of the coherent specular (direct) lobe, attenuation included.
+    #[must_use]
+    fn specular_intensity(&self) -> T;
+    /// `S0` of the scattered part, attenuation included.
+    #[must_use]
+    fn scattered_intensity(&self) -> T;
+    /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
+    #[must_use]
+    fn attenuation(&self) -> T;
+    /// `(specular, scattered)` Stokes radiances in the exit s/p frame; `None` at the
+    /// [`Intensity`] level, which does not compute them (it is not "unpolarized").
+    #[must_use]
+    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)>;
+    /// `specular + scattered` intensity.
+    #[inline]
+    #[must_use]
+    fn total_intensity(&self) -> T {
+        self.specular_intensity() + self.scattered_intensity()
+    }
+    /// The output as a [`LevelResponse`] (so that one type holds the output of any level).
+    #[must_use]
+    fn into_level_response(self) -> LevelResponse<T>;
+    /// Every radiance multiplied by `factor` (the attenuation unchanged), e.g. `1/pdf`.
+    #[must_use]
+    fn scaled(&self, factor: T) -> Self;
+}
+
+/// What a kernel of a run-time [`super::Level`] returns: the level's own output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LevelResponse<T: Real> {
+    /// From the [`Intensity`] level.
+    Intensity(IntensityResponse<T>),
+    /// From the [`OneShape`] or [`Full`] level.
+    Stokes(Response<T>),
+}
+
+impl<T: Real> KernelOutput<T> for LevelResponse<T> {
+    #[inline]
+    fn specular_intensity(&self) -> T {
+        match self {
+            Self::Intensity(r) => r.specular,
+            Self::Stokes(r) => r.specular.s0(),
+        }
+    }
+    #[inline]
+    fn scattered_intensity(&self) -> T {
+        match self {
+            Self::Intensity(r) => r.scattered,
+            Self::Stokes(r) => r.scattered.s0(),
+        }
+    }
+    #[inline]
+    fn attenuation(&self) -> T {
+        match self {
+            Self::Intensity(r) => r.attenuation,
+            Self::Stokes(r) => r.attenuation,
+        }
+    }
+    #[inline]
+    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
+        match self {
+            Self::Intensity(_) => None,
+            Self::Stokes(r) => Some((r.specular, r.scattered)),
+        }
+    }
+    #[inline]
+    fn into_level_response(self) -> LevelResponse<T> {
+        self
+    }
+    #[inline]
+    fn scaled(&self, factor: T) -> Self {
+        match self {
+            Self::Intensity(r) => Self::Intensity(r.scaled(factor)),
+            Self::Stokes(r) => Self::Stokes(r.scaled(factor)),
+        }
+    }
+}
+
+/// The [`OneShape`] and [`Full`] levels' answer for one exit direction: Stokes radiances in the
+/// exit s/p frame ([`Geometry::exit_sp`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Response<T: Real> {
+    /// The coherent specular (direct) lobe, attenuation included.
+    pub specular: Stokes<T>,
+    /// The scattered (diffuse) part, attenuation included.
+    pub scattered: Stokes<T>,
+    /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
+    pub attenuation: T,
+}
+
+impl<T: Real> Response<T> {
+    /// `specular + scattered`.
+    #[must_use]
+    pub fn total(&self) -> Stokes<T> {
+        Stokes(self.specular.0 + self.scattered.0)
+    }
+}
+
+impl<T: Real> KernelOutput<T> for Response<T> {
+    #[inline]
+    fn specular_intensity(&self) -> T {
+        self.specular.s0()
+    }
+    #[inline]
+    fn scattered_intensity(&self) -> T {
+        self.scattered.s0()
+    }
+    #[inline]
+    fn attenuation(&self) -> T {
+        self.attenuation
+    }
+    #[inline]
+    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
+        Some((self.specular, self.scattered))
+    }
+    #[inline]
+    fn into_level_response(self) -> LevelResponse<T> {
+        LevelResponse::Stokes(self)
+    }
+    #[inline]
+    fn scaled(&self, factor: T) -> Self {
+        Self {
+            specular: Stokes(self.specular.0 * factor),
+            scattered: Stokes(self.scattered.0 * factor),
+            attenuation: self.attenuation,
+        }
+    }
+}
+
+/// The [`Intensity`] level's answer for one exit direction: radiances `L₀` only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IntensityResponse<T: Real> {
+    /// `L₀` of the coherent specular (direct) lobe, attenuation included.
+    pub specular: T,
+    /// `L₀` of the scattered (diffuse) part, attenuation included.
+    pub scattered: T,
+    /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
+    pub attenuation: T,
+}
+
+impl<T: Real> IntensityResponse<T> {
+    /// `specular + scattered`.
+    #[must_use]
+    pub fn total(&self) -> T {
+        self.specular + self.scattered
+    }
+}
+
+impl<T: Real> KernelOutput<T> for IntensityResponse<T> {
+    #[inline]
+    fn specular_intensity(&self) -> T {
+        self.specular
+    }
+    #[inline]
+    fn scattered_intensity(&self) -> T {
+        self.scattered
+    }
+    #[inline]
+    fn attenuation(&self) -> T {
+        self.attenuation
+    }
+    #[inline]
+    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
+        None
+    }
+    #[inline]
+    fn into_level_response(self) -> LevelResponse<T> {
+        LevelResponse::Intensity(self)
+    }
+    #[inline]
+    fn scaled(&self, factor: T) -> Self {
+        Self {
+            specular: self.specular * factor,
+            scattered: self.scattered * factor,
+            attenuation: self.attenuation,
+        }
+    }
+}
+
+/// How much of the polarization a kernel keeps (a model level), and how it evaluates S2.20.
+///
+/// Sealed: the three levels below are the crate's. Their `plan` and `evaluate` are what
+/// [`super::Kernel::prepare`] and [`super::Kernel::evaluate_prepared`] run.
+pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
+    /// Which level.
+    const LEVEL: PolarizationLevel;
+
+    /// What the level returns per exit direction.
+    type Output<T: Real>: KernelOutput<T>;
+
+    /// The per-packet work the level needs (which sections `Ξ_α`, the rotation `T`, the channel
+    /// logarithms of the Full level's channel mix).
+    #[must_use]
+    fn plan<T: Real>(packet: &WavePacket<T>, uses_shape: bool) -> PreparationPlan;
+
+    /// The level's S2.20 for one exit direction `g` (see the module formula).
+    #[must_use]
+    fn evaluate<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> Self::Output<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>;
+}
+
+/// The per-packet work a polarization level asks for ([`PolarizationModel::plan`]); opaque.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PreparationPlan(pub(crate) Plan);
+
+/// Intensity only: `L₀ = (cos θ_o/λ²) α M₀₀ K S0` with `K` from `Θ_½`. No frames, no 4×4 products;
+/// returns [`IntensityResponse`].
+#[doc(alias = "Scalar")]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Intensity;
+/// Stokes vectors with one coherence shape, `Θ_½`, for all channels: `L = … M T K S`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OneShape;
+/// The full S2.20 with a shape matrix per channel.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Full;
+
+impl sealed::Sealed for Intensity {}
+impl sealed::Sealed for OneShape {}
+impl sealed::Sealed for Full {}
+
+/// `α` and `ln(α/λ²)` for one exit: the Debye–Waller factor from the geometry's phase factor,
+/// `λ = 2π/k` from the packet. The factor `cos θ_o ∈ (0, 1]` multiplies the Stokes vector
+/// instead (one logarithm less per exit; it cannot underflow it).
+#[inline]
+fn front<T: Real, P: Psd<T, 2>, Pol, Coh>(
+    psd: &P,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    g: &Geometry<T>,
+) -> (T, T) {
+    let v = g.phase_factor();
+    let ln_alpha = -(v * v) * psd.variance();
+    (ln_alpha.exp(), prepared.two_ln_k_over_2pi + ln_alpha)
+}
+
+/// The scattered part at the one-weight levels, `u · S0 α K/λ²`: the linear weight (one
+/// exponential) where it and the whole scale are safely normal, the log form otherwise.
+#[inline]
+fn one_weight_scatter<T, P, Pol, Coh>(
+    coherence: &Coh,
+    psd: &P,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    g: &Geometry<T>,
+    (attenuation, ln_front): (T, T),
+    u: Vector4<T>,
+) -> Vector4<T>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Coh: CoherenceWeights<T, P>,
+{
+    let xi = prepared.sections[2].as_ref();
+    let kd = coherence.scatter_weight(psd, xi, &g.h_t);
+    match prepared.linear_scale(kd, attenuation) {
+        Some(e) => u * e,
+        None => {
+            let ld = ln_front + coherence.log_scatter_weight(psd, xi, &g.h_t);
+            if prepared.is_dark(ld) {
+                Vector4::zeros()
+            } else {
+                prepared.scaled(u, ld)
+            }
+        }
+    }
+}
+
+/// The [`OneShape`] path (also [`Full`] on single-shape packets and without shapes): `M T S K`.
+#[inline]
+fn one_shape<T, P, Sp, Sc, Pol, Coh>(
+    coherence: &Coh,
+    material: &RoughSurface<P, Sp, Sc>,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    g: &Geometry<T>,
+) -> Response<T>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+    Coh: CoherenceWeights<T, P>,
+{
+    let psd = &material.psd;
+    let (attenuation, ln_front) = front(psd, prepared, g);
+    let ls = ln_front + coherence.log_specular_weight(prepared.sections[2].as_ref(), &g.h_t);
+    let t = prepared.t_stokes * g.cos_o;
+    // Off the specular lobe (and always for a plane wave) its weight underflows: skip the
+    // specular pBSDF there.
+    let specular = if Coh::USES_SHAPE && !prepared.is_dark(ls) {
+        prepared.scaled(material.specular.mueller(g).0 * t, ls)
+    } else {
+        Vector4::zeros()
+    };
+    let scattered = one_weight_scatter(
+        coherence,
+        psd,
+        prepared,
+        g,
+        (attenuation, ln_front),
+        material.scatter.mueller(g).0 * t,
+    );
+    Response {
+        specular: Stokes(specular),
+        scattered: Stokes(scattered),
+        attenuation,
+    }
+}
+
+impl PolarizationModel for Intensity {
+    const LEVEL: PolarizationLevel = PolarizationLevel::Intensity;
+    type Output<T: Real> = IntensityResponse<T>;
+
+    #[inline]
+    fn plan<T: Real>(packet: &WavePacket<T>, uses_shape: bool) -> PreparationPlan {
+        PreparationPlan(Plan {
+            sections: [false, false, uses_shape],
+            rotation: false,
+            channel_logs: false,
+            single_shape: packet.has_single_shape(),
+        })
+    }
+
+    #[inline]
+    fn evaluate<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> IntensityResponse<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>,
+    {
+        let psd = &material.psd;
+        let (attenuation, ln_front) = front(psd, prepared, g);
+        let xi = prepared.sections[2].as_ref();
+        // Off the specular lobe (and always for a plane wave) its weight is 0.
+        let ls = ln_front + coherence.log_specular_weight(xi, &g.h_t);
+        let u = |m00: T| Vector4::new(m00 * g.cos_o, T::zero(), T::zero(), T::zero());
+        let specular = if prepared.is_dark(ls) {
+            T::zero()
+        } else {
+            prepared.scaled(u(material.specular.m00(g)), ls)[0]
+        };
+        let scattered = one_weight_scatter(
+            coherence,
+            psd,
+            prepared,
+            g,
+            (attenuation, ln_front),
+            u(material.scatter.m00(g)),
+        )[0];
+        IntensityResponse {
+            specular,
+            scattered,
+            attenuation,
+        }
+    }
+}
+
+impl PolarizationModel for OneShape {
+    const LEVEL: PolarizationLevel = PolarizationLevel::OneShape;
+    type Output<T: Real> = Response<T>;
+
+    #[inline]
+    fn plan<T: Real>(packet: &WavePacket<T>, uses_shape: bool) -> PreparationPlan {
+        PreparationPlan(Plan {
+            sections: [false, false, uses_shape],
+            rotation: true,
+            channel_logs: false,
+            single_shape: packet.has_single_shape(),
+        })
+    }
+
+    #[inline]
+    fn evaluate<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> Response<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>,
+    {
+        one_shape(coherence, material, prepared, g)
+    }
+}
+
+impl PolarizationModel for Full {
+    const LEVEL: PolarizationLevel = PolarizationLevel::Full;
+    type Output<T: Real> = Response<T>;
+
+    /// With one shape (or without shapes) the three channels' weights are one and the same:
+    /// the [`OneShape`] plan; otherwise all three sections and the channel logarithms.
+    #[inline]
+    fn plan<T: Real>(packet: &WavePacket<T>, uses_shape: bool) -> PreparationPlan {
+        let single = packet.has_single_shape();
+        let three = uses_shape && !single;
+        PreparationPlan(Plan {
+            sections: [three, three, uses_shape],
+            rotation: true,
+            channel_logs: three,
+            single_shape: single,
+        })
+    }
+
+    #[inline]
+    fn evaluate<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> Response<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>,
+    {
+        if !Coh::USES_SHAPE || prepared.single_shape {
+            return one_shape(coherence, material, prepared, g);
+        }
+        let psd = &material.psd;
+        let (attenuation, ln_front) = front(psd, prepared, g);
+        let log_weights = |i: usize| {
+            let xi = prepared.sections[i].as_ref();
+            (
+                coherence.log_specular_weight(xi, &g.h_t),
+                coherence.log_scatter_weight(psd, xi, &g.h_t),
+            )
+        };
+        let ((xs, xd), (ys, yd), (hs, hd)) = (log_weights(0), log_weights(1), log_weights(2));
+        let (spec_in, spec_m) = prepared.channel_mix(xs, ys, hs);
+        let (scat_in, scat_m) = prepared.channel_mix(xd, yd, hd);
+        let (spec_ln, scat_ln) = (ln_front + spec_m, ln_front + scat_m);
+        // Off the specular lobe its weight underflows: skip the specular pBSDF there.
+        let specular = if prepared.is_dark(spec_ln) {
+            Vector4::zeros()
+        } else {
+            prepared.scaled(
+                material.specular.mueller(g).0 * (spec_in * g.cos_o),
+                spec_ln,
+            )
+        };
+        let scattered = if prepared.is_dark(scat_ln) {
+            Vector4::zeros()
+        } else {
+            prepared.scaled(material.scatter.mueller(g).0 * (scat_in * g.cos_o), scat_ln)
+        };
+        Response {
+            specular: Stokes(specular),
+            scattered: Stokes(scattered),
+            attenuation,
+        }
+    }
+}

@@ -1,0 +1,224 @@
+//! The per-packet part of the kernel: everything that depends on the packet and the surface
+//! but not on the exit direction.
+
+use core::marker::PhantomData;
+
+use nalgebra::{Matrix4, Vector4};
+
+use super::coherence::{ln_smallest_subnormal, ln_two_pi, neg_infinity};
+use super::section::surface_inverse_coherence;
+use crate::frame::{Frame, frame_change_mueller};
+use crate::gaussian::Gaussian;
+use crate::packet::{Channel, WavePacket};
+use crate::real::Real;
+
+/// What the per-packet work computes, chosen by the polarization level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Plan {
+    /// Which sections: `Ξ_x`, `Ξ_y`, `Ξ_½`.
+    pub(crate) sections: [bool; 3],
+    /// The rotation `T` to the incident s/p frame (not needed for intensity only).
+    pub(crate) rotation: bool,
+    /// The channel logarithms of the Full level's channel mix.
+    pub(crate) channel_logs: bool,
+    /// The packet has one shape (`Θ_x = Θ_y`).
+    pub(crate) single_shape: bool,
+}
+
+/// The per-packet part of a [`super::Kernel`] at model level (`Pol`, `Coh`), from
+/// [`super::Kernel::prepare`].
+///
+/// Holds the packet's Stokes vector normalised by `S0` with the logarithms of its channel
+/// intensities (for the log-space channel mix of [`super::Full`]), the rotation `T` (S2.4) from the
+/// packet frame to the incident s/p frame, and the surface sections `Ξ_α` of the channels the
+/// level uses (none for [`super::PlaneWave`]; `Ξ_½` only below [`super::Full`] and for
+/// single-shape packets), each with its Cholesky
+/// factor. No heap allocation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedPacket<T: Real, Pol, Coh> {
+    /// `S0` and `ln S0` (−∞ for a dark packet).
+    pub(crate) s0: T,
+    pub(crate) ln_s0: T,
+    /// `1/λ² = (k/2π)²`.
+    pub(crate) inv_lambda_sq: T,
+    /// `ln(smallest subnormal) − ln S0`: a part whose `ln_e` lies below is 0.
+    pub(crate) dark_below: T,
+    /// `2 ln(k/2π) = −2 ln λ`.
+    pub(crate) two_ln_k_over_2pi: T,
+    /// `ln(S_x/S0)`, `ln(S_y/S0)`, `ln(|S2 + iS3|/(2 S0))` (−∞ where 0).
+    pub(crate) ln_sx: T,
+    pub(crate) ln_sy: T,
+    pub(crate) ln_c: T,
+    /// `(S2, S3)/|S2 + iS3|`, the phase of `μ` (0 where `S2 = S3 = 0`).
+    pub(crate) phase: (T, T),
+    pub(crate) t: Matrix4<T>,
+    /// `T S/S0`.
+    pub(crate) t_stokes: Vector4<T>,
+    /// `Ξ_x`, `Ξ_y`, `Ξ_½` (`None` where unused or not positive definite).
+    pub(crate) sections: [Option<Gaussian<T, 2>>; 3],
+    /// `Θ_x = Θ_y`: the `Full` level then takes the one-weight path (the three weights agree).
+    pub(crate) single_shape: bool,
+    _levels: PhantomData<(Pol, Coh)>,
+}
+
+impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
+    /// The per-packet work of `plan` (chosen by the polarization level, see
+    /// `polarization.rs`): the sections it asks for, the rotation `T` unless intensity only,
+    /// the channel logarithms for the Full level's channel mix.
+    pub(crate) fn new(
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+        incident_sp: &Frame<T>,
+        plan: Plan,
+    ) -> Self {
+        let section = |wanted: bool, channel| {
+            if wanted {
+                surface_inverse_coherence(packet, channel, surface)
+            } else {
+                None
+            }
+        };
+        let sections = [
+            section(plan.sections[0], Channel::X),
+            section(plan.sections[1], Channel::Y),
+            section(plan.sections[2], Channel::Half),
+        ];
+        let stokes = packet.stokes().0;
+        let s0 = stokes[0];
+        let hat = if s0 > T::zero() {
+            stokes / s0
+        } else {
+            Vector4::zeros()
+        };
+        let t = if plan.rotation {
+            frame_change_mueller(packet.frame(), incident_sp).0
+        } else {
+            Matrix4::identity()
+        };
+        // The channel intensities in log form, for the Full level's channel mix only.
+        let (ln_sx, ln_sy, ln_c, phase) = if plan.channel_logs {
+            let half = T::lit(0.5);
+            let c = hat[2].hypot(hat[3]);
+            let phase = if c > T::zero() {
+                (hat[2] / c, hat[3] / c)
+            } else {
+                (T::zero(), T::zero())
+            };
+            (
+                ((hat[0] + hat[1]) * half).ln(),
+                ((hat[0] - hat[1]) * half).ln(),
+                (c * half).ln(),
+                phase,
+            )
+        } else {
+            (T::zero(), T::zero(), T::zero(), (T::zero(), T::zero()))
+        };
+        let k = packet.wavenumber();
+        let ln_s0 = s0.ln();
+        let k_over_2pi = k / T::two_pi();
+        Self {
+            s0,
+            ln_s0,
+            inv_lambda_sq: k_over_2pi * k_over_2pi,
+            dark_below: T::lit(ln_smallest_subnormal::<T>()) - ln_s0,
+            two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
+            ln_sx,
+            ln_sy,
+            ln_c,
+            phase,
+            t,
+            t_stokes: t * hat,
+            sections,
+            single_shape: plan.single_shape,
+            _levels: PhantomData,
+        }
+    }
+
+    /// The `Full` level's effective Stokes vector `T v̂` (normalised) and the logarithm of
+    /// its scale, from the channel weights `ln K_x`, `ln K_y`, `ln K_½`:
+    /// ```text
+    /// a_x = ln(K_x S_x/S0),  a_y = ln(K_y S_y/S0),  a_½ = min(ln(K_½ |S2+iS3|/(2S0)), ½(a_x + a_y))
+    /// m = max(a_x, a_y),     r_α = e^{a_α − m}
+    /// v̂ = (r_x + r_y, r_x − r_y, 2 r_½ cos arg μ, 2 r_½ sin arg μ),     v = S0 e^{m} v̂
+    /// ```
+    /// The `min` is the Cauchy–Schwarz inequality of the weights, `K_½² |μ|² ≤ K_x K_y`, which
+    /// the exact S2.20 satisfies for every realizable packet (module docs of
+    /// [`crate::packet`]: at every spatial frequency the spectral matrix is positive
+    /// semidefinite, and K is its average against `p ≥ 0`); it makes `v̂` a valid Stokes vector
+    /// by construction, `(r_x − r_y)² + 4 r_½² ≤ (r_x + r_y)²`. Where the computed weights
+    /// break the inequality — rounding of nearly proportional shapes in `f32`, or per-channel
+    /// quadrature errors of [`crate::psd::GaussHermite`] — it lowers `K_½` by no more than their
+    /// own error: the exact weights satisfy it.
+    #[inline]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN maximum must take the dark branch too"
+    )]
+    pub(crate) fn channel_mix(&self, lx: T, ly: T, lh: T) -> (Vector4<T>, T) {
+        let ax = lx + self.ln_sx;
+        let ay = ly + self.ln_sy;
+        let ah = (lh + self.ln_c).min((ax + ay) * T::lit(0.5));
+        let m = ax.max(ay);
+        if !(m > neg_infinity()) {
+            return (Vector4::zeros(), neg_infinity());
+        }
+        let rel = |a: T| if a == m { T::one() } else { (a - m).exp() };
+        let (rx, ry, rh) = (rel(ax), rel(ay), rel(ah));
+        let two_rh = rh * T::lit(2.0);
+        let v = Vector4::new(
+            rx + ry,
+            rx - ry,
+            two_rh * self.phase.0,
+            two_rh * self.phase.1,
+        );
+        (self.t * v, m)
+    }
+
+    /// `S0 α K/λ²` when the weight `K` lies in [1e-30, 1e30] (so it has not lost digits to
+    /// underflow) and the product is a normal number: the linear form of the scale of a
+    /// one-weight part. `None` otherwise (the caller then takes the log form).
+    #[inline]
+    pub(crate) fn linear_scale(&self, weight: T, attenuation: T) -> Option<T> {
+        if !crate::numerics::in_normal_range(weight) {
+            return None;
+        }
+        // Every partial product normal too: a subnormal one would keep only a few digits.
+        let normal = |x: T| x >= T::MIN_POSITIVE && x <= T::MAX;
+        let p = weight * attenuation * self.inv_lambda_sq;
+        let e = p * self.s0;
+        (normal(p) && normal(e)).then_some(e)
+    }
+
+    /// `true` when `S0 e^{ln_e}` is below the smallest subnormal number, so that the part is 0
+    /// (the pBSDF need not be evaluated).
+    #[inline]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN exponent must count as dark too"
+    )]
+    pub(crate) fn is_dark(&self, ln_e: T) -> bool {
+        !(ln_e >= self.dark_below)
+    }
+
+    /// `u · S0 e^{ln_e}`, the scalar applied once at the end.
+    ///
+    /// When `S0 e^{ln_e}` is not a normal number, the magnitude of `u` is folded into the
+    /// exponent first: `(u/u₀) · exp(ln_e + ln S0 + ln u₀)`. Every entry then rounds once, so a
+    /// result that underflows into the subnormal range keeps its degree of polarization
+    /// (`|u_pol|/u₀`), and one whose factors are below the smallest number of the type (a far
+    /// tail of a bright packet) is not lost.
+    #[inline]
+    pub(crate) fn scaled(&self, u: Vector4<T>, ln_e: T) -> Vector4<T> {
+        // exp(ln_e) · S0 would round exp(ln_e) first, with a subnormal's few digits when the
+        // weight is tiny and S0 bright: one exponential of the sum instead.
+        let e = (ln_e + self.ln_s0).exp();
+        if (e >= T::MIN_POSITIVE && e <= T::MAX) || u[0] <= T::zero() {
+            u * e
+        } else {
+            // An overflow stays an overflow (±∞), but an entry that is exactly 0 stays 0 rather
+            // than becoming 0 · ∞ = NaN.
+            let e = (ln_e + self.ln_s0 + u[0].ln()).exp();
+            (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
+        }
+    }
+}

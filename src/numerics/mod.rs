@@ -1,0 +1,27 @@
+//! Generic numerics shared by the physics modules (not public API): accurate 2×2 linear
+//! algebra, small Cholesky factorisations, complex square roots, `hypot`, log-space sums.
+//!
+//! Nothing here knows about light: these are the building blocks that several concepts need
+//! (a shape matrix, a section of the coherence by a surface, a PSD blur, a Fresnel coefficient),
+//! kept in one place so that no physics module borrows them from another.
+
+mod cholesky;
+mod complex;
+mod linalg2;
+
+pub(crate) use cholesky::{cholesky, in_normal_range, is_nan, log_det_from_cholesky, solve_lower};
+pub(crate) use complex::{HYPOT_PLAIN, principal_sqrt};
+pub(crate) use linalg2::{
+    det2, det2_of_mean, inverse_cholesky_of_mean, inverse_cholesky2, inverse2, pow2_scale,
+};
+
+use crate::real::Real;
+
+/// `ln Σᵢ e^{xᵢ}` without overflow or underflow (`−∞` for an empty or all-`−∞` list).
+#[inline]
+pub(crate) fn log_sum_exp<T: Real>(terms: impl Iterator<Item = T> + Clone) -> T {
+    // Start from the most negative finite number: with every term −∞ the sum is then 0 and
+    // the result −MAX + ln 0 = −∞, with no 0/0 or ∞ − ∞ on the way.
+    let m = terms.clone().fold(-T::MAX, |m, x| m.max(x));
+    m + terms.fold(T::zero(), |acc, x| acc + (x - m).exp()).ln()
+}
