@@ -8,13 +8,13 @@ use std::time::{Duration, Instant};
 use gmueller::Real;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::{
-    CoherenceLevel, CoherenceWeights, FresnelReflection, Full, Kernel, KernelOutput, Level,
-    LevelVisitor, Partial, Pbsdf, PolarizationLevel, PolarizationModel, RayleighRice, RoughSurface,
+    CoherenceLevel, CoherenceWeights, Full, Kernel, KernelOutput, Level, LevelVisitor, Partial,
+    Pbsdf, PolarizationLevel, PolarizationModel, RoughSurface,
 };
 use gmueller::psd::{Adaptive, BlurMethod, ClosedForm, GaussHermite, Psd};
 use nalgebra::{Matrix2, Vector2};
 
-use super::scenes::{HeightGrating, MIXTURES, Material, SceneData};
+use super::scenes::{MIXTURES, Material, SceneData};
 
 /// Polarization level.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -284,7 +284,7 @@ macro_rules! levels {
 
 /// Runs variant `v` (its precision must be `T`'s) on a material and scene; `None` if it does not
 /// apply to the material.
-pub fn measure<T: GratingPrecision>(
+pub fn measure<T: Real>(
     v: &Variant,
     mat: &Material<T>,
     s: &SceneData<T>,
@@ -310,42 +310,12 @@ pub fn measure<T: GratingPrecision>(
             let i = MIXTURES.iter().position(|&x| x == m)?;
             levels!(v.pol, v.coh, ClosedForm, &mixtures[i], s, timing)
         }
-        (Material::Grating(m), Blur::None | Blur::Exact) => T::grating(v, m, s, timing),
+        (Material::Grating(m), Blur::None | Blur::Exact) => {
+            levels!(v.pol, v.coh, ClosedForm, m, s, timing)
+        }
         _ => return None,
     })
 }
-
-type GratingSurface<T> = RoughSurface<HeightGrating<T>, FresnelReflection<T>, RayleighRice<T>>;
-
-/// The precisions for which the example's grating has a closed-form blur (a concrete impl per
-/// precision: a generic `ClosedForm: BlurMethod<T, 2, HeightGrating<T>>` bound would shadow the
-/// library's impls during inference).
-pub trait GratingPrecision: Real {
-    /// Runs `v` on the grating.
-    fn grating(
-        v: &Variant,
-        m: &GratingSurface<Self>,
-        s: &SceneData<Self>,
-        timing: Timing,
-    ) -> Measured;
-}
-
-macro_rules! grating_precision {
-    ($t:ty) => {
-        impl GratingPrecision for $t {
-            fn grating(
-                v: &Variant,
-                m: &GratingSurface<Self>,
-                s: &SceneData<Self>,
-                timing: Timing,
-            ) -> Measured {
-                levels!(v.pol, v.coh, ClosedForm, m, s, timing)
-            }
-        }
-    };
-}
-grating_precision!(f32);
-grating_precision!(f64);
 
 /// The reference: f64, full polarization, partial coherence; the exact closed form for Gaussian
 /// PSDs and the grating, adaptive quadrature at 1e-10 for the K-correlation.

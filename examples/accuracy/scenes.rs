@@ -7,8 +7,8 @@ use gmueller::gaussian::Gaussian;
 use gmueller::interaction::{FresnelReflection, Geometry, RayleighRice, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{
-    BlurMethod, ClosedForm, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation, OrderCutoff,
-    Psd,
+    BlurMethod, ClosedForm, ClosedFormBlur, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation,
+    OrderCutoff, Psd,
 };
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, SVector, Vector2, Vector3};
@@ -86,22 +86,13 @@ impl<T: Real> Psd<T, 2> for HeightGrating<T> {
     }
 }
 
-macro_rules! grating_blur {
-    ($t:ty) => {
-        impl BlurMethod<$t, 2, HeightGrating<$t>> for ClosedForm {
-            fn blur(
-                &self,
-                psd: &HeightGrating<$t>,
-                cov: &Gaussian<$t, 2>,
-                h: &SVector<$t, 2>,
-            ) -> $t {
-                psd.variance_scale * ClosedForm.blur(&psd.grating, cov, h)
-            }
-        }
-    };
+/// The closed form lives on the PSD side ([`ClosedFormBlur`]), so this crate can give its own
+/// PSD one, generic over the precision.
+impl<T: Real> ClosedFormBlur<T, 2> for HeightGrating<T> {
+    fn closed_form_blur(&self, cov: &Gaussian<T, 2>, h: &SVector<T, 2>) -> T {
+        self.variance_scale * ClosedForm.blur(&self.grating, cov, h)
+    }
 }
-grating_blur!(f32);
-grating_blur!(f64);
 
 type Surface<T, P> = RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>;
 

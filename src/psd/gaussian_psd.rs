@@ -2,7 +2,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::{BlurMethod, ClosedForm, Psd};
+use super::{BlurMethod, ClosedForm, ClosedFormBlur, Psd};
 use crate::error::Error;
 use crate::gaussian::{Gaussian, cholesky_of_sum, mahalanobis_from_cholesky};
 use crate::numerics::{in_normal_range, log_det_from_cholesky, log_sum_exp};
@@ -317,28 +317,18 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianPsd<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> BlurMethod<T, N, GaussianPsd<T, N>> for ClosedForm {
+impl<T: Real, const N: usize> ClosedFormBlur<T, N> for GaussianPsd<T, N> {
     #[inline]
-    fn blur(&self, psd: &GaussianPsd<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        psd.log_blur(cov, h).exp()
+    fn closed_form_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.log_blur(cov, h).exp()
     }
     #[inline]
-    fn normalized_blur(
-        &self,
-        psd: &GaussianPsd<T, N>,
-        cov: &Gaussian<T, N>,
-        h: &SVector<T, N>,
-    ) -> T {
-        psd.normalized_blur_value(cov, h)
+    fn closed_form_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.normalized_blur_value(cov, h)
     }
     #[inline]
-    fn log_normalized_blur(
-        &self,
-        psd: &GaussianPsd<T, N>,
-        cov: &Gaussian<T, N>,
-        h: &SVector<T, N>,
-    ) -> T {
-        GaussianPsd::log_normalized_blur(psd, cov, h)
+    fn closed_form_log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        GaussianPsd::log_normalized_blur(self, cov, h)
     }
 }
 
@@ -421,21 +411,16 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianMixturePsd<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> BlurMethod<T, N, GaussianMixturePsd<T, N>> for ClosedForm {
+impl<T: Real, const N: usize> ClosedFormBlur<T, N> for GaussianMixturePsd<T, N> {
     #[inline]
-    fn blur(&self, psd: &GaussianMixturePsd<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        psd.components
+    fn closed_form_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.components
             .iter()
             .fold(T::zero(), |acc, c| acc + ClosedForm.blur(c, cov, h))
     }
     #[inline]
-    fn normalized_blur(
-        &self,
-        psd: &GaussianMixturePsd<T, N>,
-        cov: &Gaussian<T, N>,
-        h: &SVector<T, N>,
-    ) -> T {
-        psd.components.iter().fold(T::zero(), |acc, c| {
+    fn closed_form_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.components.iter().fold(T::zero(), |acc, c| {
             acc + ClosedForm.normalized_blur(c, cov, h)
         })
     }
@@ -443,17 +428,16 @@ impl<T: Real, const N: usize> BlurMethod<T, N, GaussianMixturePsd<T, N>> for Clo
     /// the mixture), log-sum-exp of the components' logarithms otherwise (tails far below the
     /// type's range).
     #[inline]
-    fn log_normalized_blur(
-        &self,
-        psd: &GaussianMixturePsd<T, N>,
-        cov: &Gaussian<T, N>,
-        h: &SVector<T, N>,
-    ) -> T {
-        let v = ClosedForm.normalized_blur(psd, cov, h);
+    fn closed_form_log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        let v = ClosedForm.normalized_blur(self, cov, h);
         if in_normal_range(v) {
             v.ln()
         } else {
-            log_sum_exp(psd.components.iter().map(|c| c.log_normalized_blur(cov, h)))
+            log_sum_exp(
+                self.components
+                    .iter()
+                    .map(|c| c.log_normalized_blur(cov, h)),
+            )
         }
     }
 }
@@ -503,18 +487,18 @@ impl<T: Real, const N: usize> Psd<T, N> for Smooth<T> {
     }
 }
 
-impl<T: Real, const N: usize> BlurMethod<T, N, Smooth<T>> for ClosedForm {
+impl<T: Real, const N: usize> ClosedFormBlur<T, N> for Smooth<T> {
     #[inline]
-    fn blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        psd.weight * cov.value(h)
+    fn closed_form_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.weight * cov.value(h)
     }
     /// `w g^Σ(h) |Σ|^{−1/2}`, in log space.
     #[inline]
-    fn normalized_blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        psd.weight * (cov.log_value(h) - T::lit(0.5) * cov.log_det()).exp()
+    fn closed_form_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.weight * (cov.log_value(h) - T::lit(0.5) * cov.log_det()).exp()
     }
     #[inline]
-    fn log_normalized_blur(&self, psd: &Smooth<T>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        psd.weight.ln() + cov.log_value(h) - T::lit(0.5) * cov.log_det()
+    fn closed_form_log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.weight.ln() + cov.log_value(h) - T::lit(0.5) * cov.log_det()
     }
 }

@@ -2,7 +2,7 @@
 
 use nalgebra::SVector;
 
-use super::{BlurMethod, ClosedForm, Psd};
+use super::{BlurMethod, ClosedForm, ClosedFormBlur, Psd};
 use crate::error::Error;
 use crate::gaussian::Gaussian;
 use crate::real::Real;
@@ -417,37 +417,32 @@ impl<T: Real, const N: usize> Psd<T, N> for Grating<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> BlurMethod<T, N, Grating<T, N>> for ClosedForm {
+impl<T: Real, const N: usize> ClosedFormBlur<T, N> for Grating<T, N> {
     #[inline]
-    fn blur(&self, psd: &Grating<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
-        psd.orders
+    fn closed_form_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.orders
             .iter()
             .fold(T::zero(), |acc, (z, e)| acc + *e * cov.value(&(h - z)))
     }
     /// `Σ e_m g^Σ(h − ζ_m) |Σ|^{−1/2}`, each term in log space.
     #[inline]
-    fn normalized_blur(&self, psd: &Grating<T, N>, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+    fn closed_form_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         let half_log_det = T::lit(0.5) * cov.log_det();
-        psd.orders.iter().fold(T::zero(), |acc, (z, e)| {
+        self.orders.iter().fold(T::zero(), |acc, (z, e)| {
             acc + *e * (cov.log_value(&(h - z)) - half_log_det).exp()
         })
     }
     /// The logarithm of the linear sum where that is a safely normal number, log-sum-exp over
     /// the orders of `ln e_m + ln g^Σ(h − ζ_m) − ½ ln|Σ|` otherwise.
     #[inline]
-    fn log_normalized_blur(
-        &self,
-        psd: &Grating<T, N>,
-        cov: &Gaussian<T, N>,
-        h: &SVector<T, N>,
-    ) -> T {
-        let v = ClosedForm.normalized_blur(psd, cov, h);
+    fn closed_form_log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        let v = ClosedForm.normalized_blur(self, cov, h);
         if crate::numerics::in_normal_range(v) {
             return v.ln();
         }
         let half_log_det = T::lit(0.5) * cov.log_det();
         crate::numerics::log_sum_exp(
-            psd.orders
+            self.orders
                 .iter()
                 .map(|(z, e)| e.ln() + cov.log_value(&(h - z)) - half_log_det),
         )

@@ -17,7 +17,8 @@
 //!
 //! # Blur methods
 //! A blur method is a type implementing [`BlurMethod`]; the choice is monomorphised:
-//! - [`ClosedForm`]: exact, for [`GaussianPsd`], [`GaussianMixturePsd`], [`Grating`], [`Smooth`];
+//! - [`ClosedForm`]: exact, for every PSD implementing [`ClosedFormBlur`] — [`GaussianPsd`],
+//!   [`GaussianMixturePsd`], [`Grating`], [`Smooth`], and a downstream crate's own PSDs;
 //! - mixture fit: [`KCorrelation::mixture_fit`] builds a [`GaussianMixturePsd`] once, then
 //!   [`ClosedForm`] applies;
 //! - [`GaussHermite`]: tensor Gauss–Hermite quadrature of a fixed order, any PSD;
@@ -176,6 +177,120 @@ pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
     }
 }
 
-/// The exact, closed-form blur (Gaussian, Gaussian-mixture, grating and smooth PSDs).
+/// The exact, closed-form blur: the [`BlurMethod`] of every PSD that implements
+/// [`ClosedFormBlur`] (in this crate: [`GaussianPsd`], [`GaussianMixturePsd`], [`Grating`],
+/// [`Smooth`]; in any other crate: its own PSDs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ClosedForm;
+
+/// A PSD whose blur `(p * g^Σ)(h)` has a closed form; [`ClosedForm`] then blurs it.
+///
+/// The closed form lives on the PSD side, so a crate that defines a PSD can give it one: the
+/// blanket `impl BlurMethod<T, N, P> for ClosedForm` covers every `P: ClosedFormBlur<T, N>`
+/// (an `impl BlurMethod<T, N, MyPsd> for ClosedForm` would be rejected by the orphan rule,
+/// E0210, since `ClosedForm` is not the downstream crate's type).
+///
+/// # Formula
+/// ```text
+/// closed_form_blur(Σ, h)                    = (p * g^Σ)(h)
+/// closed_form_normalized_blur(Σ, h)         = |Σ|^{−1/2} (p * g^Σ)(h) = ∫ p(ζ) 𝒩_Σ(h − ζ) dⁿζ
+/// closed_form_log_normalized_blur(Σ, h)     = ln of the line above
+/// ```
+/// Only the first is required; the defaults are those of [`BlurMethod`] (a `|Σ|^{−1/2}` round
+/// trip and a plain logarithm). Override them where the blur spans more than the type's range
+/// (wide coherence areas make `(p * g^Σ)` underflow long before the normalised blur does).
+///
+/// # Examples
+/// A PSD defined outside `gmueller` — two Dirac orders at `±ζ₀` (a grating with only its first
+/// orders) — with its closed form, used by the partially coherent kernel:
+/// ```
+/// use gmueller::gaussian::Gaussian;
+/// use gmueller::frame::Frame;
+/// use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, PhaseScreen, RoughSurface};
+/// use gmueller::packet::{CoherenceShape, WavePacket};
+/// use gmueller::psd::{BlurMethod, ClosedForm, ClosedFormBlur, Psd};
+/// use gmueller::real::Real;
+/// use gmueller::stokes::Stokes;
+/// use nalgebra::{SVector, Vector2, Vector3};
+///
+/// /// `p = (2π) w [δ(ζ − ζ₀) + δ(ζ + ζ₀)] / 2`: two orders of total weight `w`.
+/// struct TwoOrders<T: Real> { zeta0: Vector2<T>, weight: T }
+///
+/// impl<T: Real> Psd<T, 2> for TwoOrders<T> {
+///     fn value(&self, _zeta: &SVector<T, 2>) -> T { T::zero() } // no continuous part
+///     fn variance(&self) -> T { self.weight }
+/// }
+/// impl<T: Real> ClosedFormBlur<T, 2> for TwoOrders<T> {
+///     // (p * g^Σ)(h) = (2π)^{−1} ∫ p(ζ) g^Σ(h − ζ) d²ζ = w [g^Σ(h − ζ₀) + g^Σ(h + ζ₀)] / 2
+///     fn closed_form_blur(&self, cov: &Gaussian<T, 2>, h: &SVector<T, 2>) -> T {
+///         let half = T::lit(0.5) * self.weight;
+///         half * (cov.value(&(h - self.zeta0)) + cov.value(&(h + self.zeta0)))
+///     }
+/// }
+///
+/// let p = TwoOrders { zeta0: Vector2::new(3.0_f64, 0.0), weight: 1e-4 };
+/// let cov = Gaussian::<f64, 2>::isotropic(0.5)?; // Σ = 0.5² I
+/// let h = Vector2::new(2.5, 0.1);
+/// let exact = ClosedForm.blur(&p, &cov, &h);
+/// let expected = 0.5e-4 * ((-0.5 * (0.25 + 0.01) / 0.25_f64).exp() + (-0.5 * (30.25 + 0.01) / 0.25_f64).exp());
+/// assert!((exact / expected - 1.0).abs() < 1e-14);
+/// let normalized = ClosedForm.normalized_blur(&p, &cov, &h);
+/// assert!((normalized / (exact / 0.25) - 1.0).abs() < 1e-14); // |Σ|^{1/2} = 0.25
+///
+/// // The partially coherent kernel takes it like any PSD of the crate (`Partial` blurs with
+/// // `ClosedForm` by default).
+/// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z())?;
+/// let travel = Vector3::new(0.0, 0.0, -1.0_f64);
+/// let packet = WavePacket::from_stokes(
+///     Stokes::unpolarized(1.0)?, CoherenceShape::isotropic(5.0)?,
+///     Frame::sp(travel, Vector3::x())?, 0.5)?;
+/// let material = RoughSurface {
+///     psd: TwoOrders { zeta0: Vector2::new(2.0, 0.0), weight: 1e-4 },
+///     specular: PhaseScreen::new(1.0)?,
+///     scatter: PhaseScreen::new(1.0)?,
+/// };
+/// let kernel = Kernel::<Intensity, Partial>::default();
+/// // The first order leaves where the half-vector's tangential part is ζ₀: k sin θ = 2.
+/// let sin_t = 2.0 / packet.wavenumber();
+/// let order = Geometry::for_packet(&packet, &surface, Vector3::new(sin_t, 0.0, (1.0 - sin_t * sin_t).sqrt()))?;
+/// let between = Geometry::for_packet(&packet, &surface, Vector3::new(0.5 * sin_t, 0.0, (1.0 - 0.25 * sin_t * sin_t).sqrt()))?;
+/// let at_order = kernel.evaluate(&material, &packet, &order).scattered;
+/// let off_order = kernel.evaluate(&material, &packet, &between).scattered;
+/// assert!(at_order.is_finite() && at_order > 1e3 * off_order);
+/// # Ok::<(), gmueller::Error>(())
+/// ```
+pub trait ClosedFormBlur<T: Real, const N: usize>: Psd<T, N> {
+    /// `(p * g^Σ)(h)`, exact; finite for finite input, `0` on underflow.
+    #[must_use]
+    fn closed_form_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T;
+
+    /// `∫ p(ζ) 𝒩_Σ(h − ζ) dⁿζ = |Σ|^{−1/2} (p * g^Σ)(h)` ([`BlurMethod::normalized_blur`]).
+    #[inline]
+    #[must_use]
+    fn closed_form_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.closed_form_blur(cov, h) * (T::lit(-0.5) * cov.log_det()).exp()
+    }
+
+    /// `ln` of [`ClosedFormBlur::closed_form_normalized_blur`] (`−∞` where it is 0)
+    /// ([`BlurMethod::log_normalized_blur`]).
+    #[inline]
+    #[must_use]
+    fn closed_form_log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.closed_form_normalized_blur(cov, h).ln()
+    }
+}
+
+impl<T: Real, const N: usize, P: ClosedFormBlur<T, N> + ?Sized> BlurMethod<T, N, P> for ClosedForm {
+    #[inline]
+    fn blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.closed_form_blur(cov, h)
+    }
+    #[inline]
+    fn normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.closed_form_normalized_blur(cov, h)
+    }
+    #[inline]
+    fn log_normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        psd.closed_form_log_normalized_blur(cov, h)
+    }
+}
