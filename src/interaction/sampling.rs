@@ -63,11 +63,10 @@ use super::{
 };
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::numerics::chebyshev::{CdfTable, TableError};
 use crate::psd::{GaussianPsd, KCorrelation, Psd};
 use crate::real::Real;
 
-/// Degree of the per-panel Chebyshev interpolants.
-const DEG: usize = 16;
 /// Interpolation tolerance relative to the peak of `F(ρ_max(ψ))`.
 const TABLE_TOL: f64 = 1e-13;
 /// The most panels a table may use.
@@ -130,21 +129,6 @@ pub fn weight<T: Real>(value: T, pdf: T) -> T {
     }
 }
 
-/// One panel of the angular CDF table.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Panel<T: Real> {
-    start: T,
-    width: T,
-    /// `∫ F(ρ_max) dψ` over all earlier panels.
-    cumulative: T,
-    /// `∫ F(ρ_max) dψ` over this panel.
-    mass: T,
-    /// Chebyshev coefficients of `F(ρ_max(ψ(x)))`, `x ∈ [−1, 1]`.
-    value: [T; DEG + 1],
-    /// Chebyshev coefficients of its antiderivative, zero at `x = −1`.
-    integral: [T; DEG + 2],
-}
-
 /// A radially symmetric lobe in whitened coordinates, truncated to the unit disk.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TruncatedLobe<T: Real> {
@@ -160,8 +144,8 @@ pub struct TruncatedLobe<T: Real> {
     log_norm: T,
     /// `(γ − 1)/2` and `−(γ + 1)/2` for the power profile.
     exps: (T, T),
-    panels: Vec<Panel<T>>,
-    total: T,
+    /// The angular CDF `∫ F(ρ_max(ψ)) dψ` on `[0, 2π)`.
+    table: CdfTable<T>,
 }
 
 /// Radial CDF `F(ρ)` (f64 or T), from `ρ²`.
@@ -184,18 +168,6 @@ fn radial_cdf_inverse_sq<T: Real>(profile: &RadialProfile<T>, half_exp: T, t: T)
         // ρ² = (1 − t)^{−2/(γ−1)} − 1.
         RadialProfile::Power { .. } => (-(-t).ln_1p() / half_exp).exp_m1(),
     }
-}
-
-/// Clenshaw summation of `Σ cₖ Tₖ(x)`.
-#[inline]
-fn clenshaw<T: Real>(c: &[T], x: T) -> T {
-    let (mut b1, mut b2) = (T::zero(), T::zero());
-    for &ck in c.iter().skip(1).rev() {
-        let b0 = ck + (x + x) * b1 - b2;
-        b2 = b1;
-        b1 = b0;
-    }
-    c[0] + x * b1 - b2
 }
 
 impl<T: Real> TruncatedLobe<T> {
@@ -243,8 +215,20 @@ impl<T: Real> TruncatedLobe<T> {
             let rho = rho_max(&centre, &l, inside, psi);
             radial_cdf(&prof64, half_exp, rho * rho)
         };
-        let panels64 = build_table(&a)?;
-        let total: f64 = panels64.iter().map(|p| p.mass).sum();
+        let table = CdfTable::build(
+            &a,
+            (0.0, core::f64::consts::TAU),
+            TABLE_TOL,
+            1e-11,
+            MAX_PANELS,
+        )
+        .map_err(|e| Error::Unrealizable {
+            reason: match e {
+                TableError::NoMass => "sampling lobe has no mass on the hemisphere",
+                TableError::TooManyPanels => "sampling table did not converge within 16384 panels",
+            },
+        })?;
+        let total = table.total();
         let mass = total / core::f64::consts::TAU;
         if !(mass.is_finite() && mass > 0.0) {
             return Err(Error::Unrealizable {
@@ -262,17 +246,6 @@ impl<T: Real> TruncatedLobe<T> {
                          overflows)",
             });
         }
-        let panels = panels64
-            .iter()
-            .map(|p| Panel {
-                start: T::lit(p.start),
-                width: T::lit(p.width),
-                cumulative: T::lit(p.cumulative),
-                mass: T::lit(p.mass),
-                value: p.value.map(T::lit),
-                integral: p.integral.map(T::lit),
-            })
-            .collect();
         Ok(Self {
             profile,
             centre: centre.map(T::lit),
@@ -281,8 +254,7 @@ impl<T: Real> TruncatedLobe<T> {
             mass: T::lit(mass),
             log_norm: T::lit(log_norm),
             exps: (T::lit(half_exp), T::lit(neg_exp)),
-            panels,
-            total: T::lit(total),
+            table: table.to_precision(),
         })
     }
 
@@ -313,7 +285,7 @@ impl<T: Real> TruncatedLobe<T> {
     /// The number of panels of the angular CDF table.
     #[must_use]
     pub fn table_size(&self) -> usize {
-        self.panels.len()
+        self.table.len()
     }
 
     /// The density per unit disk area at `u` (`0` outside the open unit disk).
@@ -336,45 +308,8 @@ impl<T: Real> TruncatedLobe<T> {
 
     /// Draws `u` in the disk from two uniforms (see the module docs).
     fn sample_disk(&self, v0: T, v1: T) -> Vector2<T> {
-        let t = clamp01(v0) * self.total;
-        // Last panel whose cumulative mass is ≤ t.
-        let j = self
-            .panels
-            .partition_point(|p| p.cumulative <= t)
-            .saturating_sub(1);
-        let p = &self.panels[j];
-        let half = p.width * T::lit(0.5);
-        let target = ((t - p.cumulative).max(T::zero())).min(p.mass) / half;
-        let top = p.mass / half;
-        let (mut lo, mut hi) = (-T::one(), T::one());
-        let mut x = if top > T::zero() {
-            T::lit(2.0) * target / top - T::one()
-        } else {
-            T::zero()
-        };
+        let psi = self.table.invert(clamp01(v0) * self.table.total());
         let tol = T::lit(4.0) * T::EPSILON;
-        for _ in 0..64 {
-            let f = clenshaw(&p.integral, x) - target;
-            if f.abs() <= T::lit(2.0) * T::EPSILON * top {
-                break; // the CDF residual is at rounding level
-            }
-            if f < T::zero() {
-                lo = x;
-            } else {
-                hi = x;
-            }
-            let d = clenshaw(&p.value, x);
-            let mut next = x - f / d;
-            if !(d > T::zero() && next > lo && next < hi) {
-                next = (lo + hi) * T::lit(0.5);
-            }
-            let step = (next - x).abs();
-            x = next;
-            if step <= tol || hi - lo <= tol {
-                break;
-            }
-        }
-        let psi = p.start + half * (x + T::one());
         let (s, c) = psi.sin_cos();
         let l = &self.l;
         let d = Vector2::new(l[0] * c, l[1] * c + l[2] * s);
@@ -414,100 +349,6 @@ fn rho_max<T: Real>(c: &Vector2<T>, l: &[T; 3], inside: T, psi: T) -> T {
     } else {
         (root - b) / a
     }
-}
-
-/// A panel of the f64 table under construction.
-struct Panel64 {
-    start: f64,
-    width: f64,
-    cumulative: f64,
-    mass: f64,
-    value: [f64; DEG + 1],
-    integral: [f64; DEG + 2],
-}
-
-/// Chebyshev coefficients of `f` on `[lo, lo + width]` from the DEG + 1 Lobatto points, and an
-/// error estimate (tail coefficients and two off-node checks).
-fn chebyshev_fit(f: &impl Fn(f64) -> f64, lo: f64, width: f64) -> ([f64; DEG + 1], f64) {
-    let n = DEG as f64;
-    let pi = core::f64::consts::PI;
-    let at = |x: f64| f(lo + 0.5 * width * (x + 1.0));
-    let mut vals = [0.0; DEG + 1];
-    for (j, v) in vals.iter_mut().enumerate() {
-        *v = at((pi * j as f64 / n).cos());
-    }
-    let mut c = [0.0; DEG + 1];
-    for (k, ck) in c.iter_mut().enumerate() {
-        let mut s = 0.0;
-        for (j, v) in vals.iter().enumerate() {
-            let w = if j == 0 || j == DEG { 0.5 } else { 1.0 };
-            s += w * v * (pi * (j * k) as f64 / n).cos();
-        }
-        *ck = s * if k == 0 || k == DEG { 1.0 / n } else { 2.0 / n };
-    }
-    let mut err = c[DEG].abs().max(c[DEG - 1].abs());
-    for x in [-0.6180339887, 0.2360679775, 0.75] {
-        err = err.max((clenshaw(&c, x) - at(x)).abs());
-    }
-    (c, err)
-}
-
-/// Adaptive table of `∫ a dψ` over `[0, 2π)`.
-fn build_table(a: &impl Fn(f64) -> f64) -> Result<Vec<Panel64>, Error> {
-    let tau = core::f64::consts::TAU;
-    let initial = 16;
-    let mut peak = 0.0_f64;
-    for i in 0..256 {
-        peak = peak.max(a(tau * i as f64 / 256.0));
-    }
-    if !(peak.is_finite() && peak > 0.0) {
-        return Err(Error::Unrealizable {
-            reason: "sampling lobe has no mass on the hemisphere",
-        });
-    }
-    let tol = TABLE_TOL * peak;
-    let mut out: Vec<Panel64> = Vec::new();
-    // Depth-first, left to right, so panels come out sorted.
-    let mut stack: Vec<(f64, f64)> = (0..initial)
-        .rev()
-        .map(|i| (tau * i as f64 / initial as f64, tau / initial as f64))
-        .collect();
-    while let Some((lo, w)) = stack.pop() {
-        let (c, err) = chebyshev_fit(a, lo, w);
-        if err > tol && w > 1e-11 {
-            if out.len() + stack.len() >= MAX_PANELS {
-                return Err(Error::Unrealizable {
-                    reason: "sampling table did not converge within 16384 panels",
-                });
-            }
-            stack.push((lo + 0.5 * w, 0.5 * w));
-            stack.push((lo, 0.5 * w));
-            continue;
-        }
-        // Antiderivative: B₁ = a₀ − a₂/2, Bₖ = (aₖ₋₁ − aₖ₊₁)/(2k), B₀ so that P(−1) = 0.
-        let coef = |k: usize| if k <= DEG { c[k] } else { 0.0 };
-        let mut b = [0.0; DEG + 2];
-        b[1] = coef(0) - 0.5 * coef(2);
-        for (k, bk) in b.iter_mut().enumerate().skip(2) {
-            *bk = (coef(k - 1) - coef(k + 1)) / (2.0 * k as f64);
-        }
-        let alt: f64 = (1..=DEG + 1)
-            .map(|k| if k % 2 == 0 { b[k] } else { -b[k] })
-            .sum();
-        b[0] = -alt;
-        let odd: f64 = (1..=DEG + 1).step_by(2).map(|k| b[k]).sum();
-        let mass = w * odd; // (w/2)(P(1) − P(−1)) = w Σ_{k odd} Bₖ
-        let cumulative = out.last().map_or(0.0, |p| p.cumulative + p.mass);
-        out.push(Panel64 {
-            start: lo,
-            width: w,
-            cumulative,
-            mass: mass.max(0.0),
-            value: c,
-            integral: b,
-        });
-    }
-    Ok(out)
 }
 
 /// An importance sampler for the wave BSDF at one incident direction (see the module docs).

@@ -1,10 +1,12 @@
 //! Generic numerics shared by the physics modules (not public API): accurate 2×2 linear
-//! algebra, small Cholesky factorisations, complex square roots, `hypot`, log-space sums.
+//! algebra, small Cholesky factorisations, complex square roots, `hypot`, log-space sums,
+//! piecewise Chebyshev tables of a cumulative distribution.
 //!
 //! Nothing here knows about light: these are the building blocks that several concepts need
 //! (a shape matrix, a section of the coherence by a surface, a PSD blur, a Fresnel coefficient),
 //! kept in one place so that no physics module borrows them from another.
 
+pub(crate) mod chebyshev;
 mod cholesky;
 mod complex;
 mod linalg2;
