@@ -401,7 +401,7 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
         -T::lit(0.5) * self.mahalanobis_sq(x)
     }
 
-    /// The unnormalised value `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)` (DESIGN §1), in `[0, 1]`: `0` on
+    /// The unnormalised value `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)` (module conventions), in `[0, 1]`: `0` on
     /// underflow, at huge finite `x` and at infinite `x`; NaN only for a NaN entry of `x`.
     #[inline]
     #[must_use]
@@ -610,10 +610,16 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     /// let q = Vector2::new(0.3, 0.7);
     /// // Same thing as the transform of the composed Gaussian g^{B⁻¹ΣB⁻ᵀ}:
     /// let composed = g.compose_linear(&b).unwrap();
-    /// let lemma = g.lemma_s2_1(&b, &q).unwrap();
+    /// let lemma = g.fourier_of_linear_map(&b, &q).unwrap();
     /// assert!((lemma - composed.log_fourier_at(&q).exp()).abs() < 1e-14);
     /// ```
-    pub fn lemma_s2_1(&self, b: &SMatrix<T, N, N>, q: &SVector<T, N>) -> Result<T, Error> {
+    #[doc(alias = "lemma_s2_1")]
+    #[doc(alias = "S2.1")]
+    pub fn fourier_of_linear_map(
+        &self,
+        b: &SMatrix<T, N, N>,
+        q: &SVector<T, N>,
+    ) -> Result<T, Error> {
         ensure_finite("linear map B", b.iter().copied())?;
         ensure_finite("frequency q", q.iter().copied())?;
         let singular = Error::Singular {
@@ -660,7 +666,9 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
     ///
     /// # Errors
     /// [`Error::NonFinite`] if `k_s`, `q` or the rotation has a NaN or infinite entry.
-    pub fn corollary_s2_2(
+    #[doc(alias = "corollary_s2_2")]
+    #[doc(alias = "S2.2")]
+    pub fn fourier_of_packet_term(
         &self,
         q_local_to_world: &Rotation<T, N>,
         k_s: &SVector<T, N>,

@@ -1,4 +1,4 @@
-//! Bad input (DESIGN §7): every validated constructor rejects NaN, ∞, non-SPD shape matrices,
+//! Bad input: every validated constructor rejects NaN, ∞, non-SPD shape matrices,
 //! zero or parallel basis vectors, non-positive wavelengths, `S0 < |S|` and `|μ| > 1` with an
 //! `Error` whose message names the input and the violated condition; and a property test feeds
 //! arbitrary finite values (plus ±0 and 1e±300) to every public constructor and function — the
@@ -614,7 +614,7 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
                 g.product(&g),
                 g.convolve(&g),
                 g.fourier(),
-                g.lemma_s2_1(&m2(6), &x),
+                g.fourier_of_linear_map(&m2(6), &x),
                 g.compose_linear(&m2(1)),
             );
             let y = Vector2::new(t(10), t(11));
@@ -626,7 +626,7 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
                 g.log_density(&x),
                 g.product_shifted(&x, &g, &y),
                 g.fourier_shifted_modulated(&x, &y, &Vector2::new(t(13), t(14))),
-                g.corollary_s2_2(&rot, &x, &y),
+                g.fourier_of_packet_term(&rot, &x, &y),
                 g.convolve(&g).map(|s| (s.value(&x), s.log_value(&y))),
             );
             // Never NaN at finite points (0 and −∞ where out of range).

@@ -1,4 +1,5 @@
-//! Numerical behaviour at the DESIGN §7 extremes: proptests sampling log-uniformly over wavelength
+//! Numerical behaviour at the extremes of the validity ranges (docs/numerical.md): proptests
+//! sampling log-uniformly over wavelength
 //! 0.1–100 µm, coherence widths 10⁻³–10⁶ λ, anisotropy to 10⁶, incidence/exitance to 89.99°
 //! (plus exact normal incidence, specular and back-scatter) and correlation lengths
 //! 10⁻³–10⁴ λ, through frames, Fresnel, Jones→Mueller, Gaussians, PSD blurs and every kernel

@@ -1,4 +1,5 @@
-//! Verifies importance sampling at the extremes of DESIGN §7: for Gaussian and K-correlation
+//! Verifies importance sampling at the extremes of the validity ranges (docs/numerical.md): for
+//! Gaussian and K-correlation
 //! lobes with correlation lengths 10⁻³…10⁴ λ, minimum coherence widths 10⁻³…10⁶ λ, wavelengths
 //! 0.1…100 µm and incidence up to 89.99° (plus exact normal incidence), construction succeeds
 //! below 80° (beyond, a sampler may refuse a very narrow lobe with an error, see the test), and

@@ -834,7 +834,7 @@ proptest! {
     }
 }
 
-/// Physics check of the S3 flip (DESIGN §1): a quarter-wave plate with fast axis x̂ on +45° linear
+/// Physics check of the S3 flip (the crate's e^{−iωt} convention): a quarter-wave plate with fast axis x̂ on +45° linear
 /// light gives S3 = +1 here and −1 in Mitsuba 3 / py-pol / pypolar.
 #[test]
 fn quarter_wave_plate_s3_sign_flips_with_time_convention() {

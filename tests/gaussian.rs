@@ -156,7 +156,7 @@ fn lemma_s2_1_matches_quadrature_2d() {
             half_width(&cov, &b),
             301,
         );
-        let lemma = g.lemma_s2_1(&b, &q).unwrap();
+        let lemma = g.fourier_of_linear_map(&b, &q).unwrap();
         assert_close("Lemma S2.1 (corrected) re", lemma, quad.re, QUAD);
         assert_close("Lemma S2.1 im", quad.im, 0.0, QUAD);
     }
@@ -176,7 +176,7 @@ fn lemma_s2_1_matches_quadrature_3d() {
     );
     assert_close(
         "Lemma S2.1 (corrected, 3-D)",
-        g.lemma_s2_1(&b, &q).unwrap(),
+        g.fourier_of_linear_map(&b, &q).unwrap(),
         quad.re,
         QUAD,
     );
@@ -228,7 +228,10 @@ fn lemma_s2_1_printed_form_fails() {
     assert_close(
         "printed = corrected for symmetric B",
         lemma_printed(&cov, &bs, &q),
-        Gaussian::new(cov).unwrap().lemma_s2_1(&bs, &q).unwrap(),
+        Gaussian::new(cov)
+            .unwrap()
+            .fourier_of_linear_map(&bs, &q)
+            .unwrap(),
         F64,
     );
 }
@@ -250,7 +253,7 @@ fn corollary_s2_2_matches_quadrature_2d() {
         Vector2::new(0.3, 0.2),
     ] {
         let quad = fourier_quad(f, &q, 12.0, 301);
-        let cor = g.corollary_s2_2(&rot, &ks, &q).unwrap();
+        let cor = g.fourier_of_packet_term(&rot, &ks, &q).unwrap();
         assert_close("Corollary S2.2 re", cor, quad.re, QUAD);
         assert_close("Corollary S2.2 im", quad.im, 0.0, QUAD);
         // Ξ = Q Θ⁻¹ Qᵀ (S2.18): the same value from the world-frame Gaussian g^Ξ.
@@ -265,8 +268,8 @@ fn corollary_s2_2_matches_quadrature_2d() {
     // The opposite shift (q − kŝ) and the opposite direction of Q both fail.
     let q = Vector2::new(-0.6, 1.0);
     let quad = fourier_quad(f, &q, 12.0, 301).re;
-    let wrong_shift = g.corollary_s2_2(&rot, &(-ks), &q).unwrap();
-    let wrong_q = g.corollary_s2_2(&rot.inverse(), &ks, &q).unwrap();
+    let wrong_shift = g.fourier_of_packet_term(&rot, &(-ks), &q).unwrap();
+    let wrong_q = g.fourier_of_packet_term(&rot.inverse(), &ks, &q).unwrap();
     assert!(
         (wrong_shift - quad).abs() > 0.05 * quad,
         "{wrong_shift} vs {quad}"
@@ -288,7 +291,7 @@ fn corollary_s2_2_matches_quadrature_3d() {
     let quad = fourier_quad(f, &q, 10.0, 81);
     assert_close(
         "Corollary S2.2 (3-D) re",
-        g.corollary_s2_2(&rot, &ks, &q).unwrap(),
+        g.fourier_of_packet_term(&rot, &ks, &q).unwrap(),
         quad.re,
         QUAD,
     );
@@ -454,9 +457,13 @@ fn transforms_reject_non_finite<T: gmueller::Real>() {
     for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY].map(T::lit) {
         let v = Vector2::new(bad, T::one());
         let m = Matrix2::new(T::one(), T::zero(), bad, T::one());
-        names(g.lemma_s2_1(&m, &one).map(drop), "linear map B", "lemma B");
         names(
-            g.lemma_s2_1(&Matrix2::identity(), &v).map(drop),
+            g.fourier_of_linear_map(&m, &one).map(drop),
+            "linear map B",
+            "lemma B",
+        );
+        names(
+            g.fourier_of_linear_map(&Matrix2::identity(), &v).map(drop),
             "frequency q",
             "lemma q",
         );
@@ -486,12 +493,12 @@ fn transforms_reject_non_finite<T: gmueller::Real>() {
             "fsm q",
         );
         names(
-            g.corollary_s2_2(&rot, &v, &one).map(drop),
+            g.fourier_of_packet_term(&rot, &v, &one).map(drop),
             "k ŝ",
             "corollary k_s",
         );
         names(
-            g.corollary_s2_2(&rot, &one, &v).map(drop),
+            g.fourier_of_packet_term(&rot, &one, &v).map(drop),
             "frequency q",
             "corollary q",
         );
@@ -593,13 +600,13 @@ fn lemma_s2_1_tiny_b_is_not_singular() {
     let b = Matrix3::from_diagonal(&Vector3::new(1.0, 2.0, 3.0)) * 1e-110;
     let q = Vector3::new(40e-110, 0.0, 0.0);
     let expected = (-800.0 - 6f64.ln() + 330.0 * 10f64.ln()).exp();
-    let got = g.lemma_s2_1(&b, &q).unwrap();
+    let got = g.fourier_of_linear_map(&b, &q).unwrap();
     assert!(got.is_finite(), "{got}");
     assert_close("lemma, tiny B", got, expected, Tol::new(0.0, 1e-12));
     // A truly singular B is still rejected.
     let sing = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 0.0, 1.0);
     assert!(matches!(
-        g.lemma_s2_1(&sing, &q),
+        g.fourier_of_linear_map(&sing, &q),
         Err(Error::Singular { .. })
     ));
 }
@@ -623,7 +630,10 @@ fn shifted_forms_overflow<T: gmueller::Real>() {
     let far = g.fourier_shifted_modulated(&z, &(-big), &big).unwrap();
     assert_eq!((far.re.to_f64(), far.im.to_f64()), (0.0, 0.0));
     let rot = Rotation2::new(T::lit(0.4));
-    assert_eq!(g.corollary_s2_2(&rot, &big, &big).unwrap().to_f64(), 0.0);
+    assert_eq!(
+        g.fourier_of_packet_term(&rot, &big, &big).unwrap().to_f64(),
+        0.0
+    );
     let near = Vector2::new(T::one(), T::one());
     let r = g.fourier_shifted_modulated(&Vector2::new(max, max), &z, &near);
     assert!(

@@ -528,7 +528,7 @@ fn kernel_equals_seed_prefactor_times_double_integral() {
 
 /// The surface determinant is that of the 2-D section `Σ = Ξ_t⁻¹`, not `|Θ⊥|^{1/2}`: for `σ_zz = ∞`,
 /// `|Ξ_t|^{−1/2} = |Θ⊥|^{1/2}/cos θ_i` (the footprint), so the "surface form of `|Θ|^{1/2}`"
-/// read literally misses `1/cos θ_i`; and the section is not the marginal (DESIGN §3.5).
+/// read literally misses `1/cos θ_i`; and the section is not the marginal (errata, item 8).
 #[test]
 fn surface_section_determinant_and_not_marginal() {
     let (surface, m) = surface_matter(0.2, mat2(400.0, 0.0, 400.0), mat2(0.1, 0.0, 0.1), 1e-4);

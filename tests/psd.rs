@@ -58,12 +58,12 @@ fn normalisation_gaussian_and_kcorrelation() {
         let k = KCorrelation::<f64, 2>::new(0.02, t, gamma).unwrap();
         let i = radial_integral(2, |r| k.value(&Vector2::new(r, 0.0)));
         assert_close("∫p K-correlation 2-D", i, TAU * 0.02, Tol::new(1e-12, 1e-8));
-        // FORMALISM: p per unit variance and unit integral is (γ−1)T/(2π)(1+T|ζ|²)^{−(γ+1)/2}.
+        // The main paper: p per unit variance and unit integral is (γ−1)T/(2π)(1+T|ζ|²)^{−(γ+1)/2}.
         let z = Vector2::<f64>::new(0.37, -0.2);
         let formalism =
             (gamma - 1.0) * t / TAU * (1.0 + t * z.norm_squared()).powf(-(gamma + 1.0) / 2.0);
         assert_close(
-            "K-correlation vs FORMALISM",
+            "K-correlation vs the main paper's form",
             k.value(&z) / k.integral(),
             formalism,
             Tol::new(1e-14, 1e-12),

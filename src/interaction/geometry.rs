@@ -28,7 +28,7 @@ pub enum Side {
 ///
 /// # Formula
 /// ```text
-/// ŝ = −k̂_packet      (from the surface toward the source; DESIGN erratum 6)
+/// ŝ = −k̂_packet      (from the surface toward the source; crate docs, "Errata", item 4)
 /// h = k (r̂ + ŝ),     h_t = (h·t̂₁, h·t̂₂)          (h_t = 0 at the specular direction)
 /// cos θ_i = ŝ·n̂,     cos θ_o = r̂·n̂
 /// ```

@@ -1,4 +1,5 @@
-//! Importance sampling of the wave BSDF (FORMALISM "Importance sampling"): one proposal lobe per
+//! Importance sampling of the wave BSDF (the main paper's "Importance sampling"): one proposal
+//! lobe per
 //! (material, incident direction, wavelength) that serves every packet, with `sample` and `pdf`
 //! that agree exactly.
 //!

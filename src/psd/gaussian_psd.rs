@@ -13,7 +13,7 @@ use crate::real::Real;
 /// # Formula
 /// ```text
 /// R(x) = σ² exp(−½ xᵀΛ⁻¹x)   ⇒   p(ζ) = σ² |Λ|^{1/2} exp(−½ ζᵀΛζ)
-/// isotropic, Λ = ℓ² I:  p(ζ) = σ² ℓⁿ exp(−½ ℓ² |ζ|²)          (n = 2: FORMALISM's q² ℓ² e^{−½ℓ²|ζ|²})
+/// isotropic, Λ = ℓ² I:  p(ζ) = σ² ℓⁿ exp(−½ ℓ² |ζ|²)          (n = 2: the main paper's q² ℓ² e^{−½ℓ²|ζ|²})
 /// blur:  (p * g^Σ)(h) = σ² |Λ|^{1/2} (|Λ⁻¹| |Σ| / |Λ⁻¹ + Σ|)^{1/2} g^{Λ⁻¹ + Σ}(h)
 /// ```
 /// Parameters: rms height σ, correlation length ℓ in the `exp(−r²/(2ℓ²))` sense. SCATMECH's

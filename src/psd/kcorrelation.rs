@@ -13,7 +13,7 @@ use crate::real::Real;
 /// # Formula
 /// ```text
 /// p(ζ) = σ² c (1 + T|ζ|²)^{−ν},   ν = (γ + 1)/2,   c = (2T)^{n/2} Γ(ν) / Γ(ν − n/2)
-/// n = 2:  c = (γ − 1) T     (FORMALISM's unit-integral (γ−1)T/(2π), times (2π) for ∫p = (2π)σ²)
+/// n = 2:  c = (γ − 1) T     (the main paper's unit-integral (γ−1)T/(2π), times 2π for ∫p = (2π)σ²)
 /// ```
 /// so that `∫ p dⁿζ = (2π)^{n/2} σ²`; this needs `γ > n − 1` (finite variance).
 ///

@@ -4,7 +4,7 @@
 //! Rayleigh–Rice polarization factors (SCATMECH's form), the surface section `Ξ` of a packet
 //! channel (S2.18 restricted to the surface) and the closed-form coherence integral of S2.10.
 //!
-//! Conventions are DESIGN §1's: column stacking, `e^{−iωt}`, `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)`.
+//! Conventions are the crate's (lib.rs, "Conventions"): column stacking, `e^{−iωt}`, `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)`.
 
 use nalgebra::{Matrix2, Matrix3, Matrix4, Vector2, Vector3};
 use num_complex::Complex;

@@ -32,7 +32,7 @@ pub trait Pbsdf<T: Real> {
     #[must_use]
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T>;
 
-    /// `M₀₀` alone (what the scalar model level needs); override when cheaper than
+    /// `M₀₀` alone (what the [`super::Intensity`] level needs); override when cheaper than
     /// [`Pbsdf::mueller`].
     #[inline]
     #[must_use]
