@@ -76,6 +76,9 @@
 //!
 //! ## Numerical behaviour
 #![doc = include_str!("../docs/numerical.md")]
+//!
+//! ## Architecture
+#![doc = include_str!("../docs/architecture.md")]
 #![forbid(unsafe_code)]
 
 pub mod error;

@@ -8,7 +8,8 @@ use crate::real::Real;
 /// factor `v` of the interface's geometry ([`Geometry::phase_factor`]: `k (cos θ_i + cos θ_o)`
 /// in reflection).
 ///
-/// For a height field `z` the phase imprinted on the light is `v z`, and for Gaussian heights `⟨e^{iv(z₁ − z₂)}⟩ = α e^{v² R(ξ)}`:
+/// For a height field `z` the phase imprinted on the light is `v z`, and for Gaussian heights
+/// `⟨e^{iv(z₁ − z₂)}⟩ = α e^{v² R(ξ)}`:
 /// `α` is the coherent (specular) fraction; its first-order companion `α v² R(ξ)` is the
 /// scattered part, so both carry `α` and their sum `α (1 + v²σ²) ≤ 1` conserves energy.
 #[must_use]
