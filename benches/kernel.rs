@@ -19,7 +19,7 @@ use gmueller::frame::Frame;
 use gmueller::fresnel;
 use gmueller::interaction::batch::{DirectionsSoa, StokesSoa, plane_wave_rayleigh_rice};
 use gmueller::interaction::{
-    CoherenceWeights, FresnelReflection, Full, Geometry, Incoherent, Intensity, Kernel, OneShape,
+    CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, Level, LevelVisitor, OneShape,
     Partial, PlaneWave, PolarizationModel, RayleighRice, RoughSurface,
 };
 use gmueller::mueller::Mueller;
@@ -109,7 +109,7 @@ fn bench_level<T, Pol, Coh, P>(
     c: &mut Criterion,
     group: &str,
     name: &str,
-    coherence: Coh,
+    kernel: Kernel<Pol, Coh>,
     material: &RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
 ) where
     T: Real,
@@ -118,7 +118,6 @@ fn bench_level<T, Pol, Coh, P>(
     P: Psd<T, 2>,
 {
     let mut g = c.benchmark_group(group);
-    let kernel = Kernel::<Pol, Coh>::new(coherence);
     let sc = scenes::<T>();
     g.bench_function(BenchmarkId::new(name, "seeded"), |b| {
         let mut i = 0;
@@ -178,26 +177,34 @@ fn levels_for<T: Real>(c: &mut Criterion, prec: &str) {
     let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
     let m = glass(psd);
     let group = format!("kernel_gaussian/{prec}");
-    macro_rules! lv {
-        ($pol:ty, $coh:ty) => {
-            bench_level::<T, $pol, $coh, _>(
-                c,
-                &group,
-                concat!(stringify!($pol), "x", stringify!($coh)),
-                <$coh>::default(),
-                &m,
-            )
-        };
+    // Every level, chosen at run time by the library's one dispatch (`Level::dispatch`); the
+    // benchmark names are `{polarization}x{coherence}`.
+    struct Bench<'a, T: Real, P> {
+        c: &'a mut Criterion,
+        group: &'a str,
+        material: &'a RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
     }
-    lv!(Intensity, PlaneWave);
-    lv!(Intensity, Partial);
-    lv!(Intensity, Incoherent);
-    lv!(OneShape, PlaneWave);
-    lv!(OneShape, Partial);
-    lv!(OneShape, Incoherent);
-    lv!(Full, PlaneWave);
-    lv!(Full, Partial);
-    lv!(Full, Incoherent);
+    impl<T: Real, P: Psd<T, 2>> LevelVisitor<T, P> for Bench<'_, T, P> {
+        type Output = ();
+        fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
+        where
+            Pol: PolarizationModel,
+            Coh: CoherenceWeights<T, P>,
+        {
+            let name = level.name().replace('/', "x");
+            bench_level(self.c, self.group, &name, kernel, self.material);
+        }
+    }
+    for level in Level::ALL {
+        level.dispatch(
+            ClosedForm,
+            Bench {
+                c,
+                group: &group,
+                material: &m,
+            },
+        );
+    }
 
     // K-correlation (T = 4 µm², γ = 2.5) at the Full×Partial level.
     let kc = KCorrelation::<T, 2>::new(T::lit(4e-4), T::lit(4.0), T::lit(2.5)).unwrap();
@@ -208,7 +215,7 @@ fn levels_for<T: Real>(c: &mut Criterion, prec: &str) {
             c,
             &group,
             &format!("FullxPartial/GaussHermite{order}"),
-            Partial(GaussHermite::<T>::new(order).unwrap()),
+            Kernel::new(Partial(GaussHermite::<T>::new(order).unwrap())),
             &mk,
         );
     }
@@ -219,7 +226,7 @@ fn levels_for<T: Real>(c: &mut Criterion, prec: &str) {
             c,
             &group,
             &format!("FullxPartial/Mixture{comps}"),
-            Partial(ClosedForm),
+            Kernel::new(Partial(ClosedForm)),
             &glass(mix),
         );
     }
