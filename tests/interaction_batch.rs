@@ -697,7 +697,10 @@ fn batch_output_digest() {
         }
     }
     let mut d = [0u64; 4];
-    for (slot, f) in d.iter_mut().zip([pw::<f64>, pw::<f32>, mj::<f64>, mj::<f32>]) {
+    for (slot, f) in d
+        .iter_mut()
+        .zip([pw::<f64>, pw::<f32>, mj::<f64>, mj::<f32>])
+    {
         let mut h = Fnv(0xcbf29ce484222325);
         f(&mut h);
         *slot = h.0;
