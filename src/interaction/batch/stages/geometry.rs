@@ -56,8 +56,8 @@ mod tests {
                     for l in 0..len {
                         let g = sc.geometry(i + l);
                         assert!(same(cos_o[l], g.cos_o), "{what}: exit {}", i + l);
-                        for k in 0..3 {
-                            assert!(same(r[k][l], g.exit[k]), "{what}: exit {}, r{k}", i + l);
+                        for (k, rk) in r.iter().enumerate() {
+                            assert!(same(rk[l], g.exit[k]), "{what}: exit {}, r{k}", i + l);
                         }
                     }
                 });
