@@ -6,6 +6,8 @@
 //!
 //! ## Module map (one module per concept, in the order of the derivation)
 //! - [`real`]: the scalar trait [`Real`] (`f32`, `f64`).
+//! - [`simd`]: the lane vocabulary, vector exponential, structure-of-arrays view and chunk loop
+//!   under the batch paths (imports no physics module).
 //! - [`error`]: the [`Error`] returned by validated constructors.
 //! - [`jones`]: Jones vectors and matrices, standard polarization elements.
 //! - [`fresnel`]: Fresnel coefficients of dielectric and conducting interfaces as Jones matrices.
@@ -92,6 +94,7 @@ mod numerics;
 pub mod packet;
 pub mod psd;
 pub mod real;
+pub mod simd;
 pub mod stack;
 pub mod stokes;
 

@@ -594,3 +594,119 @@ fn errors_write_nothing() {
     let (r, _) = run_raw(&b, &[], &[], &[], [0; 4]);
     r.unwrap();
 }
+
+/// FNV-1a over the output bits of both batch entry points (`plane_wave_rayleigh_rice` here,
+/// `mueller_from_jones_soa` too) in f32 and f64 on a large deterministic set with the edge cases
+/// of this file: a refactoring of the batch layer must leave the printed digests unchanged on
+/// one machine (run with `cargo test --release --test interaction_batch -- --ignored
+/// --nocapture batch_output_digest`).
+#[test]
+#[ignore = "prints a digest to compare before and after a refactoring"]
+fn batch_output_digest() {
+    use gmueller::mueller::batch::{JonesSoa, MuellerSoa, mueller_from_jones_soa};
+    struct Fnv(u64);
+    impl Fnv {
+        fn eat(&mut self, bits: u64) {
+            for b in bits.to_le_bytes() {
+                self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x100000001b3);
+            }
+        }
+        fn text(&mut self, s: &str) {
+            for b in s.bytes() {
+                self.eat(u64::from(b));
+            }
+        }
+    }
+    fn pw<T: Real>(h: &mut Fnv) {
+        let mut scenes = Vec::new();
+        for (theta_i, eta, sigma) in [
+            (0.5, Complex::new(1.5, 0.0), 0.01),
+            (0.0, Complex::new(1.5, 0.0), 0.01),
+            (1e-9, Complex::new(0.2, 3.5), 0.02),
+            (1.2, Complex::new(2.0, 0.5), 0.005),
+            (89.5f64.to_radians(), Complex::new(0.05, 8.0), 0.01),
+            (0.3, Complex::new(1.0, 0.0), 0.01),
+            (0.3, Complex::new(1.5, 0.2), 0.0),
+            (0.3, Complex::new(1.5, 1e-20), 0.01),
+            (0.7, Complex::new(1.3, 0.0), 0.002),
+        ] {
+            for normal in [Vector3::z(), Vector3::new(0.1, -0.2, 1.0).normalize()] {
+                let mut sc = base_scene();
+                sc.theta_i = theta_i;
+                sc.eta = eta;
+                sc.sigma = sigma;
+                sc.normal = normal;
+                scenes.push(sc);
+            }
+        }
+        for (k, sc) in scenes.iter_mut().enumerate() {
+            let n = [0, 1, 3, 7, 8, 9, 15, 16, 17, 33, 1000][k % 11];
+            let mut exits = exit_set(sc, n, 100 + k as u64);
+            let (t1, _, nn) = surface_axes(sc);
+            exits.extend([nn, nn * 3.0, nn * 1e-3, nn + t1 * 1e-9, nn + t1 * 1e-5]);
+            exits.extend((0..9).map(|j| nn * 0.01 + t1 * (1.0 + j as f64)));
+            exits.extend((0..5).map(|j| nn + t1 * (3.0 + 2.0 * j as f64)));
+            sc.exits = exits;
+        }
+        // Error cases: a non-finite, a zero and a below-the-surface exit.
+        let mut bad = Vec::new();
+        for e in [
+            Vector3::new(f64::NAN, 0.0, 1.0),
+            Vector3::zeros(),
+            Vector3::new(0.0, 0.3, -1.0),
+        ] {
+            let mut sc = base_scene();
+            sc.exits = exit_set(&sc, 20, 9);
+            sc.exits[13] = e;
+            bad.push(sc);
+        }
+        for sc in scenes.iter().chain(&bad) {
+            match Built::<T>::new(sc).batch() {
+                Ok(out) => {
+                    for s in &out {
+                        for &v in s {
+                            h.eat(v.to_f64().to_bits());
+                        }
+                    }
+                }
+                Err(e) => h.text(&format!("{e}")),
+            }
+        }
+    }
+    fn mj<T: Real>(h: &mut Fnv) {
+        let mut rng = Lcg(0xd1e5);
+        for n in (0..42).chain([255, 1000, 1024]) {
+            let stride = if n % 2 == 0 { padded_stride::<T>(n) } else { n };
+            let mut input = vec![T::zero(); 8 * stride.max(1)];
+            for k in 0..8 {
+                for i in 0..n {
+                    let scale = [1.0, 1e-20, 1e20, 0.0, 3.0][(i + k) % 5];
+                    let scale = if n == 1000 { 1.0 } else { scale };
+                    input[k * stride + i] = T::lit((rng.uniform() * 4.0 - 2.0) * scale);
+                }
+            }
+            let mut out = vec![T::lit(f64::NAN); 16 * stride.max(1)];
+            let j = JonesSoa::from_strided(&input, n, stride).unwrap();
+            let mut m = MuellerSoa::from_strided(&mut out, n, stride).unwrap();
+            mueller_from_jones_soa(&j, &mut m).unwrap();
+            for s in &m.m {
+                for &v in s.iter() {
+                    h.eat(v.to_f64().to_bits());
+                }
+            }
+        }
+    }
+    let mut d = [0u64; 4];
+    for (slot, f) in d
+        .iter_mut()
+        .zip([pw::<f64>, pw::<f32>, mj::<f64>, mj::<f32>])
+    {
+        let mut h = Fnv(0xcbf29ce484222325);
+        f(&mut h);
+        *slot = h.0;
+    }
+    println!(
+        "digest plane_wave f64 {:016x} f32 {:016x}; mueller f64 {:016x} f32 {:016x}",
+        d[0], d[1], d[2], d[3]
+    );
+}

@@ -13,6 +13,11 @@ use pulp::{Simd, WithSimd};
 
 use crate::error::Error;
 use crate::real::Real;
+use crate::simd::complex::{C, im_conj, re_conj};
+use crate::simd::driver::{self, LaneMap};
+use crate::simd::{LayoutError, Soa, SoaMut};
+
+pub use crate::simd::padded_stride;
 
 /// A batch of Jones matrices `[[a, b], [c, d]]` as eight slices of equal length (real and
 /// imaginary parts of `a, b, c, d`, row-major).
@@ -49,7 +54,7 @@ impl<'a, T> JonesSoa<'a, T> {
     /// assert_eq!(JonesSoa::from_strided(&buf, n, s).unwrap().im[3].len(), 3);
     /// ```
     pub fn from_strided(buf: &'a [T], n: usize, stride: usize) -> Result<Self, Error> {
-        let [ar, br, cr, dr, ai, bi, ci, di] = strided(buf, n, stride)?;
+        let [ar, br, cr, dr, ai, bi, ci, di] = Soa::<T, 8>::from_strided(buf, n, stride)?.c;
         Ok(Self {
             re: [ar, br, cr, dr],
             im: [ai, bi, ci, di],
@@ -76,7 +81,7 @@ impl<'a, T> MuellerSoa<'a, T> {
     /// ```
     pub fn from_strided(buf: &'a mut [T], n: usize, stride: usize) -> Result<Self, Error> {
         Ok(Self {
-            m: strided_mut(buf, n, stride)?,
+            m: SoaMut::<T, 16>::from_strided(buf, n, stride)?.c,
         })
     }
 
@@ -93,87 +98,15 @@ impl<'a, T> MuellerSoa<'a, T> {
     }
 }
 
-/// `Ok` when `count` slices of `n` elements, `stride` apart, fit in `len` elements.
-fn check_strided(len: usize, count: usize, n: usize, stride: usize) -> Result<(), Error> {
-    if stride < n {
-        return Err(Error::OutOfRange {
-            what: "batch stride",
-            value: stride as f64,
-            expected: "at least the number of elements n",
-        });
+/// The layout errors of [`crate::simd::Soa`] as the crate's [`Error::OutOfRange`].
+impl From<LayoutError> for Error {
+    fn from(e: LayoutError) -> Self {
+        Error::OutOfRange {
+            what: e.what,
+            value: e.value,
+            expected: e.expected,
+        }
     }
-    let need = (count - 1).saturating_mul(stride).saturating_add(n);
-    if len < need {
-        return Err(Error::OutOfRange {
-            what: "batch buffer length",
-            value: len as f64,
-            expected: "at least (slices − 1) · stride + n",
-        });
-    }
-    Ok(())
-}
-
-/// `K` slices of `n` elements of `buf`, `stride` apart (the layout of every `from_strided`).
-pub(crate) fn strided<T, const K: usize>(
-    buf: &[T],
-    n: usize,
-    stride: usize,
-) -> Result<[&[T]; K], Error> {
-    check_strided(buf.len(), K, n, stride)?;
-    Ok(core::array::from_fn(|k| &buf[k * stride..k * stride + n]))
-}
-
-/// [`strided`] for mutable slices.
-pub(crate) fn strided_mut<T, const K: usize>(
-    buf: &mut [T],
-    n: usize,
-    stride: usize,
-) -> Result<[&mut [T]; K], Error> {
-    check_strided(buf.len(), K, n, stride)?;
-    let mut chunks = buf.chunks_mut(stride.max(1));
-    Ok(core::array::from_fn(|_| match chunks.next() {
-        Some(c) => &mut c[..n],
-        None => &mut [],
-    }))
-}
-
-/// A stride (in elements of `T`) for the slices of a batch of `n` matrices in one buffer, chosen
-/// so the slices do not start at addresses that are equal modulo 4 KiB.
-///
-/// The batch loop streams through 24 slices at once. When their start addresses agree modulo
-/// 4 KiB (one buffer with `stride = n` and `n · size_of::<T>()` a multiple of 4 KiB, e.g.
-/// `n = 1024`; or separately allocated page-aligned slices) they all map to the same set of the
-/// 8-way L1 data cache and the loop runs several times slower (measured on AMD EPYC, 1024
-/// matrices in `f64`: 27–38 µs instead of 2.6–4.2 µs, over several runs). This returns the
-/// smallest `s ≥ n`, a whole number of 64-byte cache lines, for which slices `s` elements apart
-/// start at least three cache lines apart modulo 4 KiB (for up to 16 slices); it wastes at most
-/// about 4 KiB per slice.
-///
-/// # Examples
-/// ```
-/// use gmueller::mueller::batch::padded_stride;
-/// assert_eq!(padded_stride::<f64>(1024), 1048); // 1024 · 8 B is a multiple of 4 KiB
-/// assert!(padded_stride::<f32>(1000) >= 1000);
-/// ```
-#[must_use]
-pub fn padded_stride<T>(n: usize) -> usize {
-    const PAGE: usize = 4096;
-    const LINE: usize = 64;
-    const MIN_GAP: usize = 3 * LINE;
-    let size = core::mem::size_of::<T>().max(1);
-    let per_line = (LINE / size).max(1);
-    let first = n.div_ceil(per_line) * per_line;
-    let spread = |s: usize| {
-        let d = s.wrapping_mul(size) % PAGE;
-        (1..16).all(|k| {
-            let x = (k * d) % PAGE;
-            x.min(PAGE - x) >= MIN_GAP
-        })
-    };
-    (0..PAGE / LINE)
-        .map(|j| first + j * per_line)
-        .find(|&s| spread(s))
-        .unwrap_or(first)
 }
 
 /// Writes the Mueller matrices of a batch of Jones matrices into the sixteen entry slices of
@@ -248,7 +181,7 @@ pub fn mueller_from_jones_soa<T: Real>(
             expected: "8 input slices and 16 output slices of one common length",
         });
     }
-    T::mueller_from_jones_soa_kernel(j, out);
+    kernel_simd(j, out);
     Ok(())
 }
 
@@ -259,6 +192,7 @@ pub fn mueller_from_jones_soa<T: Real>(
 ///
 /// # Panics
 /// If a slice is shorter than `j.re[0]`.
+#[cfg(test)]
 pub(crate) fn kernel_portable<T: Real>(j: &JonesSoa<'_, T>, out: &mut MuellerSoa<'_, T>) {
     let n = j.re[0].len();
     let [ar, br, cr, dr] = j.re.map(|s| &s[..n]);
@@ -320,147 +254,32 @@ pub(crate) fn kernel_portable<T: Real>(j: &JonesSoa<'_, T>, out: &mut MuellerSoa
     }
 }
 
-/// The SIMD kernel for `f32` and `f64`: detects the instruction set and runs [`Kernel`].
-/// Lengths must already be equal (checked by [`mueller_from_jones_soa`]).
+/// The SIMD kernel: detects the instruction set and runs [`Kernel`]. Lengths must already be
+/// equal (checked by [`mueller_from_jones_soa`]).
 ///
 /// # Panics
 /// If a slice is shorter than `j.re[0]`.
 #[inline]
-pub(crate) fn kernel_simd<F: Lanes>(j: &JonesSoa<'_, F>, out: &mut MuellerSoa<'_, F>) {
-    pulp::Arch::new().dispatch(Kernel { j, out });
+fn kernel_simd<F: Real>(j: &JonesSoa<'_, F>, out: &mut MuellerSoa<'_, F>) {
+    crate::simd::dispatch(Kernel { j, out });
 }
 
-/// The scalar types with a SIMD vector type in [`pulp`]: `f32` and `f64`. `V<S>` is the vector
-/// of `S::F32_LANES` or `S::F64_LANES` lanes; `mul_add` is fused where the hardware has FMA.
-pub(crate) trait Lanes: Real {
-    /// One SIMD vector of `Self`.
-    type V<S: Simd>: Copy;
-    fn vsplat<S: Simd>(s: S, x: Self) -> Self::V<S>;
-    fn vadd<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
-    fn vsub<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
-    fn vmul<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
-    /// `a b + c`.
-    fn vmul_add<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>, c: Self::V<S>) -> Self::V<S>;
-    /// `c − a b`.
-    fn vneg_mul_add<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>, c: Self::V<S>) -> Self::V<S>;
-    /// Whole vectors first, then the remainder.
-    fn vsplit<S: Simd>(x: &[Self]) -> (&[Self::V<S>], &[Self]);
-    fn vsplit_mut<S: Simd>(x: &mut [Self]) -> (&mut [Self::V<S>], &mut [Self]);
-    /// The number of lanes of `V<S>`.
-    fn lanes<S: Simd>() -> usize;
-    /// Loads a remainder shorter than a vector (other lanes zero).
-    fn load_partial<S: Simd>(s: S, x: &[Self]) -> Self::V<S>;
-    /// Stores the first `x.len()` lanes.
-    fn store_partial<S: Simd>(s: S, x: &mut [Self], v: Self::V<S>);
-}
-
-macro_rules! impl_lanes {
-    ($t:ty, $v:ident, $splat:ident, $add:ident, $sub:ident, $mul:ident, $fma:ident, $fnma:ident,
-     $split:ident, $split_mut:ident, $lanes:ident, $load:ident, $store:ident) => {
-        impl Lanes for $t {
-            type V<S: Simd> = S::$v;
-            #[inline(always)]
-            fn vsplat<S: Simd>(s: S, x: Self) -> Self::V<S> {
-                s.$splat(x)
-            }
-            #[inline(always)]
-            fn vadd<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
-                s.$add(a, b)
-            }
-            #[inline(always)]
-            fn vsub<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
-                s.$sub(a, b)
-            }
-            #[inline(always)]
-            fn vmul<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
-                s.$mul(a, b)
-            }
-            #[inline(always)]
-            fn vmul_add<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>, c: Self::V<S>) -> Self::V<S> {
-                s.$fma(a, b, c)
-            }
-            #[inline(always)]
-            fn vneg_mul_add<S: Simd>(
-                s: S,
-                a: Self::V<S>,
-                b: Self::V<S>,
-                c: Self::V<S>,
-            ) -> Self::V<S> {
-                s.$fnma(a, b, c)
-            }
-            #[inline(always)]
-            fn vsplit<S: Simd>(x: &[Self]) -> (&[Self::V<S>], &[Self]) {
-                S::$split(x)
-            }
-            #[inline(always)]
-            fn vsplit_mut<S: Simd>(x: &mut [Self]) -> (&mut [Self::V<S>], &mut [Self]) {
-                S::$split_mut(x)
-            }
-            #[inline(always)]
-            fn lanes<S: Simd>() -> usize {
-                S::$lanes
-            }
-            #[inline(always)]
-            fn load_partial<S: Simd>(s: S, x: &[Self]) -> Self::V<S> {
-                s.$load(x)
-            }
-            #[inline(always)]
-            fn store_partial<S: Simd>(s: S, x: &mut [Self], v: Self::V<S>) {
-                s.$store(x, v)
-            }
-        }
-    };
-}
-
-// `mul_add_e` / `negate_mul_add_e`: fused where the instruction set has FMA, `a b + c` otherwise
-// (pulp's plain `mul_add` would call a slow software fma on the scalar path).
-impl_lanes!(
-    f32,
-    f32s,
-    splat_f32s,
-    add_f32s,
-    sub_f32s,
-    mul_f32s,
-    mul_add_e_f32s,
-    negate_mul_add_e_f32s,
-    as_simd_f32s,
-    as_mut_simd_f32s,
-    F32_LANES,
-    partial_load_f32s,
-    partial_store_f32s
-);
-impl_lanes!(
-    f64,
-    f64s,
-    splat_f64s,
-    add_f64s,
-    sub_f64s,
-    mul_f64s,
-    mul_add_e_f64s,
-    negate_mul_add_e_f64s,
-    as_simd_f64s,
-    as_mut_simd_f64s,
-    F64_LANES,
-    partial_load_f64s,
-    partial_store_f64s
-);
-
-/// `Re(x ȳ) = x.re y.re + x.im y.im` (one fused multiply–add).
+/// `Re(x ȳ)` of two entries given as real and imaginary vectors.
 #[inline(always)]
-fn re<S: Simd, F: Lanes>(s: S, xr: F::V<S>, xi: F::V<S>, yr: F::V<S>, yi: F::V<S>) -> F::V<S> {
-    F::vmul_add(s, xr, yr, F::vmul(s, xi, yi))
+fn re<S: Simd, F: Real>(s: S, xr: F::V<S>, xi: F::V<S>, yr: F::V<S>, yi: F::V<S>) -> F::V<S> {
+    re_conj::<S, F>(s, C { re: xr, im: xi }, C { re: yr, im: yi })
 }
 
-/// `Im(x ȳ) = x.im y.re − x.re y.im` (one fused multiply–add).
+/// `Im(x ȳ)` of two entries given as real and imaginary vectors.
 #[inline(always)]
-fn im<S: Simd, F: Lanes>(s: S, xr: F::V<S>, xi: F::V<S>, yr: F::V<S>, yi: F::V<S>) -> F::V<S> {
-    F::vneg_mul_add(s, xr, yi, F::vmul(s, xi, yr))
+fn im<S: Simd, F: Real>(s: S, xr: F::V<S>, xi: F::V<S>, yr: F::V<S>, yi: F::V<S>) -> F::V<S> {
+    im_conj::<S, F>(s, C { re: xr, im: xi }, C { re: yr, im: yi })
 }
 
 /// The closed form on one vector of matrices: inputs `[a_re, b_re, c_re, d_re, a_im, …, d_im]`,
 /// outputs `M_00 … M_33` row-major (see [`mueller_from_jones_soa`]).
 #[inline(always)]
-fn mueller_lanes<S: Simd, F: Lanes>(s: S, x: [F::V<S>; 8]) -> [F::V<S>; 16] {
+fn mueller_lanes<S: Simd, F: Real>(s: S, x: [F::V<S>; 8]) -> [F::V<S>; 16] {
     let [ar, br, cr, dr, ai, bi, ci, di] = x;
     let half = F::vsplat(s, F::lit(0.5));
     let (add, sub, re, im) = (F::vadd::<S>, F::vsub::<S>, re::<S, F>, im::<S, F>);
@@ -504,7 +323,17 @@ struct Kernel<'r, 'j, 'o, F> {
     out: &'r mut MuellerSoa<'o, F>,
 }
 
-impl<F: Lanes> WithSimd for Kernel<'_, '_, '_, F> {
+/// [`mueller_lanes`] as the driver's per-lane map (8 inputs, 16 outputs).
+struct MuellerLanes;
+
+impl<F: Real> LaneMap<F, 8, 16> for MuellerLanes {
+    #[inline(always)]
+    fn eval<S: Simd>(&self, s: S, x: [F::V<S>; 8]) -> [F::V<S>; 16] {
+        mueller_lanes::<S, F>(s, x)
+    }
+}
+
+impl<F: Real> WithSimd for Kernel<'_, '_, '_, F> {
     type Output = ();
 
     // `inline(always)`: the body must be compiled inside pulp's `#[target_feature]` function.
@@ -515,53 +344,7 @@ impl<F: Lanes> WithSimd for Kernel<'_, '_, '_, F> {
         let inputs = [
             j.re[0], j.re[1], j.re[2], j.re[3], j.im[0], j.im[1], j.im[2], j.im[3],
         ];
-        let mut heads: [&[F::V<S>]; 8] = [&[]; 8];
-        for k in 0..8 {
-            heads[k] = F::vsplit::<S>(&inputs[k][..n]).0;
-        }
-        let nv = heads[0].len();
-        let [h0, h1, h2, h3, h4, h5, h6, h7] = heads;
-        let (h0, h1, h2, h3) = (&h0[..nv], &h1[..nv], &h2[..nv], &h3[..nv]);
-        let (h4, h5, h6, h7) = (&h4[..nv], &h5[..nv], &h6[..nv], &h7[..nv]);
-        let mut out_heads: [&mut [F::V<S>]; 16] = Default::default();
-        for (k, o) in out.m.iter_mut().enumerate() {
-            out_heads[k] = F::vsplit_mut::<S>(&mut o[..n]).0;
-        }
-        for i in 0..nv {
-            let x = [h0[i], h1[i], h2[i], h3[i], h4[i], h5[i], h6[i], h7[i]];
-            let m = mueller_lanes::<S, F>(s, x);
-            for k in 0..16 {
-                out_heads[k][i] = m[k];
-            }
-        }
-        let lanes = F::lanes::<S>();
-        let done = nv * lanes;
-        if done == n {
-            return;
-        }
-        // The remainder. With at least one whole vector, recompute the last whole vector of the
-        // batch, `n − lanes .. n`: the matrices it shares with the loop get the same values
-        // again, and no masked store is needed (those are slow on AMD processors). Shorter
-        // batches go through masked loads and stores.
-        let start = if nv > 0 { n - lanes } else { 0 };
-        let mut x = [F::vsplat(s, F::zero()); 8];
-        for k in 0..8 {
-            let t = &inputs[k][start..n];
-            x[k] = if nv > 0 {
-                F::vsplit::<S>(t).0[0]
-            } else {
-                F::load_partial(s, t)
-            };
-        }
-        let m = mueller_lanes::<S, F>(s, x);
-        for (o, mk) in out.m.iter_mut().zip(m) {
-            let t = &mut o[start..n];
-            if nv > 0 {
-                F::vsplit_mut::<S>(t).0[0] = mk;
-            } else {
-                F::store_partial(s, t, mk);
-            }
-        }
+        driver::map::<S, F, MuellerLanes, 8, 16>(s, &MuellerLanes, inputs, &mut out.m, n);
     }
 }
 
@@ -574,7 +357,7 @@ mod tests {
     //! (`N = ½‖J‖²_F`, see `tests/mueller_batch.rs`).
     use super::*;
 
-    fn inputs<F: Lanes>(n: usize, seed: u64) -> Vec<Vec<F>> {
+    fn inputs<F: Real>(n: usize, seed: u64) -> Vec<Vec<F>> {
         let mut x = seed;
         (0..8)
             .map(|_| {
@@ -590,7 +373,7 @@ mod tests {
             .collect()
     }
 
-    fn run<F: Lanes>(
+    fn run<F: Real>(
         v: &[Vec<F>],
         op: impl FnOnce(&JonesSoa<'_, F>, &mut MuellerSoa<'_, F>),
     ) -> Vec<Vec<F>> {
@@ -605,7 +388,7 @@ mod tests {
         out.m.iter().map(|s| s.to_vec()).collect()
     }
 
-    fn check<F: Lanes>() {
+    fn check<F: Real>() {
         for n in 0..42 {
             let v = inputs::<F>(n, 7 + n as u64);
             let reference = run(&v, kernel_portable);

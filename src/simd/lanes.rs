@@ -1,55 +1,142 @@
-//! The vector arithmetic of the batch kernel: the per-type lane operations (`ExpLanes`), the
-//! exponential, complex numbers in lanes and small 3-vector helpers.
+//! The per-type lane vocabulary: one SIMD vector of `f32` or `f64` under a [`pulp::Simd`]
+//! back-end, its arithmetic, comparisons, selects and partial loads and stores, and the one
+//! run-time dispatch entry of the crate.
 
-use num_complex::Complex;
-use pulp::Simd;
+use pulp::{Simd, WithSimd};
 
-use crate::mueller::batch::Lanes;
+mod sealed {
+    /// Implemented for `f32` and `f64` only.
+    pub trait Sealed {}
+    impl Sealed for f32 {}
+    impl Sealed for f64 {}
+}
 
-/// What the kernel needs beyond [`Lanes`]: division, square root, comparisons, selects, and
-/// the exponential's per-type constants and `2ⁿ`.
-pub(crate) trait ExpLanes: Lanes {
-    /// A lane mask.
+/// The lane vocabulary of `f32` and `f64` (sealed): the vector type `V<S>` of
+/// `S::F32_LANES` / `S::F64_LANES` lanes of a [`pulp::Simd`] back-end, its mask type `M<S>`,
+/// and the operations the batch kernels are written in. [`crate::real::Real`] has it as a
+/// supertrait, so every kernel generic over `T: Real` can run in lanes.
+///
+/// `vmul_add` / `vneg_mul_add` are fused where the instruction set has FMA and `a b + c`
+/// otherwise (pulp's plain `mul_add` would call a slow software fma on the scalar back-end).
+pub trait Lanes: Copy + Send + Sync + 'static + sealed::Sealed {
+    /// One SIMD vector of `Self`.
+    type V<S: Simd>: Copy;
+    /// A lane mask of `V<S>`.
     type M<S: Simd>: Copy;
-    /// `ln(smallest subnormal / 2)` rounded down and `ln(max)` rounded up: the clamp of [`vexp`].
+    /// `ln(smallest subnormal / 2)` rounded down: the lower clamp of the vector exponential.
     const EXP_LO: f64;
+    /// `ln(max)` rounded up: the upper clamp of the vector exponential.
     const EXP_HI: f64;
     /// `1.5 · 2^(mantissa bits)`: adding it rounds to an integer.
     const SHIFTER: f64;
     /// `ln 2 = LN2_HI + LN2_LO`, `LN2_HI` with enough trailing zeros that `n · LN2_HI` is exact.
     const LN2_HI: f64;
+    /// The low part of `ln 2` (see [`Lanes::LN2_HI`]).
     const LN2_LO: f64;
-    /// Taylor coefficients `1/j!` from the highest degree down to `j = 0`.
+    /// Taylor coefficients `1/j!` of the exponential from the highest degree down to `j = 0`.
     const EXP_POLY: &'static [f64];
-    /// The size range `[MIN_POSITIVE / ε, MAX / 4]` of the fast validity test (`ε m` stays
-    /// normal, `3 m` finite).
-    const MIN_SIZE: f64;
-    const MAX_SIZE: f64;
+
+    /// The number of lanes of `V<S>`.
+    fn width<S: Simd>() -> usize;
+    /// `x` on every lane.
+    fn vsplat<S: Simd>(s: S, x: Self) -> Self::V<S>;
+    /// The `f64` literal `x` rounded to `Self`, on every lane.
+    fn vlit<S: Simd>(s: S, x: f64) -> Self::V<S>;
+    /// `a + b`.
+    fn vadd<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
+    /// `a − b`.
+    fn vsub<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
+    /// `a b`.
+    fn vmul<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
+    /// `a / b`.
     fn vdiv<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
+    /// `a b + c`.
+    fn vmul_add<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>, c: Self::V<S>) -> Self::V<S>;
+    /// `c − a b`.
+    fn vneg_mul_add<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>, c: Self::V<S>) -> Self::V<S>;
+    /// `√a`.
     fn vsqrt<S: Simd>(s: S, a: Self::V<S>) -> Self::V<S>;
+    /// `|a|`.
     fn vabs<S: Simd>(s: S, a: Self::V<S>) -> Self::V<S>;
+    /// `min(a, b)`.
     fn vmin<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
+    /// `max(a, b)`.
     fn vmax<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
+    /// `a < b`.
     fn vlt<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::M<S>;
+    /// `a ≤ b`.
     fn vle<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::M<S>;
+    /// `a = b`.
     fn veq<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::M<S>;
+    /// `a ∧ b`.
     fn vand<S: Simd>(s: S, a: Self::M<S>, b: Self::M<S>) -> Self::M<S>;
+    /// `¬a`.
     fn vnot<S: Simd>(s: S, a: Self::M<S>) -> Self::M<S>;
     /// Whether any lane of `m` is set.
     fn vany<S: Simd>(s: S, m: Self::M<S>) -> bool;
+    /// `a` where `m` is set, `b` elsewhere.
     fn vselect<S: Simd>(s: S, m: Self::M<S>, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
     /// `2ⁿ` for integral `n` with `n + bias` a valid biased exponent (normal result).
     fn vpow2<S: Simd>(s: S, n: Self::V<S>) -> Self::V<S>;
+    /// Whole vectors first, then the remainder.
+    fn vsplit<S: Simd>(x: &[Self]) -> (&[Self::V<S>], &[Self]);
+    /// [`Lanes::vsplit`] for mutable slices.
+    fn vsplit_mut<S: Simd>(x: &mut [Self]) -> (&mut [Self::V<S>], &mut [Self]);
+    /// Loads a remainder shorter than a vector (other lanes zero).
+    fn load_partial<S: Simd>(s: S, x: &[Self]) -> Self::V<S>;
+    /// Stores the first `x.len()` lanes.
+    fn store_partial<S: Simd>(s: S, x: &mut [Self], v: Self::V<S>);
 }
 
-macro_rules! impl_exp_lanes {
-    ($t:ty, $v:ident, $m:ident, $div:ident, $sqrt:ident, $abs:ident, $min:ident, $max:ident,
-     $lt:ident, $le:ident, $eq:ident, $and:ident, $not:ident, $first:ident, $select:ident,
-     $lanes:ident) => {
+/// Runs `op` with the best instruction set of this CPU ([`pulp::Arch::dispatch`]: AVX2 + FMA
+/// on x86-64-v3, NEON on aarch64, a scalar back-end otherwise), detected at run time.
+#[inline]
+pub fn dispatch<Op: WithSimd>(op: Op) -> Op::Output {
+    pulp::Arch::new().dispatch(op)
+}
+
+macro_rules! impl_lanes {
+    ($t:ty, $v:ident, $m:ident, $splat:ident, $add:ident, $sub:ident, $mul:ident, $div:ident,
+     $fma:ident, $fnma:ident, $sqrt:ident, $abs:ident, $min:ident, $max:ident, $lt:ident,
+     $le:ident, $eq:ident, $and:ident, $not:ident, $first:ident, $select:ident, $split:ident,
+     $split_mut:ident, $lanes:ident, $load:ident, $store:ident) => {
+        type V<S: Simd> = S::$v;
         type M<S: Simd> = S::$m;
+        #[inline(always)]
+        fn width<S: Simd>() -> usize {
+            S::$lanes
+        }
+        #[inline(always)]
+        fn vsplat<S: Simd>(s: S, x: Self) -> Self::V<S> {
+            s.$splat(x)
+        }
+        #[inline(always)]
+        fn vlit<S: Simd>(s: S, x: f64) -> Self::V<S> {
+            s.$splat(x as $t)
+        }
+        #[inline(always)]
+        fn vadd<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
+            s.$add(a, b)
+        }
+        #[inline(always)]
+        fn vsub<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
+            s.$sub(a, b)
+        }
+        #[inline(always)]
+        fn vmul<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
+            s.$mul(a, b)
+        }
         #[inline(always)]
         fn vdiv<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
             s.$div(a, b)
+        }
+        #[inline(always)]
+        fn vmul_add<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>, c: Self::V<S>) -> Self::V<S> {
+            s.$fma(a, b, c)
+        }
+        #[inline(always)]
+        fn vneg_mul_add<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>, c: Self::V<S>) -> Self::V<S> {
+            s.$fnma(a, b, c)
         }
         #[inline(always)]
         fn vsqrt<S: Simd>(s: S, a: Self::V<S>) -> Self::V<S> {
@@ -95,15 +182,37 @@ macro_rules! impl_exp_lanes {
         fn vselect<S: Simd>(s: S, m: Self::M<S>, a: Self::V<S>, b: Self::V<S>) -> Self::V<S> {
             s.$select(m, a, b)
         }
+        #[inline(always)]
+        fn vsplit<S: Simd>(x: &[Self]) -> (&[Self::V<S>], &[Self]) {
+            S::$split(x)
+        }
+        #[inline(always)]
+        fn vsplit_mut<S: Simd>(x: &mut [Self]) -> (&mut [Self::V<S>], &mut [Self]) {
+            S::$split_mut(x)
+        }
+        #[inline(always)]
+        fn load_partial<S: Simd>(s: S, x: &[Self]) -> Self::V<S> {
+            s.$load(x)
+        }
+        #[inline(always)]
+        fn store_partial<S: Simd>(s: S, x: &mut [Self], v: Self::V<S>) {
+            s.$store(x, v)
+        }
     };
 }
 
-impl ExpLanes for f64 {
-    impl_exp_lanes!(
+impl Lanes for f64 {
+    impl_lanes!(
         f64,
         f64s,
         m64s,
+        splat_f64s,
+        add_f64s,
+        sub_f64s,
+        mul_f64s,
         div_f64s,
+        mul_add_e_f64s,
+        negate_mul_add_e_f64s,
         sqrt_f64s,
         abs_f64s,
         min_f64s,
@@ -115,11 +224,13 @@ impl ExpLanes for f64 {
         not_m64s,
         first_true_m64s,
         select_f64s,
-        F64_LANES
+        as_simd_f64s,
+        as_mut_simd_f64s,
+        F64_LANES,
+        partial_load_f64s,
+        partial_store_f64s
     );
     // exp(x) rounds to 0 below ln(2⁻¹⁰⁷⁵) ≈ −745.133 and overflows above ≈ 709.783.
-    const MIN_SIZE: f64 = f64::MIN_POSITIVE / f64::EPSILON;
-    const MAX_SIZE: f64 = f64::MAX / 4.0;
     const EXP_LO: f64 = -746.0;
     const EXP_HI: f64 = 710.0;
     const SHIFTER: f64 = 6755399441055744.0; // 1.5 · 2⁵²
@@ -168,12 +279,18 @@ impl ExpLanes for f64 {
     }
 }
 
-impl ExpLanes for f32 {
-    impl_exp_lanes!(
+impl Lanes for f32 {
+    impl_lanes!(
         f32,
         f32s,
         m32s,
+        splat_f32s,
+        add_f32s,
+        sub_f32s,
+        mul_f32s,
         div_f32s,
+        mul_add_e_f32s,
+        negate_mul_add_e_f32s,
         sqrt_f32s,
         abs_f32s,
         min_f32s,
@@ -185,11 +302,13 @@ impl ExpLanes for f32 {
         not_m32s,
         first_true_m32s,
         select_f32s,
-        F32_LANES
+        as_simd_f32s,
+        as_mut_simd_f32s,
+        F32_LANES,
+        partial_load_f32s,
+        partial_store_f32s
     );
     // exp(x) rounds to 0 below ln(2⁻¹⁵⁰) ≈ −103.972 and overflows above ≈ 88.723.
-    const MIN_SIZE: f64 = (f32::MIN_POSITIVE / f32::EPSILON) as f64;
-    const MAX_SIZE: f64 = (f32::MAX / 4.0) as f64;
     const EXP_LO: f64 = -104.0;
     const EXP_HI: f64 = 89.0;
     const SHIFTER: f64 = 12582912.0; // 1.5 · 2²³
@@ -218,149 +337,4 @@ impl ExpLanes for f32 {
         let u = s.wrapping_dyn_shl_u32s(u, s.splat_u32s(23));
         pulp::bytemuck::cast(u)
     }
-}
-
-/// `eˣ` on every lane, within 2 ulp of the correctly rounded value over the whole range
-/// (subnormal results included; 0 below the underflow threshold and for −∞, +∞ above the
-/// overflow threshold).
-///
-/// # Formula
-/// ```text
-/// n = round(x / ln 2),  r = x − n LN2_HI − n LN2_LO   (|r| ≤ ln 2 / 2, Cody–Waite)
-/// eˣ = (Σ_{j ≤ J} rʲ/j!) · 2^{n₁} · 2^{n₂},  n₁ = round(n/2), n₂ = n − n₁
-/// ```
-/// J = 13 (f64, truncation ≤ 0.02 ulp) or 7 (f32, ≤ 0.13 ulp); the two-step scaling keeps both
-/// factors normal, so results in the subnormal range are rounded once. NaN gives an unspecified
-/// value (the kernel never passes one).
-#[inline(always)]
-pub(crate) fn vexp<S: Simd, F: ExpLanes>(s: S, x: F::V<S>) -> F::V<S> {
-    let c = |v: f64| F::vsplat(s, F::lit(v));
-    let x = F::vmin(s, F::vmax(s, x, c(F::EXP_LO)), c(F::EXP_HI));
-    let shifter = c(F::SHIFTER);
-    let nf = F::vsub(
-        s,
-        F::vmul_add(s, x, c(core::f64::consts::LOG2_E), shifter),
-        shifter,
-    );
-    let r = F::vneg_mul_add(s, nf, c(F::LN2_HI), x);
-    let r = F::vneg_mul_add(s, nf, c(F::LN2_LO), r);
-    let mut p = c(F::EXP_POLY[0]);
-    for &k in &F::EXP_POLY[1..] {
-        p = F::vmul_add(s, p, r, c(k));
-    }
-    let n1 = F::vsub(s, F::vmul_add(s, nf, c(0.5), shifter), shifter);
-    let n2 = F::vsub(s, nf, n1);
-    F::vmul(s, F::vmul(s, p, F::vpow2(s, n1)), F::vpow2(s, n2))
-}
-
-/// A complex number as two vectors.
-#[derive(Clone, Copy)]
-pub(super) struct C<V> {
-    pub(super) re: V,
-    pub(super) im: V,
-}
-
-/// Complex arithmetic on vectors, with `num_complex`'s operations in its order and without
-/// fused multiply–adds, so that the Rayleigh–Rice factors round exactly as the scalar ones.
-#[derive(Clone, Copy)]
-pub(super) struct Cx<S>(pub(super) S);
-
-impl<S: Simd> Cx<S> {
-    #[inline(always)]
-    pub(super) fn splat<F: ExpLanes>(self, z: Complex<F>) -> C<F::V<S>> {
-        C {
-            re: F::vsplat(self.0, z.re),
-            im: F::vsplat(self.0, z.im),
-        }
-    }
-    /// `(a.re b.re − a.im b.im) + i (a.re b.im + a.im b.re)`.
-    #[inline(always)]
-    pub(super) fn mul<F: ExpLanes>(self, a: C<F::V<S>>, b: C<F::V<S>>) -> C<F::V<S>> {
-        let s = self.0;
-        C {
-            re: F::vsub(s, F::vmul(s, a.re, b.re), F::vmul(s, a.im, b.im)),
-            im: F::vadd(s, F::vmul(s, a.re, b.im), F::vmul(s, a.im, b.re)),
-        }
-    }
-    /// `z · t` for real `t`.
-    #[inline(always)]
-    pub(super) fn scale<F: ExpLanes>(self, z: C<F::V<S>>, t: F::V<S>) -> C<F::V<S>> {
-        C {
-            re: F::vmul(self.0, z.re, t),
-            im: F::vmul(self.0, z.im, t),
-        }
-    }
-    /// `1/z = z̄/|z|²` with one division ([`super::pbsdf`]'s `recip`).
-    #[inline(always)]
-    pub(super) fn recip<F: ExpLanes>(self, z: C<F::V<S>>) -> C<F::V<S>> {
-        let s = self.0;
-        let n2 = F::vadd(s, F::vmul(s, z.re, z.re), F::vmul(s, z.im, z.im));
-        let inv = F::vdiv(s, F::vsplat(s, F::one()), n2);
-        C {
-            re: F::vmul(s, z.re, inv),
-            im: F::vmul(s, F::vsub(s, F::vsplat(s, F::zero()), z.im), inv),
-        }
-    }
-}
-
-/// `Re(x ȳ) = x.re y.re + x.im y.im` (one fused multiply–add).
-#[inline(always)]
-pub(super) fn re_conj<S: Simd, F: ExpLanes>(s: S, x: C<F::V<S>>, y: C<F::V<S>>) -> F::V<S> {
-    F::vmul_add(s, x.re, y.re, F::vmul(s, x.im, y.im))
-}
-
-/// `Im(x ȳ) = x.im y.re − x.re y.im` (one fused multiply–add).
-#[inline(always)]
-pub(super) fn im_conj<S: Simd, F: ExpLanes>(s: S, x: C<F::V<S>>, y: C<F::V<S>>) -> F::V<S> {
-    F::vneg_mul_add(s, x.re, y.im, F::vmul(s, x.im, y.re))
-}
-
-/// `(a · b + c · d) + e · f` without fusing (nalgebra's 3-vector dot product order).
-#[inline(always)]
-pub(super) fn dot3<S: Simd, F: ExpLanes>(s: S, a: [F::V<S>; 3], b: [F::V<S>; 3]) -> F::V<S> {
-    F::vadd(
-        s,
-        F::vadd(s, F::vmul(s, a[0], b[0]), F::vmul(s, a[1], b[1])),
-        F::vmul(s, a[2], b[2]),
-    )
-}
-
-/// `v − k (v·k)` normalised, twice (`frame.rs`'s `orthogonalize`), unfused.
-#[inline(always)]
-pub(super) fn orthogonalize<S: Simd, F: ExpLanes>(
-    s: S,
-    v: [F::V<S>; 3],
-    k: [F::V<S>; 3],
-) -> [F::V<S>; 3] {
-    let once = orthogonalize_step::<S, F>(s, v, k);
-    orthogonalize_step::<S, F>(s, once, k)
-}
-
-/// One step of [`orthogonalize`]. (Functions rather than closures or `array::map` throughout
-/// the vector code: they are `inline(always)`, so nothing is compiled outside pulp's
-/// `#[target_feature]` function.)
-#[inline(always)]
-pub(super) fn orthogonalize_step<S: Simd, F: ExpLanes>(
-    s: S,
-    v: [F::V<S>; 3],
-    k: [F::V<S>; 3],
-) -> [F::V<S>; 3] {
-    let d = dot3::<S, F>(s, v, k);
-    let a = [
-        F::vsub(s, v[0], F::vmul(s, k[0], d)),
-        F::vsub(s, v[1], F::vmul(s, k[1], d)),
-        F::vsub(s, v[2], F::vmul(s, k[2], d)),
-    ];
-    let norm = F::vsqrt(s, dot3::<S, F>(s, a, a));
-    div3::<S, F>(s, a, norm)
-}
-
-/// `v / d` component by component (true divisions, as nalgebra's `Vector3 / T`).
-#[inline(always)]
-pub(super) fn div3<S: Simd, F: ExpLanes>(s: S, v: [F::V<S>; 3], d: F::V<S>) -> [F::V<S>; 3] {
-    [
-        F::vdiv(s, v[0], d),
-        F::vdiv(s, v[1], d),
-        F::vdiv(s, v[2], d),
-    ]
 }

@@ -1,0 +1,156 @@
+//! The per-packet work of the batch plane-wave kernel, done once per call: the incident s/p
+//! frame, the rotation `T` and the effective Stokes vector, the per-packet part of the
+//! Rayleigh–Rice factors, the PSD's Cholesky factor and the constant part of the exponent.
+
+use nalgebra::{Vector2, Vector3, Vector4};
+use num_complex::Complex;
+
+use crate::error::Error;
+use crate::frame::{Frame, frame_change_mueller};
+use crate::interaction::geometry::{self, Geometry};
+use crate::numerics::{HYPOT_PLAIN, principal_sqrt};
+use crate::packet::WavePacket;
+use crate::psd::{GaussianPsd, Psd};
+use crate::real::Real;
+
+/// The per-packet constants of [`super::plane_wave_rayleigh_rice`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PlaneWavePrep<T: Real> {
+    /// Whether the SIMD loop reproduces the scalar kernel for these parameters.
+    pub(crate) vectorizable: bool,
+    pub(crate) surface: Frame<T>,
+    /// `−k̂` of the packet as given (for the exact error of an ambiguous direction).
+    pub(crate) to_source_raw: Vector3<T>,
+    /// ŝ (unit).
+    pub(crate) s: Vector3<T>,
+    pub(crate) n: Vector3<T>,
+    pub(crate) t1: Vector3<T>,
+    pub(crate) t2: Vector3<T>,
+    /// `n̂ × ŝ_in` and `n̂ × (n̂ × ŝ_in)`: the azimuth axes of [`Geometry::exit_azimuth`].
+    pub(crate) u_az: Vector3<T>,
+    pub(crate) v_az: Vector3<T>,
+    pub(crate) k: T,
+    pub(crate) cos_i: T,
+    pub(crate) si2: T,
+    pub(crate) e: Complex<T>,
+    pub(crate) em1: Complex<T>,
+    pub(crate) neg_em1: Complex<T>,
+    pub(crate) qi: Complex<T>,
+    pub(crate) d1: Complex<T>,
+    pub(crate) d3: Complex<T>,
+    pub(crate) neg_em1_qi: Complex<T>,
+    /// `Im ε = 0`: the modulus in `q_o` is `|Re(ε) − sin²θ_o|`.
+    pub(crate) real_eps: bool,
+    /// `(Im ε)²` and `(Im ε)/2`.
+    pub(crate) eim2: T,
+    pub(crate) eim_half: T,
+    /// `ln(σ²|Λ|^{1/2}) + ln(2π (2k cos θ_i)² / λ²) + ln S0`.
+    pub(crate) log_scale: T,
+    pub(crate) variance: T,
+    pub(crate) l00: T,
+    pub(crate) l10: T,
+    pub(crate) l11: T,
+    /// `T S/S0` as `(S0 + S1)/2, (S0 − S1)/2, S2, S3` (the Full level's effective vector,
+    /// normalised; `S0` is in `log_scale`).
+    pub(crate) stokes: [T; 4],
+    /// `√ε` of the type: below it `Frame::sp` falls back to a tangent of n̂.
+    pub(crate) parallel_tol: T,
+}
+
+impl<T: Real> PlaneWavePrep<T> {
+    pub(crate) fn new(
+        psd: &GaussianPsd<T, 2>,
+        epsilon: Complex<T>,
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+    ) -> Result<Self, Error> {
+        let s = geometry::unit(-packet.direction(), "direction to the source")?;
+        let n = surface.k();
+        // The incident s/p frame, T and the effective Stokes vector exactly as the Full level.
+        let (cos_i, incident_sp) = geometry::incidence(&s, surface)?;
+        let t = frame_change_mueller(packet.frame(), &incident_sp).0;
+        // S/S0, with ln S0 folded into the exponent of the weight: the weight alone (K, tiny in
+        // a far tail) underflowed before it was scaled by a bright S0 (f32: 0 for S0 = 1e25
+        // where the answer is 3e-22).
+        let st = packet.stokes().0;
+        let (st, ln_s0) = if st[0] > T::zero() {
+            (st / st[0], st[0].ln())
+        } else {
+            (Vector4::zeros(), T::zero())
+        };
+        let half = T::lit(0.5);
+        let (sx, sy) = ((st[0] + st[1]) * half, (st[0] - st[1]) * half);
+        let ts = t * Vector4::new(sx + sy, sx - sy, st[2], st[3]);
+        let u_az = n.cross(&incident_sp.x());
+        let v_az = n.cross(&u_az);
+        // RayleighRice::factors' per-packet part, with the same operations.
+        let e = epsilon;
+        let one = Complex::new(T::one(), T::zero());
+        let si2 = (T::one() - cos_i * cos_i).max(T::zero());
+        let qi = principal_sqrt(e - one * si2);
+        let em1 = e - one;
+        let d1 = qi + cos_i;
+        let d3 = e * cos_i + qi;
+        let neg_em1_qi = -em1 * qi;
+        // `hypot(Re ε − sin²θ_o, Im ε)` takes its plain branch for every θ_o when Im ε ≠ 0 lies
+        // in [1e-18, 1e18] and |Re ε| + 1 ≤ 1e18; with Im ε = 0 it is |Re ε − sin²θ_o| exactly.
+        let (lo, hi) = (T::lit(HYPOT_PLAIN.0), T::lit(HYPOT_PLAIN.1));
+        let real_eps = e.im == T::zero();
+        let plain = e.im.abs() >= lo && e.im.abs() <= hi && e.re.abs() + T::one() <= hi;
+        let k = packet.wavenumber();
+        let lambda = T::two_pi() / k;
+        let jones_scale = T::lit(2.0) * k * cos_i;
+        let log_prefactor = (T::two_pi() * jones_scale * jones_scale / (lambda * lambda)).ln();
+        let log_amplitude = psd.log_value(&Vector2::zeros());
+        let l = psd.spectral_shape().cholesky_factor();
+        let vectorizable = (real_eps || plain) && log_prefactor.is_finite();
+        Ok(Self {
+            vectorizable,
+            surface: *surface,
+            to_source_raw: -packet.direction(),
+            s,
+            n,
+            t1: surface.x(),
+            t2: surface.y(),
+            u_az,
+            v_az,
+            k,
+            cos_i,
+            si2,
+            e,
+            em1,
+            neg_em1: -em1,
+            qi,
+            d1,
+            d3,
+            neg_em1_qi,
+            real_eps,
+            eim2: e.im * e.im,
+            eim_half: e.im * T::lit(0.5),
+            log_scale: log_amplitude + log_prefactor + ln_s0,
+            variance: psd.variance(),
+            l00: l[(0, 0)],
+            l10: l[(1, 0)],
+            l11: l[(1, 1)],
+            stokes: [
+                (ts[0] + ts[1]) * T::lit(0.5),
+                (ts[0] - ts[1]) * T::lit(0.5),
+                ts[2],
+                ts[3],
+            ],
+            parallel_tol: T::EPSILON.sqrt(),
+        })
+    }
+
+    /// `Ok` when the scalar kernel accepts `exit` (the error of [`Geometry::new`] otherwise).
+    pub(crate) fn check_exact(&self, exit: Vector3<T>) -> Result<(), Error> {
+        Geometry::new(self.k, &self.surface, self.to_source_raw, exit).map(|_| ())
+    }
+
+    /// `(cos φ, sin φ)` of [`Geometry::exit_azimuth`] for the unit exit `r` (the scalar code,
+    /// for directions within `√ε` of the normal).
+    pub(crate) fn azimuth_scalar(&self, r: Vector3<T>) -> (T, T) {
+        let s_out = Frame::sp_unit(r, self.n).x();
+        (-s_out.dot(&self.v_az), s_out.dot(&self.u_az))
+    }
+}

@@ -1,0 +1,134 @@
+//! The Stokes assembly in lanes: `w · M′ (T S)` from the Jones entries `a = ss, b = ps,
+//! c = sp, d = pp` (S1.7 written out as in `mueller::batch`, with `P = (S0 + S1)/2` and
+//! `Q = (S0 − S1)/2` of the effective `T S`), with fused multiply–adds.
+
+use pulp::Simd;
+
+use super::super::prep::PlaneWavePrep;
+use crate::real::Real;
+use crate::simd::complex::{C, im_conj, re_conj};
+
+/// The four Stokes parameters `w · M′ (T S)` of the factors `[ss, ps, sp, pp]`.
+#[inline(always)]
+pub(crate) fn assemble<S: Simd, F: Real>(
+    s: S,
+    p: &PlaneWavePrep<F>,
+    [ja, jb, jc, jd]: [C<F::V<S>>; 4],
+    w: F::V<S>,
+) -> [F::V<S>; 4] {
+    let c = |v: F| F::vsplat(s, v);
+    let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
+    let fma = F::vmul_add::<S>;
+    let (re, im) = (re_conj::<S, F>, im_conj::<S, F>);
+    let [pw, qw, s2, s3] = [
+        c(p.stokes[0]),
+        c(p.stokes[1]),
+        c(p.stokes[2]),
+        c(p.stokes[3]),
+    ];
+    let aa = re(s, ja, ja);
+    let bb = re(s, jb, jb);
+    let cc = re(s, jc, jc);
+    let dd = re(s, jd, jd);
+    let (ab_r, ab_i) = (re(s, ja, jb), im(s, ja, jb));
+    let (cd_r, cd_i) = (re(s, jc, jd), im(s, jc, jd));
+    let (ac_r, nac_i) = (re(s, ja, jc), im(s, jc, ja));
+    let (bd_r, bd_i) = (re(s, jb, jd), im(s, jb, jd));
+    let (bc_r, nbc_i) = (re(s, jb, jc), im(s, jc, jb));
+    let (ad_r, ad_i) = (re(s, ja, jd), im(s, ja, jd));
+    let row_a = fma(
+        s,
+        aa,
+        pw,
+        fma(s, bb, qw, fma(s, ab_r, s2, mul(s, ab_i, s3))),
+    );
+    let row_b = fma(
+        s,
+        cc,
+        pw,
+        fma(s, dd, qw, fma(s, cd_r, s2, mul(s, cd_i, s3))),
+    );
+    let two = c(F::lit(2.0));
+    let o2 = fma(
+        s,
+        two,
+        fma(s, ac_r, pw, mul(s, bd_r, qw)),
+        fma(s, add(s, bc_r, ad_r), s2, mul(s, add(s, ad_i, nbc_i), s3)),
+    );
+    let o3 = fma(
+        s,
+        two,
+        F::vneg_mul_add(s, bd_i, qw, mul(s, nac_i, pw)),
+        fma(s, sub(s, nbc_i, ad_i), s2, mul(s, sub(s, ad_r, bc_r), s3)),
+    );
+    [
+        mul(s, add(s, row_a, row_b), w),
+        mul(s, sub(s, row_a, row_b), w),
+        mul(s, o2, w),
+        mul(s, o3, w),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector4;
+    use pulp::Simd;
+
+    use super::super::fixture::{PerWidth, Scene, chunks, every_width, lanes_of, load, scenes};
+    use super::*;
+    use crate::jones::JonesMatrix;
+    use crate::mueller::Mueller;
+
+    /// `w · M′ (T S)` against `Mueller::from_jones` of the scalar factors applied to the
+    /// effective Stokes vector, in `f64`, within `16 ε M′₀₀ (|P| + |Q| + |S2| + |S3|) w`.
+    struct Check<F: Real>(Vec<Scene<F>>);
+
+    impl<F: Real> PerWidth for Check<F> {
+        fn run<S: Simd>(&self, s: S, what: &str) {
+            for sc in &self.0 {
+                let p = &sc.prep;
+                let st = p.stokes.map(|v| v.to_f64());
+                let ts = Vector4::new(st[0] + st[1], st[0] - st[1], st[2], st[3]);
+                let size: f64 = st.iter().map(|v| v.abs()).sum();
+                chunks::<S, F>(sc.exits.len(), |i, len| {
+                    let f: Vec<_> = (i..i + len)
+                        .map(|j| sc.scatter.factors(&sc.geometry(j)))
+                        .collect();
+                    let w: Vec<F> = (0..len).map(|j| F::lit(0.5 + j as f64)).collect();
+                    let entry = |k: usize, im: bool| -> Vec<F> {
+                        f.iter()
+                            .map(|m| {
+                                let z = m[(k / 2, k % 2)];
+                                if im { z.im } else { z.re }
+                            })
+                            .collect()
+                    };
+                    let z = |k: usize| C {
+                        re: load::<S, F>(s, &entry(k, false)),
+                        im: load::<S, F>(s, &entry(k, true)),
+                    };
+                    let out = assemble::<S, F>(s, p, [z(0), z(1), z(2), z(3)], load::<S, F>(s, &w));
+                    let out = out.map(|v| lanes_of::<S, F>(s, v));
+                    for j in 0..len {
+                        let m = Mueller::from_jones(&JonesMatrix(
+                            f[j].map(|z| num_complex::Complex::new(z.re.to_f64(), z.im.to_f64())),
+                        ))
+                        .matrix();
+                        let want = m * ts * w[j].to_f64();
+                        let tol = 16.0 * F::EPSILON.to_f64() * m[(0, 0)] * size * w[j].to_f64();
+                        for k in 0..4 {
+                            let d = (out[k][j].to_f64() - want[k]).abs();
+                            assert!(d <= tol, "{what}: exit {}, S{k}: {d:e} > {tol:e}", i + j);
+                        }
+                    }
+                });
+            }
+        }
+    }
+
+    #[test]
+    fn lanes_match_mueller_from_jones_at_every_width() {
+        every_width(&Check(scenes::<f64>()));
+        every_width(&Check(scenes::<f32>()));
+    }
+}
