@@ -8,7 +8,7 @@
 //! from direction cosines (`with-geometry`: `Geometry::for_packet` inside the loop). Inputs are
 //! seeded (an LCG) and pass through `black_box`; each group also times one degenerate case
 //! (normal incidence, exact specular). `kernel_batch/{f64,f32}`: the SIMD batch path per exit
-//! against the scalar kernel on the same 1024 exits.
+//! against the per-direction kernel on the same 1024 exits.
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -359,7 +359,7 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
                 black_box(out.s[0][M - 1])
             });
         });
-        g.bench_function(BenchmarkId::new("scalar-prepared", case), |b| {
+        g.bench_function(BenchmarkId::new("per-direction-prepared", case), |b| {
             b.iter(|| {
                 let prepared = kernel.prepare(black_box(&packet), &surf).unwrap();
                 for e in &exits {
@@ -372,7 +372,7 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
                 }
             });
         });
-        g.bench_function(BenchmarkId::new("scalar-evaluate", case), |b| {
+        g.bench_function(BenchmarkId::new("per-direction-evaluate", case), |b| {
             b.iter(|| {
                 for e in &exits {
                     let geo = Geometry::for_packet(black_box(&packet), &surf, *e).unwrap();

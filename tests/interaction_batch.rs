@@ -1,5 +1,5 @@
-//! Verifies the SIMD batch path `interaction::batch::plane_wave_rayleigh_rice` against the scalar
-//! kernel it replaces, `Kernel::<Full, PlaneWave, ClosedForm>::evaluate(..).scattered` per exit
+//! Verifies the SIMD batch path `interaction::batch::plane_wave_rayleigh_rice` against the
+//! per-direction kernel it replaces, `Kernel::<Full, PlaneWave>::evaluate(..).scattered` per exit
 //! direction (and the `OneShape` level): proptest over incidence 0–85°, exits over the
 //! hemisphere (not unit length), dielectric and absorbing η (Im η up to 8), anisotropic PSDs,
 //! tilted surfaces, turned packet frames and polarized input, f32 and f64, batch lengths 0, 1,
@@ -12,12 +12,12 @@
 //! Tolerance, per Stokes parameter of each exit: `|batch − scalar| ≤ abs + rel · S0_scalar` with
 //! `rel = 4 ε (4 + |E|)`, `E` the sum of the magnitudes of the exponents (PSD amplitude and
 //! value, Debye–Waller, prefactor) that the batch path adds before one exponential while the
-//! scalar path exponentiates them separately (the condition number of `exp` is `|E|`): at most
+//! per-direction path exponentiates them separately (the condition number of `exp` is `|E|`): at most
 //! 3.6e-15 + 8.9e-16 |E| ≤ 7e-13 in f64 (|E| ≤ 745 before underflow) and 1.9e-6 + 4.8e-7 |E| in
 //! f32 (≤ 1e-5 for |E| ≤ 17, the lobe; up to 5e-5 at the f32 underflow threshold |E| ≈ 104).
 //! Measured: at most 0.7 ε (1 + |E|) in both precisions. `abs` = the type's smallest normal
 //! number times the output scale `2π cos θ_o/λ² · M₀₀ · S0_in · max(1, σ²|Λ|^{1/2})`, for results
-//! the scalar path rounds through subnormal numbers.
+//! the per-direction path rounds through subnormal numbers.
 
 mod common;
 
@@ -127,7 +127,7 @@ impl<T: Real> Built<T> {
         Ok(core::array::from_fn(|k| out.s[k].to_vec()))
     }
 
-    /// Compares the batch with the scalar kernel exit by exit; returns the number of exits where
+    /// Compares the batch with the per-direction kernel exit by exit; returns the number of exits where
     /// the scalar result is exactly 0.
     fn compare(&self, what: &str) -> usize {
         let got = self.batch().unwrap();
@@ -287,12 +287,12 @@ proptest! {
     #![proptest_config(common::proptest_config(96))]
 
     #[test]
-    fn batch_matches_the_scalar_kernel_f64(sc in scene_strategy()) {
+    fn batch_matches_the_per_direction_kernel_f64(sc in scene_strategy()) {
         Built::<f64>::new(&sc).compare("f64");
     }
 
     #[test]
-    fn batch_matches_the_scalar_kernel_f32(sc in scene_strategy()) {
+    fn batch_matches_the_per_direction_kernel_f32(sc in scene_strategy()) {
         Built::<f32>::new(&sc).compare("f32");
     }
 }
@@ -360,7 +360,7 @@ fn grazing_incidence_and_exit() {
     }
 }
 
-/// η = 1 and a smooth surface (σ = 0, `ln p = −∞`) scatter nothing: the scalar kernel gives
+/// η = 1 and a smooth surface (σ = 0, `ln p = −∞`) scatter nothing: the per-direction kernel gives
 /// exactly 0 and so must the batch.
 #[test]
 fn index_one_and_smooth_surface_give_zero() {
@@ -384,13 +384,17 @@ fn index_one_and_smooth_surface_give_zero() {
         for &e in &b.exits {
             let g = Geometry::for_packet(&b.packet, &b.surface, e).unwrap();
             let want = kernel.evaluate(&b.material(), &b.packet, &g).scattered;
-            assert_eq!(want.s0(), 0.0, "the scalar kernel scatters nothing too");
+            assert_eq!(
+                want.s0(),
+                0.0,
+                "the per-direction kernel scatters nothing too"
+            );
         }
     }
 }
 
 /// A long correlation length (ℓ = 40 µm) makes the PSD underflow to exactly 0 a few degrees off
-/// specular: the batch agrees with the scalar kernel to the smallest normal number there, and
+/// specular: the batch agrees with the per-direction kernel to the smallest normal number there, and
 /// both give 0 for most of the hemisphere.
 #[test]
 fn far_off_specular_underflow() {
@@ -425,8 +429,8 @@ fn far_off_specular_underflow() {
     }
 }
 
-/// An index so extreme that the scalar `hypot` leaves its fast branch goes through the scalar
-/// kernel per direction: bit for bit the scalar result.
+/// An index so extreme that the scalar `hypot` leaves its fast branch goes through the
+/// per-direction kernel: bit for bit its result.
 #[test]
 fn extreme_index_takes_the_scalar_fallback() {
     let mut sc = base_scene();

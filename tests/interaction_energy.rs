@@ -218,7 +218,7 @@ fn lossless_screen(
 /// The kernel's plane-wave (w → ∞) reflected fractions (specular, scattered) of unpolarized
 /// light: the specular lobe is then a Dirac delta of weight `α M₀₀` (`M₀₀ = 1`, α the kernel's
 /// `attenuation` at the specular direction); the scattered part is `∫ L cos θ_o dω / cos θ_i` of
-/// `Kernel::<Intensity, PlaneWave, ClosedForm>` by the hemisphere quadrature above.
+/// `Kernel::<Intensity, PlaneWave>` by the hemisphere quadrature above.
 fn plane_wave_fraction(sigma: f64, ell: f64, theta_i: f64, lambda: f64) -> (f64, f64) {
     // 4× the angles of `reflected_fraction`: at 85° the lobe hugs the horizon (96 angles were
     // 2.1e-7 off the oracle at ℓ = 2λ, 192 angles 3e-10 at ℓ = 10λ).

@@ -5,7 +5,7 @@
 //! The inputs are the real and imaginary parts of the four Jones entries (eight slices), the
 //! outputs the sixteen Mueller entries (sixteen slices), one element per matrix. `f32` and `f64`
 //! run a hand-vectorised kernel through [`pulp`]: the CPU is queried once per call and the kernel
-//! is compiled for AVX2 + FMA (x86-64-v3) or NEON (aarch64) when present, with a portable scalar
+//! is compiled for AVX2 + FMA (x86-64-v3) or NEON (aarch64) when present, with a portable
 //! loop otherwise. No `unsafe` is written in this crate and no `RUSTFLAGS` are needed. Lay a
 //! batch out with [`padded_stride`] (see there why).
 
@@ -126,7 +126,7 @@ impl From<LayoutError> for Error {
 /// Instruction sets: for `f32` and `f64` the CPU is detected at run time ([`pulp::Arch`], no
 /// `RUSTFLAGS` needed); on x86-64 with AVX2 and FMA (x86-64-v3) the loop handles 4 (`f64`) or
 /// 8 (`f32`) matrices per instruction with fused multiply–adds, on aarch64 it uses NEON (2 / 4
-/// lanes), elsewhere (and for other [`Real`] types) it is a plain scalar loop. AVX-512 is not
+/// lanes), elsewhere (and for other [`Real`] types) it is a portable loop. AVX-512 is not
 /// used (pulp's `x86-v4` feature is off). A remainder shorter than the SIMD width goes through
 /// masked loads and stores. No heap allocation.
 ///

@@ -2,7 +2,7 @@
 //! directions, with explicit SIMD chosen at run time.
 //!
 //! [`plane_wave_rayleigh_rice`] evaluates what
-//! `Kernel::<Full, PlaneWave, ClosedForm>::evaluate(..).scattered` returns — the classical
+//! `Kernel::<Full, PlaneWave>::evaluate(..).scattered` returns — the classical
 //! Rayleigh–Rice Mueller BRDF applied to the packet's Stokes vector, with a Gaussian PSD — for
 //! every direction of a [`DirectionsSoa`], writing the four Stokes parameters into a
 //! [`StokesSoa`]. The per-packet work (incident s/p frame, the rotation `T`, `q_i`, the PSD's
@@ -139,7 +139,7 @@ impl<'a, T> StokesSoa<'a, T> {
 ///   L_o = cos θ_o · exp(ln(2π (2k cos θ_i)²/λ²) + ln p(h_t) + ln α) · M′ (T S),
 /// M′ the Mueller matrix of the unscaled factors, one exponential per direction.
 /// ```
-/// This is `Kernel::<Full, PlaneWave, ClosedForm>::evaluate(&material, packet, &g).scattered`
+/// This is `Kernel::<Full, PlaneWave>::evaluate(&material, packet, &g).scattered`
 /// (equal to the [`super::OneShape`] level) with `g = Geometry::for_packet(packet, surface, exit)`,
 /// for each exit direction; the specular part of that kernel is a Dirac delta and not returned.
 /// Stokes vectors are in the exit s/p frame ([`Geometry::exit_sp`]), per unit incident
@@ -150,16 +150,16 @@ impl<'a, T> StokesSoa<'a, T> {
 ///
 /// Accuracy: the geometry (r̂, `cos θ_o`, the exit s vector, the azimuth, `h_t`), `q_o`, the
 /// four Rayleigh–Rice factors and the PSD's exponent are computed with the same operations in
-/// the same order as the scalar kernel (no fused multiply–adds there), so they are the scalar
+/// the same order as the per-direction kernel (no fused multiply–adds there), so they are its
 /// values bit for bit — which keeps the azimuth, whose condition number is `1/sin θ_o`, identical
 /// next to the normal. What differs is the exponential (a polynomial within 1 ulp measured, 2
 /// documented, instead of the C library's), its argument (the exponents `E` of the PSD, the
 /// Debye–Waller factor and the constant prefactor summed before one exponential; `exp` turns
 /// their rounding into a relative error `≈ ε |E|`), and the Mueller–Stokes product (fused
-/// multiply–adds, another order). Against the scalar kernel, per Stokes parameter: within
+/// multiply–adds, another order). Against the per-direction kernel, per Stokes parameter: within
 /// `4 ε (4 + |E|) S0` (measured ≤ `0.7 ε (1 + |E|) S0`: ≤ 1e-13 relative in f64 over the whole
 /// range, ≤ 5e-6 in f32 near the lobe), plus the smallest normal number times the output scale
-/// where the scalar path rounds through subnormal numbers; exactly 0 where the PSD underflows
+/// where the per-direction path rounds through subnormal numbers; exactly 0 where the PSD underflows
 /// (`tests/interaction_batch.rs`).
 ///
 /// Speed (AMD EPYC, AVX2 + FMA, 1024 exits within 15° of specular, `benches/kernel.rs` group
@@ -171,7 +171,7 @@ impl<'a, T> StokesSoa<'a, T> {
 /// AVX2 + FMA the loop handles 4 (`f64`) or 8 (`f32`) directions per instruction, elsewhere a
 /// scalar instantiation of the same loop runs. Other [`Real`] types, and indices so extreme
 /// that the scalar `hypot` would leave its fast branch (`0 < |Im ε| < 10⁻¹⁸` or
-/// `|ε| > 10¹⁸`), go through the scalar kernel per direction. No heap allocation.
+/// `|ε| > 10¹⁸`), go through the per-direction kernel per direction. No heap allocation.
 ///
 /// # Errors
 /// Nothing is written to `out` on error.
@@ -247,7 +247,7 @@ pub fn plane_wave_rayleigh_rice<T: Real, Sp>(
     portable(psd, scatter, packet, surface, exits, out)
 }
 
-/// The scalar kernel per direction: validate every exit, then evaluate each.
+/// The per-direction kernel per direction: validate every exit, then evaluate each.
 fn portable<T: Real>(
     psd: &GaussianPsd<T, 2>,
     scatter: RayleighRice<T>,

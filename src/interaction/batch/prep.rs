@@ -16,7 +16,7 @@ use crate::real::Real;
 /// The per-packet constants of [`super::plane_wave_rayleigh_rice`].
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PlaneWavePrep<T: Real> {
-    /// Whether the SIMD loop reproduces the scalar kernel for these parameters.
+    /// Whether the SIMD loop reproduces the per-direction kernel for these parameters.
     pub(crate) vectorizable: bool,
     pub(crate) surface: Frame<T>,
     /// `−k̂` of the packet as given (for the exact error of an ambiguous direction).
@@ -142,7 +142,7 @@ impl<T: Real> PlaneWavePrep<T> {
         })
     }
 
-    /// `Ok` when the scalar kernel accepts `exit` (the error of [`Geometry::new`] otherwise).
+    /// `Ok` when the per-direction kernel accepts `exit` (the error of [`Geometry::new`] otherwise).
     pub(crate) fn check_exact(&self, exit: Vector3<T>) -> Result<(), Error> {
         Geometry::new(self.k, &self.surface, self.to_source_raw, exit).map(|_| ())
     }

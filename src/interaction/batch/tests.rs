@@ -1,5 +1,5 @@
 //! The vector exponential against the standard library's over the whole range, and the
-//! batch loop against the scalar kernel, on every back-end: pulp's scalar ones of 1, 2, 4
+//! batch loop against the per-direction kernel, on every back-end: pulp's scalar ones of 1, 2, 4
 //! and 8 lanes and AVX2 + FMA when present.
 use nalgebra::Vector2;
 use num_complex::Complex;
@@ -86,7 +86,7 @@ fn exits<F: Real>(theta_i: f64, n: usize) -> Vec<Vector3<F>> {
 
 /// Every back-end of the batch loop (pulp's scalar ones of 1, 2, 4, 8 lanes, which exercise
 /// the remainder logic at every width and the unfused arithmetic of machines without FMA,
-/// and AVX2 + FMA when present) against the scalar kernel, lengths 0–41, normal and oblique
+/// and AVX2 + FMA when present) against the per-direction kernel, lengths 0–41, normal and oblique
 /// incidence, dielectric and metal; tolerance `4 ε (4 + |E|) S0` as in
 /// `tests/interaction_batch.rs`.
 fn back_ends<F: Real>() {
@@ -139,7 +139,7 @@ fn back_ends<F: Real>() {
                         + prep.log_scale.to_f64().abs()
                         + (k * (ci + co)).powi(2) * psd.variance().to_f64();
                     let s0 = want[0][i].to_f64();
-                    // Results the scalar path rounds through subnormal numbers: the smallest
+                    // Results the per-direction path rounds through subnormal numbers: the smallest
                     // normal number times the output scale.
                     let lam = core::f64::consts::TAU / k;
                     let amp = psd.log_value(&Vector2::zeros()).to_f64().exp().max(1.0);
@@ -189,12 +189,12 @@ fn back_ends<F: Real>() {
 }
 
 #[test]
-fn every_back_end_matches_the_scalar_kernel_f64() {
+fn every_back_end_matches_the_per_direction_kernel_f64() {
     back_ends::<f64>();
 }
 
 #[test]
-fn every_back_end_matches_the_scalar_kernel_f32() {
+fn every_back_end_matches_the_per_direction_kernel_f32() {
     back_ends::<f32>();
 }
 
