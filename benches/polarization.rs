@@ -18,16 +18,18 @@ use gmueller::stokes::{Stokes, a_mul, a_mul_inv};
 use nalgebra::{Matrix2, Matrix4, Vector3};
 use num_complex::Complex;
 
-/// A small deterministic generator (`SplitMix64`) so every run benches the same inputs.
-struct SplitMix(u64);
-impl SplitMix {
+/// The tests' deterministic generator (`SplitMix64`) so every run benches the same inputs.
+#[path = "../tests/common/rng.rs"]
+mod rng;
+use rng::SplitMix64 as SplitMix;
+
+/// This bench's draw: uniform in `[-1, 1)` (the shared generator's `signed`).
+trait NextF64 {
+    fn next_f64(&mut self) -> f64;
+}
+impl NextF64 for SplitMix {
     fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        self.signed()
     }
 }
 

@@ -1125,23 +1125,7 @@ fn gaussian_extreme_eigenvalues() {
 
 // ---------------------------------------------------------------- f32 vs f64 error table
 
-/// SplitMix64: a deterministic generator for the error-table sweeps (outside proptest).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn log_uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.uniform(lo.ln(), hi.ln()).exp()
-    }
-}
+// The error-table sweeps (outside proptest) draw from the shared `SplitMix64` (tests/common/rng.rs).
 
 /// Rounds an f64 input to f32 and back: the f64 reference runs on the f32 input, so the
 /// table measures the algorithm in f32, not the rounding of its inputs.
@@ -1171,7 +1155,7 @@ fn mueller_entries<T: Real>(m: &Mueller<T>) -> Vec<f64> {
 type Row = (&'static str, &'static str, f64, f64);
 
 fn error_table(n: usize) -> Vec<Row> {
-    let mut rng = Rng(0x5EED);
+    let mut rng = common::SplitMix64(0x5EED);
     let mut rows: Vec<Row> = Vec::new();
 
     // Jones → Mueller, entries of magnitude 1e-15…1e15.
@@ -1181,8 +1165,8 @@ fn error_table(n: usize) -> Vec<Row> {
         let z: Vec<Complex<f32>> = (0..4)
             .map(|_| {
                 Complex::new(
-                    (rng.uniform(-1.0, 1.0) * scale) as f32,
-                    (rng.uniform(-1.0, 1.0) * scale) as f32,
+                    (rng.uniform_in(-1.0, 1.0) * scale) as f32,
+                    (rng.uniform_in(-1.0, 1.0) * scale) as f32,
                 )
             })
             .collect();
@@ -1202,9 +1186,12 @@ fn error_table(n: usize) -> Vec<Row> {
     for i in 0..n {
         let c = r32((90.0 - rng.log_uniform(0.01, 90.0)).to_radians().cos());
         let eta = if i % 2 == 0 {
-            Complex::new(r32(rng.uniform(1.01, 4.0)), 0.0)
+            Complex::new(r32(rng.uniform_in(1.01, 4.0)), 0.0)
         } else {
-            Complex::new(r32(rng.log_uniform(0.05, 5.0)), r32(rng.uniform(0.0, 10.0)))
+            Complex::new(
+                r32(rng.log_uniform(0.05, 5.0)),
+                r32(rng.uniform_in(0.0, 10.0)),
+            )
         };
         let m64 = Mueller::from_jones(&fresnel::reflection(c, eta));
         let m32 = Mueller::from_jones(&fresnel::reflection(
@@ -1224,18 +1211,18 @@ fn error_table(n: usize) -> Vec<Row> {
     let mut e = 0.0f64;
     for _ in 0..n {
         let k = Vector3::new(
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
+            rng.uniform_in(-1.0, 1.0),
+            rng.uniform_in(-1.0, 1.0),
+            rng.uniform_in(-1.0, 1.0),
         )
         .map(r32);
         let h = Vector3::new(
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
+            rng.uniform_in(-1.0, 1.0),
+            rng.uniform_in(-1.0, 1.0),
+            rng.uniform_in(-1.0, 1.0),
         )
         .map(r32);
-        let psi = r32(rng.uniform(-std::f64::consts::PI, std::f64::consts::PI));
+        let psi = r32(rng.uniform_in(-std::f64::consts::PI, std::f64::consts::PI));
         let (Ok(f64a), Ok(f32a)) = (
             Frame::from_direction_and_x(k, h),
             Frame::from_direction_and_x(k.map(|x| x as f32), h.map(|x| x as f32)),
@@ -1255,7 +1242,7 @@ fn error_table(n: usize) -> Vec<Row> {
         let (a, b, t) = (
             r32(s),
             r32(s * rng.log_uniform(1e-3, 1.0)),
-            rng.uniform(0.0, std::f64::consts::PI),
+            rng.uniform_in(0.0, std::f64::consts::PI),
         );
         let (sn, cs) = t.sin_cos();
         let rot = Matrix2::new(cs, -sn, sn, cs);
@@ -1267,8 +1254,8 @@ fn error_table(n: usize) -> Vec<Row> {
         ) else {
             continue;
         };
-        let x =
-            Vector2::new(rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0)).map(|v| r32(v * s.sqrt()));
+        let x = Vector2::new(rng.uniform_in(-3.0, 3.0), rng.uniform_in(-3.0, 3.0))
+            .map(|v| r32(v * s.sqrt()));
         let l64 = g64.log_value(&x);
         if l64 < -40.0 {
             continue;
@@ -1299,7 +1286,8 @@ fn error_table(n: usize) -> Vec<Row> {
         let ell = r32(lambda * rng.log_uniform(1e-3, 1e4));
         let w = r32(lambda * rng.log_uniform(1e-3, 1e6));
         let sigma = r32(0.01 * lambda);
-        let h = Vector2::new(rng.uniform(-5.0, 5.0), rng.uniform(-5.0, 5.0)).map(|v| r32(v / ell));
+        let h = Vector2::new(rng.uniform_in(-5.0, 5.0), rng.uniform_in(-5.0, 5.0))
+            .map(|v| r32(v / ell));
         let p64 = GaussianPsd::<f64, 2>::isotropic(sigma, ell).unwrap();
         let p32 = GaussianPsd::<f32, 2>::isotropic(sigma as f32, ell as f32).unwrap();
         let x64 = Gaussian::<f64, 2>::isotropic(1.0 / w).unwrap();

@@ -354,21 +354,10 @@ fn distinct_points_give_complex_generalized_mueller() {
 
 // ------------------------------------------------------------------ scale invariance, robustness
 
-/// splitmix64 (Steele, Lea & Flood 2014): seeded uniforms in [−1, 1).
-struct SplitMix(u64);
-impl SplitMix {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut x = self.0;
-        x = (x ^ (x >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        x = (x ^ (x >> 27)).wrapping_mul(0x94D049BB133111EB);
-        x ^= x >> 31;
-        2.0 * ((x >> 11) as f64 / (1u64 << 53) as f64) - 1.0
-    }
-    fn jones<T: Real>(&mut self) -> JonesMatrix<T> {
-        let mut c = || Complex::new(T::lit(self.uniform()), T::lit(self.uniform()));
-        JonesMatrix::from_matrix(Matrix2::new(c(), c(), c(), c())).unwrap()
-    }
+/// A Jones matrix with entries uniform in [−1, 1) + i[−1, 1) from the shared `SplitMix64`.
+fn random_jones<T: Real>(rng: &mut common::SplitMix64) -> JonesMatrix<T> {
+    let mut c = || Complex::new(T::lit(rng.signed()), T::lit(rng.signed()));
+    JonesMatrix::from_matrix(Matrix2::new(c(), c(), c(), c())).unwrap()
 }
 
 /// J = 10¹⁰·diag(2, 1) in f32 (|J₀₀|² = 4e20, and the squares of the Mueller entries overflow):
@@ -520,10 +509,10 @@ fn check_rank_one<T: Real>(j: &JonesMatrix<T>, what: &str) {
 /// upper-triangular ones `[[10⁻⁴ a, b], [0, d]]`: nalgebra's Hermitian eigensolver returned
 /// NaN for 32 of the latter in f32 (so `is_physically_realizable` reported false).
 fn coherency_robustness<T: Real>(seed: u64) {
-    let mut rng = SplitMix(seed);
+    let mut rng = common::SplitMix64(seed);
     for i in 0..100_000 {
-        check_rank_one(&rng.jones::<T>(), &format!("random {i}"));
-        let j = rng.jones::<T>().matrix();
+        check_rank_one(&random_jones::<T>(&mut rng), &format!("random {i}"));
+        let j = random_jones::<T>(&mut rng).matrix();
         let tri = Matrix2::new(
             j[(0, 0)] * T::lit(1e-4),
             j[(0, 1)],

@@ -26,29 +26,17 @@ use nalgebra::{Matrix2, Matrix4};
 use num_complex::Complex;
 use proptest::prelude::*;
 
-/// A small deterministic generator (`SplitMix64`) for the fixed-length cases, in `[-1, 1)`.
-struct SplitMix(u64);
-impl SplitMix {
-    fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
-
 /// `n` seeded matrices; entry `e` of each is scaled by `scales[e % scales.len()]`.
 fn seeded(n: usize, seed: u64, scales: &[f64]) -> Vec<Matrix2<Complex<f64>>> {
-    let mut rng = SplitMix(seed);
+    // The shared `SplitMix64`, entries in [−1, 1).
+    let mut rng = common::SplitMix64(seed);
     (0..n)
         .map(|_| {
             let mut e = 0;
             let mut c = || {
                 let s = scales[e % scales.len()];
                 e += 1;
-                Complex::new(s * rng.next_f64(), s * rng.next_f64())
+                Complex::new(s * rng.signed(), s * rng.signed())
             };
             Matrix2::new(c(), c(), c(), c())
         })

@@ -1,5 +1,6 @@
 //! Verifies the wave-BSDF importance sampler: `pdf` integrates to 1 over the hemisphere (nested
-//! adaptive Gauss–Kronrod in (φ, θ)); `sample` draws from `pdf` (chi-square on 20 000 seeded
+//! adaptive Gauss–Legendre in (φ, θ), `tests/common/quadrature.rs`: nodes computed at run time,
+//! independent of the crate's Gauss–Kronrod table, and itself checked against closed forms); `sample` draws from `pdf` (chi-square on 20 000 seeded
 //! draws, bins about the specular point with expected counts from quadrature of `pdf`, 99.9 %
 //! Wilson–Hilferty quantile), and the same test rejects pdfs that forget the `cos θ_o` Jacobian
 //! or the truncation mass; `pdf(sample.direction) == sample.pdf`; weights are value/pdf; the
@@ -9,7 +10,8 @@
 
 mod common;
 
-use common::{Tol, assert_close};
+use common::quadrature::{gauss_legendre, integrate};
+use common::{SplitMix64, Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::sampling::{LobeSampler, RadialProfile, weight};
@@ -25,85 +27,6 @@ use proptest::prelude::*;
 use std::f64::consts::{PI, TAU};
 
 // ------------------------------------------------------------------ helpers
-
-/// `SplitMix64` (Steele, Lea & Flood 2014): a tiny seeded generator.
-struct SplitMix64(u64);
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
-// QUADPACK qk15 nodes and weights (Piessens et al. 1983).
-const XGK: [f64; 8] = [
-    0.991455371120812639206854697526329,
-    0.949107912342758524526189684047851,
-    0.864864423359769072789712788640926,
-    0.741531185599394439863864773280788,
-    0.586087235467691130294144845693013,
-    0.405845151377397166906606412076961,
-    0.207784955007898467600689403773245,
-    0.0,
-];
-const WGK: [f64; 8] = [
-    0.022935322010529224963732008058970,
-    0.063092092629978553290700663189204,
-    0.104790010322250183839876322541518,
-    0.140653259715525918745189590510238,
-    0.169004726639267902826583426598550,
-    0.190350578064785409913256402421014,
-    0.204432940075298892414161999234649,
-    0.209482141084727828012999174891714,
-];
-const WG: [f64; 4] = [
-    0.129484966168869693270611432679082,
-    0.279705391489276667901467771423780,
-    0.381830050505118944950369775488975,
-    0.417959183673469387755102040816327,
-];
-
-fn gk15(f: &mut dyn FnMut(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
-    let c = 0.5 * (a + b);
-    let h = 0.5 * (b - a);
-    let fc = f(c);
-    let (mut k, mut g) = (fc * WGK[7], fc * WG[3]);
-    for j in 0..7 {
-        let s = f(c - h * XGK[j]) + f(c + h * XGK[j]);
-        k += s * WGK[j];
-        if j % 2 == 1 {
-            g += s * WG[j / 2];
-        }
-    }
-    (k * h, ((k - g) * h).abs())
-}
-
-fn adapt(f: &mut dyn FnMut(f64) -> f64, a: f64, b: f64, tol: f64, depth: u32) -> f64 {
-    let (k, err) = gk15(f, a, b);
-    // Relative floor: |K − G| grossly overestimates the K15 error once it is near round-off.
-    if err <= tol.max(1e-14 * k.abs()) || depth > 30 {
-        return k;
-    }
-    let m = 0.5 * (a + b);
-    adapt(f, a, m, 0.5 * tol, depth + 1) + adapt(f, m, b, 0.5 * tol, depth + 1)
-}
-
-/// Adaptive G7K15 on `[a, b]` split first into `panels` equal pieces; absolute tolerance `tol`.
-fn integrate(f: &mut dyn FnMut(f64) -> f64, a: f64, b: f64, panels: usize, tol: f64) -> f64 {
-    let w = (b - a) / panels as f64;
-    (0..panels)
-        .map(|i| {
-            let lo = a + w * i as f64;
-            adapt(f, lo, lo + w, tol / panels as f64, 0)
-        })
-        .sum()
-}
 
 /// erf by its Maclaurin series (|x| ≤ 2) and erfc by its continued fraction (x > 2)
 /// (A&S 7.1.5 and 7.1.14), independent of the crate.
@@ -172,6 +95,112 @@ fn gaussian_case(deg: f64, ell: f64, w_min: f64, lambda: f64) -> LobeSampler<f64
 fn k_case(deg: f64, t: f64, gamma: f64, w_min: f64, lambda: f64) -> LobeSampler<f64> {
     let psd = KCorrelation::<f64, 2>::new(1e-4, t, gamma).unwrap();
     LobeSampler::k_correlation(&psd, &surface(), &to_source(deg), k_of(lambda), w_min).unwrap()
+}
+
+// ------------------------------------------------------------------ the quadrature oracle
+
+/// The oracle's rules and its adaptive integrator against closed forms: the 2- and 3-point rules
+/// (nodes ±1/√3; 0, ±√(3/5); weights 1; 8/9, 5/9), the exactness of the n-point rule for
+/// polynomials of degree ≤ 2n − 1 (∫₋₁¹ xᵏ = 2/(k+1) for even k, 0 for odd), and `integrate` on
+/// smooth, peaked and endpoint-singular integrands with known integrals.
+#[test]
+fn quadrature_oracle_matches_closed_forms() {
+    let t = Tol::new(1e-15, 1e-15);
+    let g2 = gauss_legendre(2);
+    let mut x2 = g2.nodes.clone();
+    x2.sort_by(f64::total_cmp);
+    assert_close("G2 node", x2[0], -1.0 / 3f64.sqrt(), t);
+    assert_close("G2 node", x2[1], 1.0 / 3f64.sqrt(), t);
+    for w in &g2.weights {
+        assert_close("G2 weight", *w, 1.0, t);
+    }
+    let g3 = gauss_legendre(3);
+    let mut nw: Vec<(f64, f64)> = g3.nodes.iter().copied().zip(g3.weights.clone()).collect();
+    nw.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let r = (3.0f64 / 5.0).sqrt();
+    for ((x, w), (xe, we)) in nw
+        .iter()
+        .zip([(-r, 5.0 / 9.0), (0.0, 8.0 / 9.0), (r, 5.0 / 9.0)])
+    {
+        assert_close("G3 node", *x, xe, t);
+        assert_close("G3 weight", *w, we, t);
+    }
+    for n in [8usize, 12] {
+        let g = gauss_legendre(n);
+        assert_eq!(g.nodes.len(), n);
+        for k in 0..2 * n {
+            let q: f64 = g
+                .nodes
+                .iter()
+                .zip(&g.weights)
+                .map(|(x, w)| w * x.powi(k as i32))
+                .sum();
+            let exact = if k % 2 == 0 {
+                2.0 / (k as f64 + 1.0)
+            } else {
+                0.0
+            };
+            assert_close(&format!("G{n} ∫x^{k}"), q, exact, Tol::new(2e-15, 2e-15));
+        }
+        // Degree 2n is not integrated exactly: the remainder is the classical
+        // ∫f − Q = 2^{2n+1} (n!)⁴ / ((2n+1) ((2n)!)³) f^{(2n)}, with f^{(2n)} = (2n)! for x^{2n}.
+        let q: f64 = g
+            .nodes
+            .iter()
+            .zip(&g.weights)
+            .map(|(x, w)| w * x.powi(2 * n as i32))
+            .sum();
+        let fact = |m: usize| (1..=m).map(|i| i as f64).product::<f64>();
+        let remainder = 2f64.powi(2 * n as i32 + 1) * fact(n).powi(4)
+            / ((2 * n + 1) as f64 * fact(2 * n).powi(2));
+        assert_close(
+            &format!("G{n} remainder at degree 2n"),
+            2.0 / (2.0 * n as f64 + 1.0) - q,
+            remainder,
+            Tol::new(0.0, 1e-8),
+        );
+    }
+    /// (label, integrand, a, b, ∫ₐᵇ f).
+    type Case = (&'static str, fn(f64) -> f64, f64, f64, f64);
+    let cases: [Case; 8] = [
+        ("x^29 on [0, 1]", |x| x.powi(29), 0.0, 1.0, 1.0 / 30.0),
+        ("e^x on [0, 3]", f64::exp, 0.0, 3.0, 3f64.exp() - 1.0),
+        ("sin on [0, π]", f64::sin, 0.0, PI, 2.0),
+        (
+            "1/(1+x²) on [0, 1]",
+            |x| 1.0 / (1.0 + x * x),
+            0.0,
+            1.0,
+            PI / 4.0,
+        ),
+        // ∫₋₁₀¹⁰ e^{−x²/2} = √(2π) erf(10/√2), erfc(10/√2) ≈ 1.5e-23: √(2π) to f64.
+        (
+            "Gaussian on [−10, 10]",
+            |x| (-0.5 * x * x).exp(),
+            -10.0,
+            10.0,
+            TAU.sqrt(),
+        ),
+        // A narrow Gaussian (σ = 0.01) off-centre: adaptivity.
+        (
+            "narrow Gaussian",
+            |x| (-0.5 * ((x - 0.3) / 0.01).powi(2)).exp(),
+            0.0,
+            1.0,
+            0.01 * TAU.sqrt(),
+        ),
+        ("√x on [0, 1]", f64::sqrt, 0.0, 1.0, 2.0 / 3.0),
+        ("x ln x on [0, 1]", |x| x * x.ln(), 0.0, 1.0, -0.25),
+    ];
+    for (what, f, a, b, exact) in cases {
+        let mut g = |x: f64| f(x);
+        assert_close(
+            what,
+            integrate(&mut g, a, b, 4, 1e-14),
+            exact,
+            Tol::new(1e-13, 1e-13),
+        );
+    }
 }
 
 // ------------------------------------------------------------------ erf reference values
@@ -255,7 +284,7 @@ fn gaussian_truncated_mass_matches_cartesian_erf_quadrature_and_monte_carlo() {
         let chol = cov_u.cholesky().unwrap().l();
         let mut inside = 0usize;
         for _ in 0..n / 2 {
-            let (u1, u2) = (1.0 - rng.uniform(), rng.uniform());
+            let (u1, u2) = (1.0 - rng.unit(), rng.unit());
             let r = (-2.0 * u1.ln()).sqrt();
             let (s, co) = (TAU * u2).sin_cos();
             for z in [Vector2::new(r * co, r * s), Vector2::new(-r * s, r * co)] {
@@ -443,7 +472,7 @@ fn draw_counts(
     let mut rng = SplitMix64(seed);
     let mut counts = vec![0usize; (RINGS.len() + 1) * SECTORS];
     for _ in 0..n {
-        let s = sampler.sample([rng.uniform(), rng.uniform()]);
+        let s = sampler.sample([rng.unit(), rng.unit()]);
         assert!(s.direction.z > 0.0 && s.pdf > 0.0);
         counts[bin_of(Vector2::new(s.direction.x, s.direction.y), c, scale)] += 1;
     }
@@ -579,7 +608,7 @@ fn f32_sampler_agrees_with_f64() {
         LobeSampler::gaussian(&psd32, &s32, &src.map(|x| x as f32), k_of(0.5) as f32, 0.7).unwrap();
     let mut rng = SplitMix64(5);
     for _ in 0..500 {
-        let u = [rng.uniform(), rng.uniform()];
+        let u = [rng.unit(), rng.unit()];
         let x = a.sample(u);
         let y = b.sample([u[0] as f32, u[1] as f32]);
         assert!(y.pdf > 0.0 && y.direction.z > 0.0);
@@ -639,7 +668,7 @@ fn weights_equal_value_over_pdf() {
     let mut rng = SplitMix64(11);
     for _ in 0..200 {
         let w = sampler
-            .sample_weighted(&kernel, &material, &pk, [rng.uniform(), rng.uniform()])
+            .sample_weighted(&kernel, &material, &pk, [rng.unit(), rng.unit()])
             .unwrap();
         let g = Geometry::for_packet(&pk, &surface(), w.sample.direction).unwrap();
         let value = kernel.evaluate(&material, &pk, &g).total();
@@ -682,7 +711,7 @@ fn importance_sampled_estimate_matches_quadrature() {
         let (mut sum, mut sum2) = (0.0, 0.0);
         for _ in 0..n {
             let w = sampler
-                .sample_weighted(&kernel, &material, &pk, [rng.uniform(), rng.uniform()])
+                .sample_weighted(&kernel, &material, &pk, [rng.unit(), rng.unit()])
                 .unwrap()
                 .weight
                 .total();

@@ -21,22 +21,6 @@ use num_complex::Complex;
 use proptest::prelude::*;
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, FRAC_PI_8};
 
-/// splitmix64: a deterministic generator for field samples (seeded by proptest).
-struct SplitMix(u64);
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut x = self.0;
-        x = (x ^ (x >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        x = (x ^ (x >> 27)).wrapping_mul(0x94D049BB133111EB);
-        x ^ (x >> 31)
-    }
-    /// Uniform in [−1, 1).
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
-
 fn z(re: f64, im: f64) -> Complex<f64> {
     Complex::new(re, im)
 }
@@ -51,13 +35,14 @@ fn back<T: Real>(c: Complex<T>) -> Complex<f64> {
 
 /// Partially polarized field samples: a random fixed polarization mixed with random noise.
 fn samples(seed: u64, n: usize, mix: f64) -> Vec<(Complex<f64>, Complex<f64>)> {
-    let mut g = SplitMix(seed);
-    let (px, py) = (z(g.uniform(), g.uniform()), z(g.uniform(), g.uniform()));
+    // SplitMix64 seeded by proptest; field samples uniform in [−1, 1).
+    let mut g = common::SplitMix64(seed);
+    let (px, py) = (z(g.signed(), g.signed()), z(g.signed(), g.signed()));
     (0..n)
         .map(|_| {
-            let phase = z(g.uniform(), g.uniform());
-            let nx = z(g.uniform(), g.uniform());
-            let ny = z(g.uniform(), g.uniform());
+            let phase = z(g.signed(), g.signed());
+            let nx = z(g.signed(), g.signed());
+            let ny = z(g.signed(), g.signed());
             (px * phase + nx * mix, py * phase + ny * mix)
         })
         .collect()

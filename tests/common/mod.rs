@@ -287,4 +287,9 @@ pub fn cube_quad<const N: usize>(
 
 /// Independent (crate-free) formulas used as expected values: see `tests/common/oracle.rs`.
 pub mod oracle;
+pub mod quadrature;
+pub mod rng;
 pub mod scene;
+
+#[allow(unused_imports, reason = "not every test binary uses the generator")]
+pub use rng::SplitMix64;

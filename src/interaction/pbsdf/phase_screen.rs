@@ -44,10 +44,10 @@ use crate::real::Real;
 /// normal, and the cubic weight wins (`ρ > 1`); away from grazing most of the lobe has `c < 1`
 /// (at normal incidence all of it) and `ρ < 1`.
 ///
-/// The brute-force reference (`examples/scalar_tracer`, `--energy`), which builds the same model
-/// from its definition with all orders of `e^{v²R}`, measures the same excess: a coherent
-/// Gaussian beam on a lossless Gaussian surface (ℓ = 2λ, 128 realizations), normalised by what a
-/// mirror reflects of the same beam, reflects 1.005480 ± 0.000017 at 75°, kσ = 0.2 (the model's
+/// The brute-force reference (the `scalar_tracer` program of `validation/`, `--energy`), which
+/// builds the same model from its definition with all orders of `e^{v²R}`, measures the same
+/// excess: a coherent Gaussian beam on a lossless Gaussian surface (ℓ = 2λ, 128 realizations),
+/// normalised by what a mirror reflects of the same beam, reflects 1.005480 ± 0.000017 at 75°, kσ = 0.2 (the model's
 /// analytic total for that beam: 1.005474) and 1.015817 ± 0.000013 at 85° (1.015827).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PhaseScreen<T: Real> {

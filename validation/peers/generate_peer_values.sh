@@ -2,22 +2,23 @@
 # Regenerates tests/data/peer_values.json with the pinned peer libraries (see
 # tests/data/README.md):
 #
-#   bash peers/generate_peer_values.sh           # check, then write the file
-#   bash peers/generate_peer_values.sh --check   # check only; exit 1 if the file would change
+#   bash validation/peers/generate_peer_values.sh           # check, then write the file
+#   bash validation/peers/generate_peer_values.sh --check   # check only; exit 1 if the file would change
 #
-# Uses the venv and wheel cache of peers/run.sh (target/peers-venv, target/peers-wheels): needs
+# Uses the venv and wheel cache of validation/peers/run.sh (target/peers-venv, target/peers-wheels): needs
 # PyPI on the first run, and compiles pySCATMECH from source there (about 6-10 minutes). Not part
 # of CI; `cargo test` reads only the committed JSON.
 set -euo pipefail
 
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The workspace root (this script is validation/peers/generate_peer_values.sh).
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
 OUT="target/peers"
 VENV="target/peers-venv"
 WHEELS="target/peers-wheels"
 mkdir -p "$OUT" "$WHEELS"
 
-# Pinned versions (the same as peers/run.sh; the script checks them again).
+# Pinned versions (the same as validation/peers/run.sh; the script checks them again).
 NUMPY="numpy==2.4.6"
 PYPOL="py-pol==1.3.0"
 MITSUBA="mitsuba==3.9.1"
@@ -43,4 +44,4 @@ if ! "$PY" -c 'import SCATPY' 2>/dev/null; then
     "$PY" -m pip install -q --disable-pip-version-check "$WHL"
 fi
 
-exec "$PY" peers/generate_peer_values.py "$@"
+exec "$PY" validation/peers/generate_peer_values.py "$@"

@@ -1,8 +1,9 @@
 //! Speed versus accuracy of every model level of the S2.20 kernel (DESIGN §5).
 //!
-//! Run with `cargo run --release --example accuracy` (about 2–3 minutes on 2 cores), or with
-//! `-- --quick` for a tiny suite (seconds); `-- --material K` restricts the suite to materials
-//! whose name contains the given text. Output: a markdown table on stdout and in
+//! Run with `cargo run --release -p gmueller-validation --bin accuracy` (about 2–3 minutes on
+//! 2 cores), or with `-- --quick` for a tiny suite (seconds); `-- --material K` restricts the
+//! suite to materials whose name contains the given text. Output: a markdown table on stdout and
+//! in the workspace's
 //! `target/accuracy/accuracy.md`, CSVs (`accuracy.csv` per variant, `scenes.csv` per variant and
 //! scene) and a Pareto plot `target/accuracy/pareto.png` (median time vs max S0 error, log–log).
 //!
@@ -37,7 +38,6 @@ mod plot;
 mod scenes;
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use measure::{Blur, Coh, Measured, Pol, Prec, Timing, all_variants, median};
@@ -141,7 +141,7 @@ fn abs_fmt(x: Option<f64>) -> String {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let quick = std::env::args().any(|a| a == "--quick");
     let wall = Instant::now();
-    let out_dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/accuracy"));
+    let out_dir = gmueller_validation::target_dir().join("accuracy");
     std::fs::create_dir_all(&out_dir)?;
 
     let materials: Vec<MaterialSpec> = if quick {

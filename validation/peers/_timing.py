@@ -1,8 +1,8 @@
-"""Shared timing and reporting for the peer scripts in peers/ (see peers/README.md).
+"""Shared timing and reporting for the peer scripts in validation/peers/ (see validation/peers/README.md).
 
 Every script prints its results as lines
     ROW|peer|operation|precision|batch|median_ns_per_item|min_ns_per_item|note
-which peers/run.sh collects into one table; a peer that cannot be measured prints
+which validation/peers/run.sh collects into one table; a peer that cannot be measured prints
     ROW|peer|operation|-|-|-|-|SKIPPED: <reason>
 """
 

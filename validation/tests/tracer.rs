@@ -1,4 +1,5 @@
-//! The scalar kernel against the brute-force reference of `examples/scalar_tracer`: a Gaussian
+//! The scalar kernel against the brute-force reference of the `scalar_tracer` program
+//! (`gmueller_validation::brute`, `src/bin/scalar_tracer/`): a Gaussian
 //! rough surface (vσ = 0.1) under partially coherent Gaussian Schell-model light, far field summed
 //! explicitly on a grid and averaged over 32 height realizations (fixed seed), compared with
 //! `Kernel::<Intensity, Partial, ClosedForm>` + `PhaseScreen` at the specular direction (coherent
@@ -9,15 +10,33 @@
 //! (vσ = 0.5, α = 0.78) under wide coherence, where the coherent lobe dominates near specular
 //! and the comparison sees the Debye–Waller factor (wrong attenuations rejected).
 
-mod common;
+use gmueller_validation::brute::{self, Matter, Scene};
+use gmueller_validation::kernel_side;
 
-#[path = "../examples/scalar_tracer/brute.rs"]
-mod brute;
-#[path = "../examples/scalar_tracer/kernel_side.rs"]
-mod kernel_side;
+/// An absolute and a relative tolerance (as in the library's `tests/common`).
+#[derive(Debug, Clone, Copy)]
+struct Tol {
+    abs: f64,
+    rel: f64,
+}
 
-use brute::{Matter, Scene};
-use common::{Tol, assert_close};
+impl Tol {
+    const fn new(abs: f64, rel: f64) -> Self {
+        Self { abs, rel }
+    }
+}
+
+/// Panics with both values unless `|a − b| ≤ abs + rel·max(|a|, |b|)` (both finite).
+#[track_caller]
+fn assert_close(what: &str, a: f64, b: f64, tol: Tol) {
+    assert!(
+        a.is_finite() && b.is_finite() && (a - b).abs() <= tol.abs + tol.rel * a.abs().max(b.abs()),
+        "{what}: {a:e} vs {b:e} (diff {:e}, tol abs {:e} rel {:e})",
+        (a - b).abs(),
+        tol.abs,
+        tol.rel
+    );
+}
 
 const SEED: u64 = 7;
 

@@ -1,4 +1,4 @@
-// Plain C++ peer for gmueller's Jones -> Mueller closed form (see peers/README.md).
+// Plain C++ peer for gmueller's Jones -> Mueller closed form (see validation/peers/README.md).
 //
 // Closed form of M_kl = 1/2 tr(sigma_k J sigma_l J^dagger) over a structure-of-arrays batch,
 // with sigma_0 = I, sigma_1 = diag(1, -1), sigma_2 = [[0, 1], [1, 0]], sigma_3 = [[0, -i], [i, 0]]
@@ -24,7 +24,7 @@
 // "precision layout N median_ns_per_matrix min_ns_per_matrix samples": 201 samples of ~2 ms,
 // each a calibrated number of back-to-back batch calls.
 //
-// Build: g++ -O3 -std=c++17 [-march=native] peers/jones_mueller_soa.cpp -o target/peers/jm
+// Build: g++ -O3 -std=c++17 [-march=native] validation/peers/jones_mueller_soa.cpp -o target/peers/jm
 
 #include <algorithm>
 #include <array>

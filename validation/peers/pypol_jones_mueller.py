@@ -5,7 +5,7 @@ complex128), then times `Mueller().from_Jones(J)` (py-pol's numpy-vectorised con
 also computes the global phase of J) for N = 1, 1024, 65536. Input construction is outside the
 timing. Before timing, py-pol's M00 and M11 are checked against 1/2 sum |J_ij|^2 and
 1/2 (|a|^2 - |b|^2 - |c|^2 + |d|^2), which hold in every Pauli ordering.
-Run by peers/run.sh.
+Run by validation/peers/run.sh.
 """
 
 import sys

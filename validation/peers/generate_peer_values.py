@@ -2,8 +2,8 @@
 """Generates tests/data/peer_values.json: reference values computed by peer libraries, each in that
 library's own convention (see tests/data/README.md for the conversion rules).
 
-    bash peers/generate_peer_values.sh           # sets up target/peers-venv, then runs this script
-    target/peers-venv/bin/python peers/generate_peer_values.py [--check]
+    bash validation/peers/generate_peer_values.sh    # sets up target/peers-venv, then runs this script
+    target/peers-venv/bin/python validation/peers/generate_peer_values.py [--check]
 
 What it does:
   1. Checks that the pinned peer versions are installed (PINS below); stops otherwise.
@@ -31,9 +31,10 @@ import sys
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The workspace root: this file is validation/peers/generate_peer_values.py.
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 OUT = os.path.join(ROOT, "tests", "data", "peer_values.json")
-SCRIPT = "peers/generate_peer_values.py"
+SCRIPT = "validation/peers/generate_peer_values.py"
 
 PINS = {
     "numpy": "2.4.6",
@@ -147,7 +148,7 @@ def check_versions():
         if have != want:
             bad.append(f"{pkg} {have} (need {want})")
     if bad:
-        sys.exit("version mismatch: " + ", ".join(bad) + " -- run bash peers/generate_peer_values.sh")
+        sys.exit("version mismatch: " + ", ".join(bad) + " -- run bash validation/peers/generate_peer_values.sh")
 
 
 check_versions()

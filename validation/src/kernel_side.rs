@@ -25,7 +25,7 @@ use gmueller::psd::{
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector2, Vector3};
 
-use super::brute::{Matter, Scene};
+use crate::brute::{Matter, Scene};
 
 /// The kernel's answer per exit direction.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -51,7 +51,7 @@ use num_complex::Complex;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
-use super::kernel_side::height_grating;
+use gmueller_validation::kernel_side::height_grating;
 
 type V3 = Vector3<f64>;
 

@@ -34,8 +34,8 @@ use std::time::Instant;
 
 use rustfft::num_complex::Complex64 as C;
 
-use super::brute::{self, Fft2, Grid, Matter, Rng, Scene};
-use super::kernel_side;
+use gmueller_validation::brute::{self, Fft2, Grid, Matter, Rng, Scene};
+use gmueller_validation::kernel_side;
 
 /// The propagating directions of the DFT grid.
 struct Dirs {

@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
 # Peer-calibration harness: measures py-pol, pySCATMECH, Mitsuba 3 and a plain C++ closed form on
-# this machine, single thread, and prints one table (see peers/README.md).
+# this machine, single thread, and prints one table (see validation/peers/README.md).
 #
-#   bash peers/run.sh
+#   bash validation/peers/run.sh
 #
 # Needs PyPI (and Debian's apt repository only if no libLLVM is installed). Writes only under
-# target/ (venv target/peers-venv, wheels target/peers-wheels, binaries and results
+# the workspace's target/ (venv target/peers-venv, wheels target/peers-wheels, binaries and results
 # target/peers/). Not part of CI.
 set -uo pipefail
 
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The workspace root (this script is validation/peers/run.sh).
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
 OUT="target/peers"
 VENV="target/peers-venv"
@@ -27,7 +28,7 @@ SCATMECH_VER="0.1.10"
 
 # Single thread everywhere.
 export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 NUMEXPR_NUM_THREADS=1
-# No __pycache__ inside peers/.
+# No __pycache__ inside validation/peers/.
 export PYTHONDONTWRITEBYTECODE=1
 
 echo "== machine"
@@ -93,7 +94,7 @@ run_py() {
     echo "== $1"
     # OPENBLAS_CORETYPE / OPENBLAS_L2_SIZE (set on some machines here) slow numpy: unset them for
     # the benchmark command only.
-    (cd peers && env -u OPENBLAS_CORETYPE -u OPENBLAS_L2_SIZE "../$PY" "$1") | tee -a "$ROWS" \
+    (cd validation/peers && env -u OPENBLAS_CORETYPE -u OPENBLAS_L2_SIZE "../../$PY" "$1") | tee -a "$ROWS" \
         || echo "ROW|$1|-|-|-|-|-|-|FAILED: see the output above" >> "$ROWS"
 }
 run_py pypol_jones_mueller.py
@@ -105,7 +106,7 @@ for flavour in default native; do
     if [ "$flavour" = native ]; then FLAGS="-O3 -march=native"; else FLAGS="-O3"; fi
     BIN="$OUT/jones_mueller_soa_$flavour"
     echo "== C++ g++ $FLAGS"
-    if ! g++ $FLAGS -std=c++17 -Wall -Wextra peers/jones_mueller_soa.cpp -o "$BIN"; then
+    if ! g++ $FLAGS -std=c++17 -Wall -Wextra validation/peers/jones_mueller_soa.cpp -o "$BIN"; then
         echo "ROW|C++ (g++ $FLAGS)|Jones->Mueller closed form, SoA|-|-|-|-|FAILED: build error" >> "$ROWS"
         continue
     fi

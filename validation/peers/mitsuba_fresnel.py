@@ -10,7 +10,7 @@ llvm_ad_mono_polarized and llvm_ad_spectral_polarized (and CUDA ones), all singl
     the warm-up calls and taken from Dr.Jit's kernel cache afterwards (tracing is still timed).
 eta = 1.5 + 0i (glass; Mitsuba takes a complex eta, so a conductor costs the same).
 Before timing, M00 is checked against the Fresnel reflectance (|r_s|^2 + |r_p|^2)/2 computed here.
-Run by peers/run.sh.
+Run by validation/peers/run.sh.
 """
 
 import cmath

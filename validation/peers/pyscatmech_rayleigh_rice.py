@@ -11,7 +11,7 @@ Timed, per Python call (one geometry each):
   * SCATPY.BRDF(handle, thetai, thetas, phis, 0, "psps") - the compiled extension function that
     MuellerBRDF wraps (returns a nested list), i.e. the same C++ work with less Python around it.
 pySCATMECH has no batch call: SCATPY's BRDF, BRDFJones, VectoredBRDF and VectoredBRDFJones all
-take one geometry. Run by peers/run.sh.
+take one geometry. Run by validation/peers/run.sh.
 """
 
 import math

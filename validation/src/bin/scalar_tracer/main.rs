@@ -3,11 +3,12 @@
 //! averaged over realizations, compared direction by direction with gmueller's scalar S2.20
 //! kernel — with error bars, timings, a CSV and a PNG plot per configuration.
 //!
-//! Run with `cargo run --release --example scalar_tracer` (about two minutes on 2 cores).
-//! Flags: `--realizations N` (per configuration; error bars shrink like 1/√N), `--quick`
-//! (a quarter of the realizations), `--threads N`, `--seed S`, `--out DIR` (default
-//! `target/scalar_tracer/`), `--only NAME` (one configuration), `--raw-beam` (no beam
-//! compensation: shows the finite beam's blur of the lobe tails, see `brute.rs`).
+//! Run with `cargo run --release -p gmueller-validation --bin scalar_tracer` (about two minutes
+//! on 2 cores). Flags: `--realizations N` (per configuration; error bars shrink like 1/√N),
+//! `--quick` (a quarter of the realizations), `--threads N`, `--seed S`, `--out DIR` (default
+//! the workspace's `target/scalar_tracer/`), `--only NAME` (one configuration), `--raw-beam` (no
+//! beam compensation: shows the finite beam's blur of the lobe tails, see
+//! `validation/src/brute.rs`).
 //! `--render [--width N] [--height N] [--wavelengths N]` instead renders a small spectral scene
 //! with the kernel under the sun and under a low-coherence source, side by side, into
 //! `render.png` in the output folder (see `render.rs`). `--energy` instead measures the total
@@ -15,12 +16,11 @@
 //! the model's analytic total and the kernel's (see `energy.rs`; about 7 minutes on 2 cores,
 //! `--quick` a quarter of that).
 //!
-//! The brute force (`brute.rs`) uses no gmueller code; `kernel_side.rs` calls the kernel for its
-//! prediction only. Units: µm. Output radiance `L` is per unit incident irradiance across the beam.
+//! The brute force (`validation/src/brute.rs`, `gmueller_validation::brute`) uses no gmueller
+//! code; `validation/src/kernel_side.rs` calls the kernel for its prediction only. Units: µm.
+//! Output radiance `L` is per unit incident irradiance across the beam.
 
-mod brute;
 mod energy;
-mod kernel_side;
 mod plot;
 mod render;
 
@@ -28,7 +28,8 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use brute::{Grid, Matter, Scene};
+use gmueller_validation::brute::{self, Grid, Matter, Scene};
+use gmueller_validation::kernel_side;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Validity limit of the first-order (single-term) phase-screen model used by the kernel.
@@ -305,7 +306,7 @@ fn parse_args() -> Result<Args, String> {
     let mut a = Args {
         realizations: None,
         quick: false,
-        out: PathBuf::from("target/scalar_tracer"),
+        out: gmueller_validation::target_dir().join("scalar_tracer"),
         threads: std::thread::available_parallelism().map_or(2, usize::from),
         seed: 20220801,
         only: None,

@@ -1,0 +1,33 @@
+//! Validation programs for gmueller, kept out of the library's examples so that their heavy
+//! dependencies (`rustfft`, `plotters`, `indicatif`, `dejavu`) are not the library's.
+//!
+//! - `cargo run --release -p gmueller-validation --bin scalar_tracer`: the reference scalar
+//!   tracer (brute-force Kirchhoff phase-screen scattering against the kernel; `--energy`,
+//!   `--render`; see `src/bin/scalar_tracer/main.rs`).
+//! - `cargo run --release -p gmueller-validation --bin accuracy`: the speed-versus-accuracy
+//!   harness (see `src/bin/accuracy/main.rs`).
+//! - `tests/tracer.rs`: a reduced, fixed-seed version of the tracer's comparison (part of
+//!   `cargo test --workspace`).
+//! - `peers/`: the scripts that measure the peer libraries and regenerate the library's
+//!   `tests/data/peer_values.json` (not part of CI).
+//!
+//! This library holds what the tracer program and the tracer test share: the brute force
+//! ([`brute`], no gmueller code) and the kernel's prediction for the same scene
+//! ([`kernel_side`]).
+
+pub mod brute;
+pub mod kernel_side;
+
+use std::path::PathBuf;
+
+/// The workspace's `target/` directory (cargo's default build directory), where the programs
+/// write their tables and plots (`target/scalar_tracer/`, `target/accuracy/`) wherever they
+/// are started from.
+#[must_use]
+pub fn target_dir() -> PathBuf {
+    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    manifest
+        .parent()
+        .expect("validation/ sits inside the workspace")
+        .join("target")
+}
