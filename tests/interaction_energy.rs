@@ -295,8 +295,8 @@ fn phase_screen_first_order(sigma: f64, ell: f64, theta_i: f64, lambda: f64) -> 
 /// The Partial level at w = 100λ (the table above: 1.00519 at 75°, kσ = 0.2) approaches the
 /// plane-wave total as `1/w²` (30λ → 100λ: the gap shrinks from 4.2e-4 to 3.8e-5): within 1e-4.
 ///
-/// The model itself is checked against brute force by the `scalar_tracer` program of `validation/`
-/// (`cargo run --release -p gmueller-validation --bin scalar_tracer -- --energy`): the brute-force hemispherical
+/// The model itself is checked against brute force by the `wave_tracer` program of `validation/`
+/// (`cargo run --release -p gmueller-validation --bin wave_tracer -- --energy`): the brute-force hemispherical
 /// total of a coherent Gaussian beam (W = 40 µm at 75°, 100 µm at 85°; 128 realizations)
 /// agrees with the model's analytic all-order total for that beam within 1 s.e. and is above 1
 /// by as much: normalised by what a mirror reflects of the same beam, 75°, kσ = 0.2:

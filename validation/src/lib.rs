@@ -1,9 +1,9 @@
 //! Validation programs for gmueller, kept out of the library's examples so that their heavy
 //! dependencies (`rustfft`, `plotters`, `indicatif`, `dejavu`) are not the library's.
 //!
-//! - `cargo run --release -p gmueller-validation --bin scalar_tracer`: the reference scalar
+//! - `cargo run --release -p gmueller-validation --bin wave_tracer`: the reference scalar
 //!   tracer (brute-force Kirchhoff phase-screen scattering against the kernel; `--energy`,
-//!   `--render`; see `src/bin/scalar_tracer/main.rs`).
+//!   `--render`; see `src/bin/wave_tracer/main.rs`).
 //! - `cargo run --release -p gmueller-validation --bin accuracy`: the speed-versus-accuracy
 //!   harness (see `src/bin/accuracy/main.rs`).
 //! - `tests/tracer.rs`: a reduced, fixed-seed version of the tracer's comparison (part of
@@ -21,7 +21,7 @@ pub mod kernel_side;
 use std::path::PathBuf;
 
 /// The workspace's `target/` directory (cargo's default build directory), where the programs
-/// write their tables and plots (`target/scalar_tracer/`, `target/accuracy/`) wherever they
+/// write their tables and plots (`target/wave_tracer/`, `target/accuracy/`) wherever they
 /// are started from.
 #[must_use]
 pub fn target_dir() -> PathBuf {

@@ -1,5 +1,5 @@
-//! The scalar kernel against the brute-force reference of the `scalar_tracer` program
-//! (`gmueller_validation::brute`, `src/bin/scalar_tracer/`): a Gaussian
+//! The `Intensity` kernel against the brute-force reference of the `wave_tracer` program
+//! (`gmueller_validation::brute`, `src/bin/wave_tracer/`): a Gaussian
 //! rough surface (vσ = 0.1) under partially coherent Gaussian Schell-model light, far field summed
 //! explicitly on a grid and averaged over 32 height realizations (fixed seed), compared with
 //! `Kernel::<Intensity, Partial, ClosedForm>` + `PhaseScreen` at the specular direction (coherent

@@ -12,7 +12,7 @@ use crate::real::Real;
 /// ```text
 /// M = |r|² v² I₄          (polarization-preserving)
 /// ```
-/// This is the model of the reference scalar tracer; with the kernel's roughness attenuation it
+/// This is the model of the reference wave-optics tracer (`wave_tracer`); with the kernel's roughness attenuation it
 /// is the first term of the Beckmann–Kirchhoff series.
 ///
 /// # Energy: not conserved near grazing incidence (a limit of the model)
@@ -44,7 +44,7 @@ use crate::real::Real;
 /// normal, and the cubic weight wins (`ρ > 1`); away from grazing most of the lobe has `c < 1`
 /// (at normal incidence all of it) and `ρ < 1`.
 ///
-/// The brute-force reference (the `scalar_tracer` program of `validation/`, `--energy`), which
+/// The brute-force reference (the `wave_tracer` program of `validation/`, `--energy`), which
 /// builds the same model from its definition with all orders of `e^{v²R}`, measures the same
 /// excess: a coherent Gaussian beam on a lossless Gaussian surface (ℓ = 2λ, 128 realizations),
 /// normalised by what a mirror reflects of the same beam, reflects 1.005480 ± 0.000017 at 75°, kσ = 0.2 (the model's

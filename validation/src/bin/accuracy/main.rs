@@ -1,4 +1,4 @@
-//! Speed versus accuracy of every model level of the S2.20 kernel (DESIGN §5).
+//! Speed versus accuracy of every model level of the S2.20 kernel.
 //!
 //! Run with `cargo run --release -p gmueller-validation --bin accuracy` (about 2–3 minutes on
 //! 2 cores), or with `-- --quick` for a tiny suite (seconds); `-- --material K` restricts the

@@ -299,7 +299,7 @@ pub fn run(realizations: Option<usize>, quick: bool, threads: usize, seed: u64) 
         }
     }
     println!(
-        "gmueller scalar tracer — energy of the lossless phase screen (λ = 0.5 µm, ℓ = 1 µm, coherent Gaussian beam, box 8W)"
+        "gmueller wave tracer — energy of the lossless phase screen (λ = 0.5 µm, ℓ = 1 µm, coherent Gaussian beam, box 8W)"
     );
     println!(
         "{:>4} {:>4} {:>6} {:>9} | {:>5} {:>5} {:>4} {:>3} {:>2} | {:>21} {:>9} {:>9} {:>9} {:>9} | {:>21} {:>9} {:>6}",
@@ -384,6 +384,6 @@ pub fn run(realizations: Option<usize>, quick: bool, threads: usize, seed: u64) 
     println!(
         "columns: brute = Σ cos θ_o |E|² over the propagating DFT directions (module docs of energy.rs); smooth = the same for h ≡ 0;\n\
          model ∞ / model 1 = the model's analytic ensemble total on the same directions (all orders / first order);\n\
-         kernel = the scalar kernel (PhaseScreen, Partial, Θ matched to the beam) on the same directions; z = (brute − model ∞)/s.e."
+         kernel = the Intensity kernel (PhaseScreen, Partial, Θ matched to the beam) on the same directions; z = (brute − model ∞)/s.e."
     );
 }

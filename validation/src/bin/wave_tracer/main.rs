@@ -1,12 +1,12 @@
-//! The reference scalar tracer (DESIGN §6): brute-force Kirchhoff phase-screen scattering of a
+//! The reference wave-optics tracer: brute-force Kirchhoff phase-screen scattering of a
 //! partially coherent Gaussian Schell-model beam by random surfaces, summed on a grid and
-//! averaged over realizations, compared direction by direction with gmueller's scalar S2.20
+//! averaged over realizations, compared direction by direction with gmueller's S2.20
 //! kernel — with error bars, timings, a CSV and a PNG plot per configuration.
 //!
-//! Run with `cargo run --release -p gmueller-validation --bin scalar_tracer` (about two minutes
+//! Run with `cargo run --release -p gmueller-validation --bin wave_tracer` (about two minutes
 //! on 2 cores). Flags: `--realizations N` (per configuration; error bars shrink like 1/√N),
 //! `--quick` (a quarter of the realizations), `--threads N`, `--seed S`, `--out DIR` (default
-//! the workspace's `target/scalar_tracer/`), `--only NAME` (one configuration), `--raw-beam` (no
+//! the workspace's `target/wave_tracer/`), `--only NAME` (one configuration), `--raw-beam` (no
 //! beam compensation: shows the finite beam's blur of the lobe tails, see
 //! `validation/src/brute.rs`).
 //! `--render [--width N] [--height N] [--wavelengths N]` instead renders a small spectral scene
@@ -306,7 +306,7 @@ fn parse_args() -> Result<Args, String> {
     let mut a = Args {
         realizations: None,
         quick: false,
-        out: gmueller_validation::target_dir().join("scalar_tracer"),
+        out: gmueller_validation::target_dir().join("wave_tracer"),
         threads: std::thread::available_parallelism().map_or(2, usize::from),
         seed: 20220801,
         only: None,
@@ -339,9 +339,9 @@ fn parse_args() -> Result<Args, String> {
             }
             "-h" | "--help" => {
                 println!(
-                    "scalar_tracer [--realizations N] [--quick] [--threads N] [--seed S] [--out DIR] [--only NAME] [--raw-beam]\n\
-                     scalar_tracer --render [--width N] [--height N] [--wavelengths N] [--threads N] [--out DIR]\n\
-                     scalar_tracer --energy [--realizations N] [--quick] [--threads N] [--seed S]"
+                    "wave_tracer [--realizations N] [--quick] [--threads N] [--seed S] [--out DIR] [--only NAME] [--raw-beam]\n\
+                     wave_tracer --render [--width N] [--height N] [--wavelengths N] [--threads N] [--out DIR]\n\
+                     wave_tracer --energy [--realizations N] [--quick] [--threads N] [--seed S]"
                 );
                 std::process::exit(0);
             }
@@ -391,7 +391,7 @@ fn main() {
         std::process::exit(1);
     }
     println!(
-        "gmueller scalar tracer — brute-force Kirchhoff phase screen vs the S2.20 scalar kernel"
+        "gmueller wave tracer — brute-force Kirchhoff phase screen vs the S2.20 Intensity kernel"
     );
     println!(
         "λ = 0.5 µm, θ_i = 30°, perfect reflector, L per unit incident irradiance; {} threads, seed {}",
@@ -517,7 +517,7 @@ fn main() {
         );
     }
     bar.finish_and_clear();
-    let csv_path = args.out.join("scalar_tracer.csv");
+    let csv_path = args.out.join("wave_tracer.csv");
     if let Err(e) = std::fs::write(&csv_path, &csv) {
         eprintln!("cannot write {}: {e}", csv_path.display());
     }
