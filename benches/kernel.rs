@@ -56,6 +56,18 @@ fn surface<T: Real>() -> Frame<T> {
 }
 
 fn scene<T: Real>(theta_i: f64, theta_o: f64, phi_o: f64, psi: f64, w: f64) -> Scene<T> {
+    scene_with(theta_i, theta_o, phi_o, psi, w, 1.2)
+}
+
+/// [`scene`] with `Θ_y = ratio² Θ_x` (`ratio = 1`: one shape for both components).
+fn scene_with<T: Real>(
+    theta_i: f64,
+    theta_o: f64,
+    phi_o: f64,
+    psi: f64,
+    w: f64,
+    ratio: f64,
+) -> Scene<T> {
     let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos()).map(T::lit);
     let exit = Vector3::new(
         theta_o.sin() * phi_o.cos(),
@@ -67,7 +79,7 @@ fn scene<T: Real>(theta_i: f64, theta_o: f64, phi_o: f64, psi: f64, w: f64) -> S
         .unwrap()
         .rotated(T::lit(psi));
     let sx = CoherenceShape::new(Matrix2::new(w * w, 0.0, 0.0, w * w).map(T::lit)).unwrap();
-    let wy = 1.2 * w;
+    let wy = ratio * w;
     let sy = CoherenceShape::new(Matrix2::new(wy * wy, 0.0, 0.0, wy * wy).map(T::lit)).unwrap();
     let stokes = Stokes::new(T::lit(1.0), T::lit(0.3), T::lit(0.2), T::lit(-0.3)).unwrap();
     let packet = WavePacket::new(stokes, sx, sy, frame, T::lit(0.5)).unwrap();
@@ -76,6 +88,11 @@ fn scene<T: Real>(theta_i: f64, theta_o: f64, phi_o: f64, psi: f64, w: f64) -> S
 }
 
 fn scenes<T: Real>() -> Vec<Scene<T>> {
+    scenes_with(1.2)
+}
+
+/// [`scenes`] with `Θ_y = ratio² Θ_x`.
+fn scenes_with<T: Real>(ratio: f64) -> Vec<Scene<T>> {
     let mut rng = Lcg(0x5eed);
     (0..N)
         .map(|_| {
@@ -86,7 +103,7 @@ fn scenes<T: Real>() -> Vec<Scene<T>> {
             let po = (rng.uniform() - 0.5) * 0.6;
             let psi = (rng.uniform() - 0.5) * 6.0;
             let w = 1.0 + 20.0 * rng.uniform();
-            scene(ti, to, po, psi, w)
+            scene_with(ti, to, po, psi, w, ratio)
         })
         .collect()
 }
@@ -170,6 +187,50 @@ fn bench_level<T, Pol, Coh, P>(
             ))
         });
     });
+    g.finish();
+}
+
+/// `Full` against `OneShape` on single-shape packets (`Θ_x = Θ_y`, polarized), where `Full`
+/// takes the `OneShape` path: the two should cost the same.
+fn single_shape_for<T: Real>(c: &mut Criterion, prec: &str) {
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let m = glass(psd);
+    let sc = scenes_with::<T>(1.0);
+    let mut g = c.benchmark_group(format!("kernel_single_shape/{prec}"));
+    macro_rules! one {
+        ($pol:ty) => {{
+            let kernel = Kernel::<$pol, Partial>::default();
+            let prepared: Vec<_> = sc
+                .iter()
+                .map(|s| kernel.prepare(&s.packet, &surface()).unwrap())
+                .collect();
+            g.bench_function(BenchmarkId::new(stringify!($pol), "prepared"), |b| {
+                let mut i = 0;
+                b.iter(|| {
+                    i = (i + 1) & (N - 1);
+                    black_box(kernel.evaluate_prepared(
+                        black_box(&m),
+                        black_box(&prepared[i]),
+                        black_box(&sc[i].geometry),
+                    ))
+                });
+            });
+            g.bench_function(BenchmarkId::new(stringify!($pol), "seeded"), |b| {
+                let mut i = 0;
+                b.iter(|| {
+                    i = (i + 1) & (N - 1);
+                    let s = &sc[i];
+                    black_box(kernel.evaluate(
+                        black_box(&m),
+                        black_box(&s.packet),
+                        black_box(&s.geometry),
+                    ))
+                });
+            });
+        }};
+    }
+    one!(OneShape);
+    one!(Full);
     g.finish();
 }
 
@@ -389,6 +450,8 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
 }
 
 fn benches(c: &mut Criterion) {
+    single_shape_for::<f64>(c, "f64");
+    single_shape_for::<f32>(c, "f32");
     levels_for::<f64>(c, "f64");
     levels_for::<f32>(c, "f32");
     baseline_for::<f64>(c, "f64");

@@ -344,7 +344,30 @@ impl<F: Real> WithSimd for Kernel<'_, '_, '_, F> {
         let inputs = [
             j.re[0], j.re[1], j.re[2], j.re[3], j.im[0], j.im[1], j.im[2], j.im[3],
         ];
-        driver::map::<S, F, MuellerLanes, 8, 16>(s, &MuellerLanes, inputs, &mut out.m, n);
+        // The whole vectors, the inputs bound to locals re-sliced to `nv` (no bounds checks).
+        let mut heads: [&[F::V<S>]; 8] = [&[]; 8];
+        for k in 0..8 {
+            heads[k] = F::vsplit::<S>(&inputs[k][..n]).0;
+        }
+        let nv = heads[0].len();
+        let [h0, h1, h2, h3, h4, h5, h6, h7] = heads;
+        let (h0, h1, h2, h3) = (&h0[..nv], &h1[..nv], &h2[..nv], &h3[..nv]);
+        let (h4, h5, h6, h7) = (&h4[..nv], &h5[..nv], &h6[..nv], &h7[..nv]);
+        {
+            let mut out_heads: [&mut [F::V<S>]; 16] = Default::default();
+            for (k, o) in out.m.iter_mut().enumerate() {
+                out_heads[k] = F::vsplit_mut::<S>(&mut o[..n]).0;
+            }
+            for i in 0..nv {
+                let x = [h0[i], h1[i], h2[i], h3[i], h4[i], h5[i], h6[i], h7[i]];
+                let m = mueller_lanes::<S, F>(s, x);
+                for k in 0..16 {
+                    out_heads[k][i] = m[k];
+                }
+            }
+        }
+        let outputs = out.m.each_mut().map(|o| &mut **o);
+        driver::remainder::<S, F, MuellerLanes, 8, 16>(s, &MuellerLanes, inputs, outputs, n, nv);
     }
 }
 

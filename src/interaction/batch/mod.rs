@@ -345,12 +345,33 @@ impl<F: Real> WithSimd for Batch<'_, '_, '_, F> {
                 prep.check_exact(exit(j))?;
             }
         }
-        driver::map::<S, F, StokesLanes<'_, F>, 3, 4>(
+        let lanes_map = StokesLanes(prep);
+        let [o0, o1, o2, o3] = &mut out.s;
+        let (o0, o1, o2, o3) = (&mut o0[..n], &mut o1[..n], &mut o2[..n], &mut o3[..n]);
+        {
+            // The whole vectors, every slice bound to a local re-sliced to `nv` (no bounds
+            // checks in the loop).
+            let (v0, v1, v2, v3) = (
+                &mut F::vsplit_mut::<S>(o0).0[..nv],
+                &mut F::vsplit_mut::<S>(o1).0[..nv],
+                &mut F::vsplit_mut::<S>(o2).0[..nv],
+                &mut F::vsplit_mut::<S>(o3).0[..nv],
+            );
+            for i in 0..nv {
+                let [a, b, c, d] = lanes_map.eval(s, [hx[i], hy[i], hz[i]]);
+                v0[i] = a;
+                v1[i] = b;
+                v2[i] = c;
+                v3[i] = d;
+            }
+        }
+        driver::remainder::<S, F, StokesLanes<'_, F>, 3, 4>(
             s,
-            &StokesLanes(prep),
+            &lanes_map,
             [xs, ys, zs],
-            &mut out.s,
+            [o0, o1, o2, o3],
             n,
+            nv,
         );
         Ok(())
     }
