@@ -389,13 +389,23 @@ fn common_setup<T: Real>(
 ) -> Result<(Vector2<f64>, f64, f64, f64), Error> {
     crate::error::ensure_finite("direction to the source", to_source.iter().copied())?;
     let s = to_source.map(Real::to_f64);
-    let norm = s.norm();
-    if norm == 0.0 {
+    let largest = s.amax();
+    if largest == 0.0 {
         return Err(Error::InvalidBasis {
             reason: "zero direction vector",
         });
     }
-    let s = s / norm;
+    // Where |s|² would leave the normal range (a component below ~1e-154 or above ~1e154),
+    // rescale by the largest component first: a subnormal square loses its digits, and the
+    // "unit" vector came out 1.0001 long (regression seed de4db7 of tests/bad_input.rs: a
+    // lobe centre outside the disk, samples with pdf 0).
+    let n2 = s.norm_squared();
+    let s = if n2 >= f64::MIN_POSITIVE / f64::EPSILON && n2 <= f64::MAX / 4.0 {
+        s / n2.sqrt()
+    } else {
+        let s = s / largest;
+        s / s.norm()
+    };
     let (t1, t2, n) = (
         surface.x().map(Real::to_f64),
         surface.y().map(Real::to_f64),
