@@ -400,7 +400,7 @@ fn common_setup<T: Real>(
     // "unit" vector came out 1.0001 long (regression seed de4db7 of tests/bad_input.rs: a
     // lobe centre outside the disk, samples with pdf 0).
     let n2 = s.norm_squared();
-    let s = if n2 >= f64::MIN_POSITIVE / f64::EPSILON && n2 <= f64::MAX / 4.0 {
+    let s = if (f64::MIN_POSITIVE / f64::EPSILON..=f64::MAX / 4.0).contains(&n2) {
         s / n2.sqrt()
     } else {
         let s = s / largest;
