@@ -309,6 +309,28 @@ impl<T: Real> Frame<T> {
         }
     }
 
+    /// This surface frame oriented toward `to_source`: itself when `to_source · k̂ ≥ 0`,
+    /// [`Frame::reversed`] (t̂₂ and n̂ negated) otherwise — the frame an interface geometry uses
+    /// for light arriving from below ([`crate::interaction::Geometry::at_interface`]), and the
+    /// one to give [`crate::interaction::Kernel::prepare`] for such light.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use nalgebra::Vector3;
+    /// let f = Frame::<f64>::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    /// assert_eq!(f.facing(&Vector3::new(0.0, 0.3, 1.0)), f);
+    /// assert_eq!(f.facing(&Vector3::new(0.0, 0.3, -1.0)).k(), -Vector3::z());
+    /// ```
+    #[must_use]
+    pub fn facing(&self, to_source: &Vector3<T>) -> Self {
+        if to_source.dot(&self.k) < T::zero() {
+            self.reversed()
+        } else {
+            *self
+        }
+    }
+
     /// The frame turned by `psi` counter-clockwise about k̂ (k̂ unchanged).
     ///
     /// # Formula

@@ -11,6 +11,7 @@ mod common;
 
 use std::f64::consts::{PI, TAU};
 
+use common::hemisphere::{Hemisphere, hemisphere_integral};
 use common::scene::{DEG, dir, fresnel_rs_rp, glass, packet, surface};
 use common::{Tol, assert_close, gauss_legendre};
 use gmueller::interaction::{
@@ -20,53 +21,6 @@ use gmueller::interaction::{
 use gmueller::mueller::Mueller;
 use gmueller::psd::GaussianPsd;
 use nalgebra::{Vector2, Vector3};
-
-/// `∫ f(r̂) d²r_t` over the exit hemisphere `|r_t| < 1` (= `∫ f cos θ_o dω`), in polar coordinates
-/// centred on the specular point `r_t0`: trapezoid in the angle, Gauss–Legendre on radial panels
-/// refined geometrically toward the centre (narrow lobes) and toward the rim (the `√` of `cos θ_o`).
-fn hemisphere_integral(
-    r0: Vector2<f64>,
-    n_angle: usize,
-    f: &mut dyn FnMut(Vector3<f64>) -> [f64; 2],
-) -> [f64; 2] {
-    let (gx, gw) = gauss_legendre(12);
-    let mut total = [0.0; 2];
-    for j in 0..n_angle {
-        let psi = TAU * j as f64 / n_angle as f64;
-        let u = Vector2::new(psi.cos(), psi.sin());
-        let b = r0.dot(&u);
-        let rho_max = -b + (b * b + 1.0 - r0.norm_squared()).sqrt();
-        let mut breaks: Vec<f64> = vec![0.0, rho_max];
-        for m in 1..=26 {
-            breaks.push(rho_max * 0.5f64.powi(m));
-        }
-        for m in 2..=14 {
-            breaks.push(rho_max * (1.0 - 0.5f64.powi(m)));
-        }
-        breaks.sort_by(f64::total_cmp);
-        let mut radial = [0.0; 2];
-        for pair in breaks.windows(2) {
-            let (a, c) = (pair[0], pair[1]);
-            let (mid, half) = ((a + c) * 0.5, (c - a) * 0.5);
-            for (x, w) in gx.iter().zip(&gw) {
-                let rho = mid + half * x;
-                let rt = r0 + u * rho;
-                let cz2 = 1.0 - rt.norm_squared();
-                if cz2 <= 0.0 {
-                    continue;
-                }
-                let v = f(Vector3::new(rt.x, rt.y, cz2.sqrt()));
-                for (acc, v) in radial.iter_mut().zip(v) {
-                    *acc += w * half * rho * v;
-                }
-            }
-        }
-        for (t, r) in total.iter_mut().zip(radial) {
-            *t += r * TAU / n_angle as f64;
-        }
-    }
-    total
-}
 
 /// Reflected fractions (specular, scattered) of unpolarized light: `∫ L cos θ_o dω / (S0 cos θ_i)`.
 fn reflected_fraction<Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
@@ -78,7 +32,7 @@ fn reflected_fraction<Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
     let pk = packet([1.0, 0.0, 0.0, 0.0], width, theta_i, 0.0, lambda);
     let r0 = Vector2::new(theta_i.sin(), 0.0);
     let kernel = Kernel::<OneShape, Partial>::default();
-    let [spec, scat] = hemisphere_integral(r0, 96, &mut |exit| {
+    let [spec, scat] = hemisphere_integral(r0, 96, Hemisphere::Above, &mut |exit| {
         let Ok(g) = Geometry::for_packet(&pk, &surface(), exit) else {
             return [0.0, 0.0];
         };
@@ -229,7 +183,7 @@ fn plane_wave_fraction(sigma: f64, ell: f64, theta_i: f64, lambda: f64) -> (f64,
     let g = Geometry::for_packet(&pk, &surface(), dir(theta_i, 0.0)).unwrap();
     let specular = kernel.evaluate(&material, &pk, &g).attenuation;
     let r0 = Vector2::new(theta_i.sin(), 0.0);
-    let [scat, _] = hemisphere_integral(r0, N_ANGLE, &mut |exit| {
+    let [scat, _] = hemisphere_integral(r0, N_ANGLE, Hemisphere::Above, &mut |exit| {
         let Ok(g) = Geometry::for_packet(&pk, &surface(), exit) else {
             return [0.0, 0.0];
         };

@@ -17,21 +17,29 @@
 //! the area by `cos θ_o / cos θ_i`, and the rule is an approximation — the kernel does not
 //! predict the scattered light's coherence (S2.20 discards it, see the seed's last paragraph).
 //!
+//! **Transmission.** The footprint on the surface is shared by the incident and the refracted
+//! light (the field is continuous across the interface), so the transmitted shape is the pure
+//! projection, `Θ′_α = Θ_geo`: at Snell's direction it is exact (the widths in the plane of
+//! incidence scale by `cos θ_t/cos θ_i`, the others are unchanged, and the far-field width of
+//! the kernel's coherent transmitted lobe is `1/(η k w′)` for the projected width `w′`), and
+//! off Snell's direction it is the same approximation as in reflection. The packet's wavenumber
+//! becomes `η k` (wavelength `λ/η`) in the new medium.
+//!
 //! The exitant packet carries **one** shape matrix, the image of `Θ_½`: a pBSDF mixes the x
 //! and y channels, and the per-channel shapes of the result are sums of Gaussians that the
 //! canonical packet cannot hold. One shape keeps the result realizable for every Stokes vector.
 
 use nalgebra::Matrix2;
 
-use super::{Geometry, surface_inverse_coherence};
+use super::{Geometry, Side, surface_inverse_coherence};
 use crate::error::Error;
 use crate::numerics::{det2, pow2_scale};
 use crate::packet::{Channel, CoherenceShape, WavePacket};
 use crate::real::Real;
 use crate::stokes::Stokes;
 
-/// The updated shape `Θ′ = U Θ_½ Uᵀ` (det U = 1) of the light leaving along `g.exit`, in the exit
-/// s/p frame (module docs).
+/// The updated shape of the light leaving along `g.exit`, in the exit s/p frame (module docs):
+/// `Θ′ = U Θ_½ Uᵀ` (det U = 1) in reflection, the projection `Θ_geo` in transmission.
 ///
 /// # Errors
 /// [`Error::NotPositiveDefinite`] (or another shape error) when the section of the incident
@@ -62,6 +70,10 @@ pub fn exitant_shape<T: Real>(
     // |Θ_geo| = (det P)² |Σ| = cos²θ_o / |Ξ| (det P = (x̂_e × ŷ_e)·n̂ = r̂·n̂), so the
     // area-conserving scale (|Θ_½|/|Θ_geo|)^{1/2} is (|Θ_½| |Ξ|)^{1/2}/cos θ_o, formed from
     // logarithms rather than from the cancelling 2×2 determinants of `geo` and `Θ_½`.
+    if g.side() == Side::Transmission {
+        // The shared footprint, projected (module docs).
+        return CoherenceShape::new(geo);
+    }
     let theta = packet.shape(Channel::Half);
     let s = pow2_scale(theta.amax());
     let ln_det_theta = det2(&(theta / s)).ln() + T::lit(2.0) * s.ln();
@@ -71,7 +83,8 @@ pub fn exitant_shape<T: Real>(
 
 /// The exitant packet carrying `stokes` (e.g. a kernel [`super::Response`]'s total, a Stokes
 /// radiance in the exit s/p frame) along `g.exit`, with the shape of [`exitant_shape`], the exit
-/// s/p frame, the incident wavelength and longitudinal coherence unbounded.
+/// s/p frame, the wavelength in the exit medium (`λ` in reflection, `λ/η` in transmission) and
+/// longitudinal coherence unbounded.
 ///
 /// # Errors
 /// As [`exitant_shape`].
@@ -81,5 +94,5 @@ pub fn exitant_packet<T: Real>(
     stokes: Stokes<T>,
 ) -> Result<WavePacket<T>, Error> {
     let shape = exitant_shape(packet, g)?;
-    WavePacket::from_stokes(stokes, shape, g.exit_sp, packet.wavelength())
+    WavePacket::from_stokes(stokes, shape, g.exit_sp, packet.wavelength() / g.eta)
 }

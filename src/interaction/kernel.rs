@@ -101,6 +101,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// packet frame to the incident s/p frame — computed once for any number of exit
     /// directions ([`Kernel::evaluate_prepared`]).
     ///
+    /// `surface` must face the source, as the geometries of the packet do: for light arriving
+    /// from below an interface ([`Geometry::at_interface`]) pass `surface.facing(&-packet.direction())`
+    /// ([`Frame::facing`]), the frame [`Geometry::surface`] returns.
+    ///
     /// # Errors
     /// [`Error::OutOfRange`] when the packet does not travel toward the surface
     /// (`k̂ · n̂ ≥ 0`), as [`Geometry::for_packet`] would report for every exit direction.

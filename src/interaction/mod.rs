@@ -2,20 +2,33 @@
 //!
 //! # Formula (surface form, n = 2, constants decided by the tests; see the crate Errata)
 //! ```text
-//! L_o = (cos θ_o / λ²) · α · [ M_spec T Σ_α K^spec_α S_α  +  M_scat T Σ_α K_α S_α ]
+//! L_o = (cos θ_o / λ_t²) · α · [ M_spec T Σ_α K^spec_α S_α  +  M_scat T Σ_α K_α S_α ]
 //!
 //! K_α      = |Σ_α|^{1/2} ∫ p(q) g^{Ξ_α}(h_t − q) d²q  = 2π |Σ_α|^{1/2} (p * g^{Ξ_α})(h_t)
 //! K^spec_α = 2π |Σ_α|^{1/2} g^{Ξ_α}(h_t)               (the same with p = 2π δ: a smooth mean surface)
 //! Ξ_α      = T_tᵀ Q Θ_α⁻¹ Qᵀ T_t,  Σ_α = Ξ_α⁻¹            (S2.18 restricted to the tangent plane)
-//! α        = exp(−(k σ (cos θ_i + cos θ_o))²)             (Debye–Waller roughness attenuation)
+//! α        = exp(−(v σ)²)                                  (Debye–Waller roughness attenuation)
 //! S_x = S_x (1, 1, 0, 0),  S_y = S_y (1, −1, 0, 0),  S_½ = (0, 0, S2, S3)          (S2.16)
 //! ```
-//! with `h = k(r̂ + ŝ)` (ŝ toward the source) and `h_t` its tangential part, `Q = [x̂ ŷ k̂]` the
+//! with `h = k(ŝ + η r̂)` (ŝ toward the source) and `h_t` its tangential part, `v = h·n̂` its
+//! normal part (the phase factor: `k (cos θ_i + cos θ_o)` in reflection,
+//! `k (cos θ_i − η cos θ_o)` in transmission), `Q = [x̂ ŷ k̂]` the
 //! packet frame (packet → world), `T_t = [t̂₁ t̂₂]` the surface tangents, `p` the PSD of the
 //! height field (unitary transform, [`crate::psd`]) and `σ² = R(0)` its variance, `T` the
 //! rotation (S2.4) from the packet frame to the incident s/p frame, `M` the pBSDFs (S2.19) from
 //! the incident to the exit s/p frame. The output is a classical Stokes radiance in the exit
 //! s/p frame ([`Geometry::exit_sp`]) per unit incident irradiance measured across the beam.
+//!
+//! **Sides.** In reflection `η = 1` and `λ_t = λ`. In transmission through an interface
+//! ([`Geometry::at_interface`], [`RoughDielectric`]) `k` and `λ` are the packet's, in the
+//! medium of incidence, `η = n_t/n_i` and `λ_t = λ/η` is the wavelength in the exit medium: the
+//! output is radiance in the exit medium, whose `1/λ_t² = η²/λ²` carries the `n²` law of
+//! radiance across the interface. The section `Ξ_α` is the same for both sides (the footprint
+//! on the surface is shared); the specular lobe sits at Snell's direction, where `h_t = 0`, and
+//! its width in direction space is `|Ξ|`-wide in `h_t = η k r̂_t + k ŝ_t`, i.e. `1/η` times the
+//! reflected one. Radiometry: the kernel returns `f · cos θ_i` per unit beam irradiance, so the
+//! BSDF is `f = L_o/(S0 cos θ_i)`; in the plane-wave limit the transmitted part obeys the
+//! generalized reciprocity `f_t(i→o)/n_o² = f_t(o→i)/n_i²` (`tests/interaction_transmission.rs`).
 //!
 //! `Ξ_α` is the 2-D *section* of the 3-D inverse coherence (the packet's coherence function
 //! evaluated at separations that lie in the surface), not the marginal: the kernel needs the
@@ -25,7 +38,7 @@
 //! # Limits
 //! - **Plane wave** (coherence area → ∞): `|Σ|^{1/2} g^{Ξ} → 2π δ`, so `K → 2π p(h_t)` and
 //!   the specular lobe becomes a Dirac delta; with [`RayleighRice`] this is the classical
-//!   Rayleigh–Rice BRDF — what a renderer without coherence computes.
+//!   Rayleigh–Rice BRDF (and BTDF) — what a renderer without coherence computes.
 //! - **Incoherent** (coherence width ≪ correlation length): the Gaussian is much wider than `p`,
 //!   `K → |Σ|^{1/2} g^{Ξ}(h_t) ∫p`: the lobe is set by the coherence alone.
 //!
@@ -105,9 +118,12 @@ pub use exitant::{exitant_packet, exitant_shape};
 pub use geometry::{Geometry, Side};
 pub use kernel::Kernel;
 pub use level::{Level, LevelVisitor};
-pub use material::RoughSurface;
+pub use material::{
+    RoughConductor, RoughDielectric, RoughSurface, SmoothConductor, SmoothDielectric,
+};
 pub use pbsdf::{
-    ConstantMueller, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen, RayleighRice,
+    ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen,
+    RayleighRice,
 };
 pub use polarization::{
     Full, Intensity, IntensityResponse, KernelOutput, LevelResponse, OneShape, PolarizationLevel,

@@ -2,10 +2,11 @@
 //! per exit direction, and what it returns.
 //!
 //! ```text
-//! Intensity:  L₀ = (cos θ_o/λ²) α M₀₀ K S0                     (K from Θ_½; no frames)
-//! OneShape:   L  = (cos θ_o/λ²) α M T K S                      (Θ_½ for every channel)
-//! Full:       L  = (cos θ_o/λ²) α M T Σ_α K_α S_α              (Θ_x, Θ_y, Θ_½; S2.20)
+//! Intensity:  L₀ = (cos θ_o/λ_t²) α M₀₀ K S0                    (K from Θ_½; no frames)
+//! OneShape:   L  = (cos θ_o/λ_t²) α M T K S                     (Θ_½ for every channel)
+//! Full:       L  = (cos θ_o/λ_t²) α M T Σ_α K_α S_α             (Θ_x, Θ_y, Θ_½; S2.20)
 //! ```
+//! (`λ_t = λ/η` the wavelength in the exit medium: `λ` in reflection.)
 //! `Full` on a packet with one shape (`Θ_x = Θ_y`, e.g. every packet from
 //! `WavePacket::from_stokes` and `exitant_packet`) has three equal weights and takes the
 //! one-weight path of `OneShape`: same result, same cost.
@@ -15,7 +16,7 @@ use core::fmt::Debug;
 use nalgebra::Vector4;
 
 use super::coherence::CoherenceWeights;
-use super::geometry::Geometry;
+use super::geometry::{Geometry, Side};
 use super::material::RoughSurface;
 use super::pbsdf::Pbsdf;
 use super::prepared::{Plan, PreparedPacket};
@@ -121,7 +122,11 @@ impl<T: Real> KernelOutput<T> for LevelResponse<T> {
 }
 
 /// The [`OneShape`] and [`Full`] levels' answer for one exit direction: Stokes radiances in the
-/// exit s/p frame ([`Geometry::exit_sp`]).
+/// exit s/p frame ([`Geometry::exit_sp`]), in the exit medium.
+///
+/// The four lobes of an interface are told apart by the side and the part: reflected or
+/// transmitted ([`Response::side`]), coherent specular (the mirror or Snell lobe, widened by the
+/// coherence) or scattered.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Response<T: Real> {
     /// The coherent specular (direct) lobe, attenuation included.
@@ -130,6 +135,8 @@ pub struct Response<T: Real> {
     pub scattered: Stokes<T>,
     /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
     pub attenuation: T,
+    /// The side the light left on (the geometry's [`Geometry::side`]).
+    pub side: Side,
 }
 
 impl<T: Real> Response<T> {
@@ -167,11 +174,13 @@ impl<T: Real> KernelOutput<T> for Response<T> {
             specular: Stokes(self.specular.0 * factor),
             scattered: Stokes(self.scattered.0 * factor),
             attenuation: self.attenuation,
+            side: self.side,
         }
     }
 }
 
-/// The [`Intensity`] level's answer for one exit direction: radiances `L₀` only.
+/// The [`Intensity`] level's answer for one exit direction: radiances `L₀` only (in the exit
+/// medium).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IntensityResponse<T: Real> {
     /// `L₀` of the coherent specular (direct) lobe, attenuation included.
@@ -180,6 +189,8 @@ pub struct IntensityResponse<T: Real> {
     pub scattered: T,
     /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
     pub attenuation: T,
+    /// The side the light left on (the geometry's [`Geometry::side`]).
+    pub side: Side,
 }
 
 impl<T: Real> IntensityResponse<T> {
@@ -217,6 +228,7 @@ impl<T: Real> KernelOutput<T> for IntensityResponse<T> {
             specular: self.specular * factor,
             scattered: self.scattered * factor,
             attenuation: self.attenuation,
+            side: self.side,
         }
     }
 }
@@ -273,9 +285,10 @@ impl sealed::Sealed for Intensity {}
 impl sealed::Sealed for OneShape {}
 impl sealed::Sealed for Full {}
 
-/// `α` and `ln(α/λ²)` for one exit: the Debye–Waller factor from the geometry's phase factor,
-/// `λ = 2π/k` from the packet. The factor `cos θ_o ∈ (0, 1]` multiplies the Stokes vector
-/// instead (one logarithm less per exit; it cannot underflow it).
+/// `α` and `ln(α/λ_t²)` for one exit: the Debye–Waller factor from the geometry's phase
+/// factor, `λ_t = λ/η` the wavelength in the exit medium (`λ = 2π/k` from the packet, `η` the
+/// geometry's relative index, 1 in reflection). The factor `cos θ_o ∈ (0, 1]` multiplies the
+/// Stokes vector instead (one logarithm less per exit; it cannot underflow it).
 #[inline]
 fn front<T: Real, P: Psd<T, 2>, Pol, Coh>(
     psd: &P,
@@ -284,7 +297,10 @@ fn front<T: Real, P: Psd<T, 2>, Pol, Coh>(
 ) -> (T, T) {
     let v = g.phase_factor();
     let ln_alpha = -(v * v) * psd.variance();
-    (ln_alpha.exp(), prepared.two_ln_k_over_2pi + ln_alpha)
+    (
+        ln_alpha.exp(),
+        (prepared.two_ln_k_over_2pi + g.ln_eta_sq) + ln_alpha,
+    )
 }
 
 /// The scattered part at the one-weight levels, `u · S0 α K/λ²`: the linear weight (one
@@ -305,7 +321,7 @@ where
 {
     let xi = prepared.sections[2].as_ref();
     let kd = coherence.scatter_weight(psd, xi, &g.h_t);
-    match prepared.linear_scale(kd, attenuation) {
+    match prepared.linear_scale(kd, attenuation, g.eta) {
         Some(e) => u * e,
         None => {
             let ld = ln_front + coherence.log_scatter_weight(psd, xi, &g.h_t);
@@ -356,6 +372,7 @@ where
         specular: Stokes(specular),
         scattered: Stokes(scattered),
         attenuation,
+        side: g.side,
     }
 }
 
@@ -410,6 +427,7 @@ impl PolarizationModel for Intensity {
             specular,
             scattered,
             attenuation,
+            side: g.side,
         }
     }
 }
@@ -512,6 +530,7 @@ impl PolarizationModel for Full {
             specular: Stokes(specular),
             scattered: Stokes(scattered),
             attenuation,
+            side: g.side,
         }
     }
 }

@@ -174,17 +174,18 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
         (self.t * v, m)
     }
 
-    /// `S0 α K/λ²` when the weight `K` lies in [1e-30, 1e30] (so it has not lost digits to
-    /// underflow) and the product is a normal number: the linear form of the scale of a
-    /// one-weight part. `None` otherwise (the caller then takes the log form).
+    /// `S0 α K η²/λ²` (`η` the relative index of the exit medium, 1 in reflection) when the
+    /// weight `K` lies in [1e-30, 1e30] (so it has not lost digits to underflow) and the product
+    /// is a normal number: the linear form of the scale of a one-weight part. `None` otherwise
+    /// (the caller then takes the log form).
     #[inline]
-    pub(crate) fn linear_scale(&self, weight: T, attenuation: T) -> Option<T> {
+    pub(crate) fn linear_scale(&self, weight: T, attenuation: T, eta: T) -> Option<T> {
         if !crate::numerics::in_normal_range(weight) {
             return None;
         }
         // Every partial product normal too: a subnormal one would keep only a few digits.
         let normal = |x: T| x >= T::MIN_POSITIVE && x <= T::MAX;
-        let p = weight * attenuation * self.inv_lambda_sq;
+        let p = weight * attenuation * (self.inv_lambda_sq * (eta * eta));
         let e = p * self.s0;
         (normal(p) && normal(e)).then_some(e)
     }

@@ -2,7 +2,7 @@
 
 use num_complex::Complex;
 
-use super::{Geometry, Pbsdf, validate_eta};
+use super::{Geometry, Pbsdf, Side, validate_eta};
 use crate::error::Error;
 use crate::frame::frame_change_mueller;
 use crate::fresnel;
@@ -11,6 +11,8 @@ use crate::real::Real;
 
 /// Specular reflection by a planar interface of relative index `η = n + iκ` (dielectric or
 /// conductor): the Mueller matrix of [`fresnel::reflection`] at `cos θ_i`, in s/p frames.
+/// An opaque reflector: 0 in a transmission geometry (for a dielectric interface in both
+/// directions, see [`super::FresnelInterface`]).
 ///
 /// # Formula
 /// ```text
@@ -42,12 +44,18 @@ impl<T: Real> FresnelReflection<T> {
 impl<T: Real> Pbsdf<T> for FresnelReflection<T> {
     #[inline]
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
+        if g.side() == Side::Transmission {
+            return Mueller(nalgebra::Matrix4::zeros());
+        }
         let m = Mueller::from_jones(&fresnel::reflection(g.cos_i, self.eta));
         frame_change_mueller(&g.specular_sp(), &g.exit_sp) * m
     }
     /// `M₀₀` (the frame transport leaves it unchanged).
     #[inline]
     fn m00(&self, g: &Geometry<T>) -> T {
+        if g.side() == Side::Transmission {
+            return T::zero();
+        }
         let c = fresnel::coefficients(g.cos_i, self.eta);
         (c.reflectance_s() + c.reflectance_p()) * T::lit(0.5)
     }

@@ -3,14 +3,21 @@
 //!
 //! One file per pBSDF; a new one is a new file implementing [`Pbsdf`] (reading the side, the
 //! angles, `h`, the phase factor and the s/p frames from [`Geometry`]) and a `pub use` here.
+//!
+//! Sides: [`FresnelInterface`], [`RayleighRice`] and [`PhaseScreen`] describe both reflection
+//! and transmission (and, at an interface, light from either side); [`FresnelReflection`] is an
+//! opaque reflector (0 in a transmission geometry); [`ConstantMueller`] and [`IdealDiffuse`] are
+//! the same on both sides.
 
 mod constant;
+mod fresnel_interface;
 mod fresnel_reflection;
 mod ideal_diffuse;
 mod phase_screen;
 mod rayleigh_rice;
 
 pub use constant::ConstantMueller;
+pub use fresnel_interface::FresnelInterface;
 pub use fresnel_reflection::FresnelReflection;
 pub use ideal_diffuse::IdealDiffuse;
 pub use phase_screen::PhaseScreen;
@@ -18,15 +25,17 @@ pub use rayleigh_rice::RayleighRice;
 
 use num_complex::Complex;
 
-use super::geometry::Geometry;
+use super::geometry::{Geometry, Side};
 use crate::error::Error;
 use crate::mueller::Mueller;
 use crate::real::Real;
 
 /// A pBSDF: the Mueller matrix `M(ŝ → r̂)` of S2.19, from the incident s/p frame
-/// ([`Geometry::incident_sp`]) to the exit s/p frame ([`Geometry::exit_sp`]).
+/// ([`Geometry::incident_sp`]) to the exit s/p frame ([`Geometry::exit_sp`]), on the side the
+/// geometry names ([`Geometry::side`]).
 ///
-/// `M` is dimensionless here: the kernel supplies the `cos θ_o / λ²` of S2.20.
+/// `M` is dimensionless here: the kernel supplies the `cos θ_o / λ_t²` of S2.20 (`λ_t` the
+/// wavelength in the exit medium).
 pub trait Pbsdf<T: Real> {
     /// The Mueller matrix for this geometry.
     #[must_use]

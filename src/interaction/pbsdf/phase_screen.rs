@@ -1,6 +1,6 @@
 //! The scalar phase-screen (Kirchhoff) scatterer.
 
-use super::{Geometry, Pbsdf};
+use super::{Geometry, Pbsdf, Side};
 use crate::error::Error;
 use crate::mueller::Mueller;
 use crate::real::Real;
@@ -10,8 +10,14 @@ use crate::real::Real;
 /// [`Geometry::phase_factor`], `k (cos θ_i + cos θ_o)` in reflection), so the
 /// first-order scattered field is `i v z(x) r` times the incident field and
 /// ```text
-/// M = |r|² v² I₄          (polarization-preserving)
+/// reflection:    M = |r|² v² I₄          (polarization-preserving)
+/// transmission:  M = τ v² I₄,   v = k (cos θ_i − η cos θ_o),   τ = η |t|²
 /// ```
+/// In transmission the screen sits on an interface that passes the field amplitude `t` into a
+/// medium of relative index `η`: `τ = η |t|²` is the `M₀₀` of the transmitted specular beam in the
+/// kernel's convention (see [`super::FresnelInterface`]), so that the smooth screen transmits the
+/// power fraction `τ cos θ_t/cos θ_i`. The brute-force model of `wave_tracer` (the field on the
+/// mean plane equals the incident field times `e^{−i v z}`, `t = 1`) has `τ = η`.
 /// This is the model of the reference wave-optics tracer (`wave_tracer`); with the kernel's roughness attenuation it
 /// is the first term of the Beckmann–Kirchhoff series.
 ///
@@ -52,14 +58,25 @@ use crate::real::Real;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PhaseScreen<T: Real> {
     reflectance: T,
+    transmission: T,
 }
 
 impl<T: Real> PhaseScreen<T> {
-    /// A phase screen on a reflector of power reflectance `|r|²` in `[0, 1]`.
+    /// A phase screen on an opaque reflector of power reflectance `|r|²` in `[0, 1]` (nothing
+    /// is transmitted).
     ///
     /// # Errors
     /// [`Error::OutOfRange`] unless `0 ≤ |r|² ≤ 1`.
     pub fn new(reflectance: T) -> Result<Self, Error> {
+        Self::interface(reflectance, T::zero())
+    }
+
+    /// A phase screen on an interface that reflects `|r|²` (in `[0, 1]`) and transmits with the
+    /// factor `τ = η |t|²` (finite, ≥ 0; see the type docs).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless `0 ≤ |r|² ≤ 1` and `τ ≥ 0` is finite.
+    pub fn interface(reflectance: T, transmission: T) -> Result<Self, Error> {
         if !(reflectance >= T::zero() && reflectance <= T::one()) {
             return Err(Error::OutOfRange {
                 what: "power reflectance",
@@ -67,7 +84,17 @@ impl<T: Real> PhaseScreen<T> {
                 expected: "[0, 1]",
             });
         }
-        Ok(Self { reflectance })
+        if !(transmission >= T::zero() && transmission.is_finite()) {
+            return Err(Error::OutOfRange {
+                what: "transmission factor τ = η|t|²",
+                value: transmission.to_f64(),
+                expected: "finite and ≥ 0",
+            });
+        }
+        Ok(Self {
+            reflectance,
+            transmission,
+        })
     }
 }
 
@@ -79,6 +106,10 @@ impl<T: Real> Pbsdf<T> for PhaseScreen<T> {
     #[inline]
     fn m00(&self, g: &Geometry<T>) -> T {
         let v = g.phase_factor();
-        self.reflectance * v * v
+        let f = match g.side() {
+            Side::Reflection => self.reflectance,
+            Side::Transmission => self.transmission,
+        };
+        f * v * v
     }
 }

@@ -3,7 +3,7 @@
 use nalgebra::Matrix2;
 use num_complex::Complex;
 
-use super::{Geometry, Pbsdf, validate_eta};
+use super::{Geometry, Pbsdf, Side, validate_eta};
 use crate::error::Error;
 use crate::jones::JonesMatrix;
 use crate::mueller::Mueller;
@@ -11,23 +11,46 @@ use crate::numerics::principal_sqrt;
 use crate::real::Real;
 
 /// First-order perturbation (Rayleigh–Rice) scattering by a rough interface of relative
-/// permittivity `ε = η²`, as SCATMECH's `Microroughness_BRDF_Model` (Germer, Appl. Opt. 36,
-/// 8798, 1997) defines its polarization factors.
+/// permittivity `ε = η²` (`η = n_below/n_above`, the convention of [`Geometry::at_interface`]),
+/// in reflection (Germer, Appl. Opt. 36, 8798, 1997) and in transmission (Elson, J. Opt. Soc.
+/// Am. A 12, 729, 1995, one interface), as SCATMECH's `Microroughness_BRDF_Model` defines its
+/// polarization factors for its four types.
 ///
 /// # Formula
+/// With `ε` the relative permittivity seen from the source (`ε` from above, `1/ε` from below,
+/// [`Geometry::incident_from_below`]), `φ` the exit azimuth from the forward plane of incidence
+/// ([`Geometry::exit_azimuth`]), square roots on the principal branch:
 /// ```text
-/// q_i = √(ε − sin²θ_i),   q_o = √(ε − sin²θ_o)           (principal branch)
-/// ss =  (ε−1) cos φ / [(cos θ_i + q_i)(cos θ_o + q_o)]
-/// pp =  (ε−1)(ε sin θ_i sin θ_o − q_o q_i cos φ) / [(ε cos θ_i + q_i)(ε cos θ_o + q_o)]
-/// ps = −(ε−1) q_i sin φ / [(ε cos θ_i + q_i)(cos θ_o + q_o)]      (p in → s out)
-/// sp = −(ε−1) q_o sin φ / [(cos θ_i + q_i)(ε cos θ_o + q_o)]      (s in → p out)
-/// J  = 2k cos θ_i [[ss, ps], [sp, pp]],      M = A_mül (J* ⊗ J) A_mül⁻¹   (S1.7)
+/// reflection (DOWNUP, UPDOWN):
+///   q_i = √(ε − sin²θ_i),   q_o = √(ε − sin²θ_o)
+///   ss =  (ε−1) cos φ / [(cos θ_i + q_i)(cos θ_o + q_o)]
+///   pp =  (ε−1)(ε sin θ_i sin θ_o − q_o q_i cos φ) / [(ε cos θ_i + q_i)(ε cos θ_o + q_o)]
+///   ps = −(ε−1) q_i sin φ / [(ε cos θ_i + q_i)(cos θ_o + q_o)]      (p in → s out)
+///   sp = −(ε−1) q_o sin φ / [(cos θ_i + q_i)(ε cos θ_o + q_o)]      (s in → p out)
+///   J  = 2k cos θ_i [[ss, ps], [sp, pp]]
+/// transmission (DOWNDOWN, UPUP), η = √ε = n_t/n_i, κ = η sin θ_o (the exit direction's
+/// tangential wavenumber over k), θ_o measured in the exit medium:
+///   q_i = √(ε − sin²θ_i),   q_o = √(ε − κ²) = η cos θ_o,   a_o = √(1 − κ²)   (imaginary when
+///                                                         the exit is evanescent in the medium
+///                                                         of incidence)
+///   ss = (ε−1) cos φ / [(q_i + cos θ_i)(q_o + a_o)]
+///   pp = (ε−1) η (κ sin θ_i + q_i a_o cos φ) / [(q_i + ε cos θ_i)(q_o + ε a_o)]
+///   ps = −(ε−1) q_i sin φ / [(q_i + ε cos θ_i)(q_o + a_o)]           (p in → s out)
+///   sp = (ε−1) η a_o sin φ / [(q_i + cos θ_i)(q_o + ε a_o)]           (s in → p out)
+///   J  = 2k cos θ_i √η [[ss, ps], [sp, pp]]
+/// M = A_mül (J* ⊗ J) A_mül⁻¹   (S1.7)
 /// ```
-/// φ is the exit azimuth from the forward plane of incidence ([`Geometry::exit_azimuth`]).
-/// The factor `2k cos θ_i` makes the kernel's plane-wave limit `cos θ_o/λ² · M · 2π p(h_t)`
-/// equal the Rayleigh–Rice BRDF `16π²/λ⁴ cos θ_i cos θ_o Q S(f)` times `cos θ_i`
-/// (`p = S/(2π)` converts SCATMECH's PSD to ours): the kernel returns radiance per unit
-/// incident irradiance *across the beam*, the BRDF is per unit irradiance *on the surface*.
+/// `k` is the wavenumber in the medium of incidence. The factor `2k cos θ_i` makes the kernel's
+/// plane-wave limit `cos θ_o/λ² · M · 2π p(h_t)` equal the Rayleigh–Rice BRDF
+/// `16π²/λ⁴ cos θ_i cos θ_o Q S(f)` times `cos θ_i` (`p = S/(2π)` converts SCATMECH's PSD to
+/// ours): the kernel returns radiance per unit incident irradiance *across the beam*, the BRDF
+/// is per unit irradiance *on the surface*. In transmission the kernel's factor is
+/// `cos θ_o/λ_t² = η² cos θ_o/λ²` (radiance in the exit medium) and `√η` in `J` completes
+/// SCATMECH's BTDF `16π²|1−ε|² η² q_o cos θ_i S |E|²/λ⁴` (Elson's factors `E`, which the
+/// `(ε−1)` above absorbs). Near the specular (Snell) direction of a long-correlated surface the
+/// factors become those of the phase screen with the Fresnel coefficients: `|J|² → |r|² v²`
+/// in reflection and `η |t|² v²` in transmission (`v` = [`Geometry::phase_factor`]), which
+/// `tests/interaction_transmission.rs` checks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RayleighRice<T: Real> {
     epsilon: Complex<T>,
@@ -50,37 +73,88 @@ impl<T: Real> RayleighRice<T> {
         self.epsilon
     }
 
-    /// The polarization factors `[[ss, ps], [sp, pp]]` (without `2k cos θ_i`).
+    /// The polarization factors `[[ss, ps], [sp, pp]]` of the geometry's side (without
+    /// `2k cos θ_i`, and without `√η` in transmission).
     #[must_use]
     pub fn factors(&self, g: &Geometry<T>) -> Matrix2<Complex<T>> {
-        let e = self.epsilon;
-        let one = Complex::new(T::one(), T::zero());
-        let (ci, co) = (g.cos_i, g.cos_o);
-        let sin2 = |c: T| (T::one() - c * c).max(T::zero());
-        let (si2, so2) = (sin2(ci), sin2(co));
-        let (cphi, sphi) = g.exit_azimuth();
-        let qi = principal_sqrt(e - one * si2);
-        let qo = principal_sqrt(e - one * so2);
-        let em1 = e - one;
-        // Denominators: s-type D₁ = cos θ_i + q_i, D₂ = cos θ_o + q_o; p-type D₃ = ε cos θ_i + q_i,
-        // D₄ = ε cos θ_o + q_o. Two complex reciprocals (one real division each) give all four
-        // pairings: 1/(D₃D₂) = D₁D₄/(D₁D₂·D₃D₄), 1/(D₁D₄) = D₂D₃/(D₁D₂·D₃D₄).
-        let (d1, d2, d3, d4) = (qi + ci, qo + co, e * ci + qi, e * co + qo);
-        let inv_ss = recip(d1 * d2);
-        let inv_pp = recip(d3 * d4);
-        let both = inv_ss * inv_pp;
-        let ss = em1 * inv_ss * cphi;
-        let pp = em1 * (e * (si2 * so2).sqrt() - qo * qi * cphi) * inv_pp;
-        let ps = -em1 * qi * (d1 * d4 * both) * sphi;
-        let sp = -em1 * qo * (d2 * d3 * both) * sphi;
-        Matrix2::new(ss, ps, sp, pp)
+        let e = if g.incident_from_below() {
+            recip(self.epsilon)
+        } else {
+            self.epsilon
+        };
+        match g.side() {
+            Side::Reflection => reflection_factors(e, g),
+            Side::Transmission => transmission_factors(e, g),
+        }
     }
 
-    /// The Jones matrix `2k cos θ_i [[ss, ps], [sp, pp]]`.
+    /// The Jones matrix `2k cos θ_i [[ss, ps], [sp, pp]]` (times `√η` in transmission).
     #[must_use]
     pub fn jones(&self, g: &Geometry<T>) -> JonesMatrix<T> {
-        JonesMatrix(self.factors(g) * Complex::new(T::lit(2.0) * g.k * g.cos_i, T::zero()))
+        JonesMatrix(self.factors(g) * Complex::new(jones_scale(g), T::zero()))
     }
+}
+
+/// `2k cos θ_i`, times `√η` in transmission.
+#[inline]
+fn jones_scale<T: Real>(g: &Geometry<T>) -> T {
+    let s = T::lit(2.0) * g.k * g.cos_i;
+    match g.side() {
+        Side::Reflection => s,
+        Side::Transmission => s * g.eta.sqrt(),
+    }
+}
+
+/// Germer's reflection factors for the relative permittivity `e` seen from the source.
+#[inline]
+fn reflection_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Complex<T>> {
+    let one = Complex::new(T::one(), T::zero());
+    let (ci, co) = (g.cos_i, g.cos_o);
+    let sin2 = |c: T| (T::one() - c * c).max(T::zero());
+    let (si2, so2) = (sin2(ci), sin2(co));
+    let (cphi, sphi) = g.exit_azimuth();
+    let qi = principal_sqrt(e - one * si2);
+    let qo = principal_sqrt(e - one * so2);
+    let em1 = e - one;
+    // Denominators: s-type D₁ = cos θ_i + q_i, D₂ = cos θ_o + q_o; p-type D₃ = ε cos θ_i + q_i,
+    // D₄ = ε cos θ_o + q_o. Two complex reciprocals (one real division each) give all four
+    // pairings: 1/(D₃D₂) = D₁D₄/(D₁D₂·D₃D₄), 1/(D₁D₄) = D₂D₃/(D₁D₂·D₃D₄).
+    let (d1, d2, d3, d4) = (qi + ci, qo + co, e * ci + qi, e * co + qo);
+    let inv_ss = recip(d1 * d2);
+    let inv_pp = recip(d3 * d4);
+    let both = inv_ss * inv_pp;
+    let ss = em1 * inv_ss * cphi;
+    let pp = em1 * (e * (si2 * so2).sqrt() - qo * qi * cphi) * inv_pp;
+    let ps = -em1 * qi * (d1 * d4 * both) * sphi;
+    let sp = -em1 * qo * (d2 * d3 * both) * sphi;
+    Matrix2::new(ss, ps, sp, pp)
+}
+
+/// Elson's transmission factors (one interface) for the relative permittivity `e` seen from
+/// the source, with `(ε − 1)` taken in (see the type docs).
+#[inline]
+fn transmission_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Complex<T>> {
+    let one = Complex::new(T::one(), T::zero());
+    let ci = g.cos_i;
+    let sin2 = |c: T| (T::one() - c * c).max(T::zero());
+    let si2 = sin2(ci);
+    // κ = η sin θ_o: the exit direction's tangential wavenumber in units of k.
+    let kappa2 = g.eta * g.eta * sin2(g.cos_o);
+    let (cphi, sphi) = g.exit_azimuth();
+    let index = principal_sqrt(e);
+    let qi = principal_sqrt(e - one * si2);
+    let qo = principal_sqrt(e - one * kappa2);
+    // Real argument with a +0 imaginary part: an evanescent a_o is +i√(κ² − 1).
+    let ao = principal_sqrt(Complex::new(T::one() - kappa2, T::zero()));
+    let em1 = e - one;
+    // s-type denominators D₁ = q_i + cos θ_i, D₂ = q_o + a_o; p-type D₃ = q_i + ε cos θ_i,
+    // D₄ = q_o + ε a_o.
+    let (d1, d2, d3, d4) = (qi + ci, qo + ao, qi + e * ci, qo + e * ao);
+    let ss = em1 * cphi * recip(d1 * d2);
+    let pp = em1 * index * (qi * ao * cphi + one * (si2 * kappa2).sqrt()) * recip(d3 * d4);
+    let ps = -em1 * qi * sphi * recip(d3 * d2);
+    let sp = em1 * index * ao * sphi * recip(d1 * d4);
+    Matrix2::new(ss, ps, sp, pp)
 }
 
 impl<T: Real> Pbsdf<T> for RayleighRice<T> {
@@ -91,7 +165,7 @@ impl<T: Real> Pbsdf<T> for RayleighRice<T> {
     /// `M₀₀ = ½ Σ |J_ij|²` without the rest of the Mueller matrix.
     #[inline]
     fn m00(&self, g: &Geometry<T>) -> T {
-        let scale = T::lit(2.0) * g.k * g.cos_i;
+        let scale = jones_scale(g);
         let f = self.factors(g);
         T::lit(0.5) * scale * scale * f.iter().fold(T::zero(), |acc, z| acc + z.norm_sqr())
     }
