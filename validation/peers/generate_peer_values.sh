@@ -4,6 +4,9 @@
 #
 #   bash validation/peers/generate_peer_values.sh           # check, then write the file
 #   bash validation/peers/generate_peer_values.sh --check   # check only; exit 1 if the file would change
+#   bash validation/peers/generate_peer_values.sh --rough-interface [--check]
+#       # the same venv, then validation/peers/generate_rough_interface_values.py, which writes
+#       # tests/data/rough_interface_peer.json
 #
 # Uses the venv and wheel cache of validation/peers/run.sh (target/peers-venv, target/peers-wheels): needs
 # PyPI on the first run, and compiles pySCATMECH from source there (about 6-10 minutes). Not part
@@ -44,4 +47,9 @@ if ! "$PY" -c 'import SCATPY' 2>/dev/null; then
     "$PY" -m pip install -q --disable-pip-version-check "$WHL"
 fi
 
-exec "$PY" validation/peers/generate_peer_values.py "$@"
+GENERATOR=validation/peers/generate_peer_values.py
+if [ "${1:-}" = "--rough-interface" ]; then
+    shift
+    GENERATOR=validation/peers/generate_rough_interface_values.py
+fi
+exec "$PY" "$GENERATOR" "$@"
