@@ -1,8 +1,9 @@
 //! Verifies that the S2.20 kernel allocates nothing per evaluation: a counting global allocator
 //! (wrapping `std::alloc::System`) counts heap allocations across many evaluations at every
 //! level (Intensity/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD + `ClosedForm`
-//! and with a K-correlation PSD + Gauss–Hermite blur, plus `Mueller::from_jones`, frame changes
-//! and `Geometry::for_packet`; the count must be zero.
+//! and with a K-correlation PSD + Gauss–Hermite blur, on an opaque surface and at a glass
+//! interface in reflection and transmission, plus `Mueller::from_jones`, frame changes and
+//! `Geometry::for_packet`; the count must be zero.
 //!
 //! The counting allocator needs `unsafe impl GlobalAlloc`: the crate's `[lints]` deny
 //! `unsafe_code` for every target and the library forbids it in `src/lib.rs`; this test file alone
@@ -22,7 +23,7 @@ use gmueller::frame::{Frame, frame_change_mueller, stokes_to_frame};
 use gmueller::fresnel;
 use gmueller::interaction::{
     CoherenceWeights, FresnelReflection, Geometry, Kernel, KernelOutput, Level, LevelVisitor,
-    PolarizationModel, RayleighRice, RoughSurface,
+    PolarizationModel, RayleighRice, RoughDielectric, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
@@ -108,26 +109,24 @@ fn scene<T: Real>() -> Scene<T> {
     }
 }
 
-fn run_level<T, Pol, Coh, P>(
+fn run_level<T, Pol, Coh, P, Sp, Sc>(
     name: &str,
     kernel: &Kernel<Pol, Coh>,
-    material: &RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
+    material: &RoughSurface<P, Sp, Sc>,
     s: &Scene<T>,
+    geometries: &[Geometry<T>],
 ) where
     T: Real,
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P>,
     P: Psd<T, 2>,
+    Sp: gmueller::interaction::Pbsdf<T>,
+    Sc: gmueller::interaction::Pbsdf<T>,
 {
-    let geometries: Vec<_> = s
-        .exits
-        .iter()
-        .map(|e| Geometry::for_packet(&s.packet, &s.surface, *e).unwrap())
-        .collect();
     let (n, sum) = count(|| {
         let mut acc = T::zero();
         for _ in 0..20 {
-            for g in &geometries {
+            for g in geometries {
                 let r = kernel.evaluate(black_box(material), black_box(&s.packet), black_box(g));
                 acc += r.total_intensity();
             }
@@ -140,7 +139,7 @@ fn run_level<T, Pol, Coh, P>(
     let (n, sum) = count(|| {
         let prepared = kernel.prepare(black_box(&s.packet), &s.surface).unwrap();
         let mut acc = T::zero();
-        for g in &geometries {
+        for g in geometries {
             let r = kernel.evaluate_prepared(black_box(material), black_box(&prepared), g);
             acc += r.total_intensity();
         }
@@ -154,13 +153,20 @@ fn run_level<T, Pol, Coh, P>(
 }
 
 /// [`run_level`] for the kernel of a level chosen at run time.
-struct RunLevel<'a, T: Real, P> {
+struct RunLevel<'a, T: Real, P, Sp, Sc> {
     name: &'a str,
-    material: &'a RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>,
+    material: &'a RoughSurface<P, Sp, Sc>,
     scene: &'a Scene<T>,
+    geometries: &'a [Geometry<T>],
 }
 
-impl<T: Real, P: Psd<T, 2>> LevelVisitor<T, P> for RunLevel<'_, T, P> {
+impl<T, P, Sp, Sc> LevelVisitor<T, P> for RunLevel<'_, T, P, Sp, Sc>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Sp: gmueller::interaction::Pbsdf<T>,
+    Sc: gmueller::interaction::Pbsdf<T>,
+{
     type Output = ();
     fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
     where
@@ -168,7 +174,7 @@ impl<T: Real, P: Psd<T, 2>> LevelVisitor<T, P> for RunLevel<'_, T, P> {
         Coh: CoherenceWeights<T, P>,
     {
         let name = format!("{} {}", level.name(), self.name);
-        run_level(&name, &kernel, self.material, self.scene);
+        run_level(&name, &kernel, self.material, self.scene, self.geometries);
     }
 }
 
@@ -186,6 +192,23 @@ fn all_levels<T: Real>() {
         scatter: RayleighRice::new(eta).unwrap(),
     };
     let gh = GaussHermite::<T>::new(6).unwrap();
+    let opaque: Vec<_> = s
+        .exits
+        .iter()
+        .map(|e| Geometry::for_packet(&s.packet, &s.surface, *e).unwrap())
+        .collect();
+    // A glass interface: the same exits reflected and mirrored below the surface (transmitted).
+    let glass = RoughDielectric::new(
+        GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap(),
+        T::lit(1.5),
+    )
+    .unwrap();
+    let interface: Vec<_> = s
+        .exits
+        .iter()
+        .flat_map(|e| [*e, Vector3::new(e.x, e.y, -e.z)])
+        .map(|e| glass.geometry_for_packet(&s.packet, &s.surface, e).unwrap())
+        .collect();
     for level in Level::ALL {
         level.dispatch(
             ClosedForm,
@@ -193,6 +216,7 @@ fn all_levels<T: Real>() {
                 name: "Gaussian/ClosedForm",
                 material: &gaussian,
                 scene: &s,
+                geometries: &opaque,
             },
         );
         level.dispatch(
@@ -201,6 +225,16 @@ fn all_levels<T: Real>() {
                 name: "KCorrelation/GaussHermite",
                 material: &kc,
                 scene: &s,
+                geometries: &opaque,
+            },
+        );
+        level.dispatch(
+            ClosedForm,
+            RunLevel {
+                name: "glass interface (reflection and transmission)",
+                material: &glass,
+                scene: &s,
+                geometries: &interface,
             },
         );
     }

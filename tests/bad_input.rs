@@ -6,7 +6,8 @@
 //! analysis functions and the importance sampler included — and asserts that nothing panics
 //! (each call runs under `catch_unwind`, the failing call is named), that accepted Stokes
 //! vectors have finite DoP, Gaussians are never NaN at finite points, Jones-derived coherency
-//! eigenvalues are never NaN and every sample has `pdf > 0` above the horizon.
+//! eigenvalues are never NaN and every sample has `pdf > 0` above the horizon; interfaces
+//! (either side, reflection and transmission) are exercised too.
 #![allow(clippy::doc_markdown, reason = "math notation in test docs")]
 
 mod common;
@@ -19,10 +20,10 @@ use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::sampling::LobeSampler;
 use gmueller::interaction::{
-    FresnelReflection, Full, Geometry, IdealDiffuse, Incoherent, Intensity, Kernel, OneShape,
-    Partial, PhaseScreen, PlaneWave, RayleighRice, RoughSurface, exitant_packet,
-    roughness_attenuation, surface_coherence_term, surface_inverse_coherence,
-    volume_coherence_term,
+    FresnelInterface, FresnelReflection, Full, Geometry, IdealDiffuse, Incoherent, Intensity,
+    Kernel, OneShape, Partial, PhaseScreen, PlaneWave, RayleighRice, RoughDielectric, RoughSurface,
+    SmoothDielectric, exitant_packet, roughness_attenuation, surface_coherence_term,
+    surface_inverse_coherence, volume_coherence_term,
 };
 use gmueller::jones::{JonesMatrix, JonesVector};
 use gmueller::mueller::{GeneralizedMueller, Mueller};
@@ -337,6 +338,81 @@ fn zero_and_parallel_basis_vectors_are_rejected() {
         Geometry::new(1.0, &f, -Vector3::z(), Vector3::z()),
         &["cos θ_i"],
     );
+    // Interfaces: either side is fine, the plane of the surface is not.
+    let up = Vector3::new(0.2, 0.0, 1.0);
+    let along = Vector3::new(1.0, 0.3, 0.0);
+    assert!(Geometry::at_interface(1.0, &f, 1.5, -up, up).is_ok());
+    rejects(
+        "interface source in the plane",
+        Geometry::at_interface(1.0, &f, 1.5, along, up),
+        &["cos θ_i", "plane"],
+    );
+    rejects(
+        "interface exit in the plane",
+        Geometry::at_interface(1.0, &f, 1.5, up, along),
+        &["cos θ_o", "plane"],
+    );
+    rejects(
+        "interface zero exit",
+        Geometry::at_interface(1.0, &f, 1.5, up, z),
+        &["zero"],
+    );
+}
+
+/// Relative indices of interfaces and the materials built on them: zero, negative, non-finite,
+/// or so small or large that `η k` or `k/η` leaves the normal range, are refused with the name
+/// of the input.
+#[test]
+fn interface_indices_are_validated() {
+    let f = ident();
+    let (up, down) = (Vector3::new(0.2, 0.0, 1.0), Vector3::new(0.1, 0.0, -1.0));
+    for eta in [
+        0.0,
+        -0.0,
+        -1.5,
+        1e-320,
+        f64::NAN,
+        f64::INFINITY,
+        -f64::INFINITY,
+    ] {
+        rejects(
+            &format!("Geometry::at_interface η = {eta}"),
+            Geometry::at_interface(1.0, &f, eta, up, down),
+            &["η"],
+        );
+        rejects(
+            &format!("FresnelInterface η = {eta}"),
+            FresnelInterface::new(eta),
+            &["index"],
+        );
+        let psd = GaussianPsd::<f64, 2>::isotropic(0.01, 1.0).unwrap();
+        assert!(
+            RoughDielectric::new(psd, eta).is_err(),
+            "RoughDielectric η = {eta}"
+        );
+        assert!(SmoothDielectric::<f64>::smooth(eta).is_err());
+    }
+    // η k overflows, or k/η underflows below the normal range.
+    rejects(
+        "η k overflow",
+        Geometry::at_interface(1e300, &f, 1e10, up, down),
+        &["η"],
+    );
+    rejects(
+        "k/η subnormal",
+        Geometry::at_interface(1e-300, &f, 1e10, up, down),
+        &["η"],
+    );
+    rejects(
+        "phase screen negative transmission",
+        PhaseScreen::interface(0.5, -1.0),
+        &["transmission"],
+    );
+    rejects(
+        "phase screen infinite transmission",
+        PhaseScreen::interface(0.5, f64::INFINITY),
+        &["transmission"],
+    );
 }
 
 #[test]
@@ -486,6 +562,8 @@ static KERNEL_CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicU
 /// How many proptest cases built an importance sampler, and a grating.
 static SAMPLER_CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 static GRATING_CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+/// How many proptest cases evaluated the kernel at an interface (either side, either exit).
+static INTERFACE_CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
     let t = |i: usize| T::lit(v[i % v.len()]);
@@ -772,6 +850,27 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
             &g.h_t(),
         );
         let _ = exitant_packet(&packet, &g, stokes);
+        // The same packet at an interface, the exit on either side.
+        if let (Ok(glass), Ok(gi)) = (
+            RoughDielectric::new(mat.psd, t(26).abs()),
+            Geometry::for_packet_at_interface(
+                &packet,
+                &surface.facing(&-packet.direction()),
+                t(26).abs(),
+                v3(27),
+            ),
+        ) {
+            INTERFACE_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let _ = Kernel::<Full, Partial>::default().evaluate(&glass, &packet, &gi);
+            let _ = Kernel::<OneShape, Incoherent>::default().evaluate(&glass, &packet, &gi);
+            let _ = Kernel::<Intensity, PlaneWave>::default().evaluate(&glass, &packet, &gi);
+            let _ = (
+                gi.specular_direction(),
+                gi.specular_sp(),
+                gi.phase_factor(),
+                exitant_packet(&packet, &gi, stokes),
+            );
+        }
         if let (Ok(p3), Ok(pk)) = (
             GaussianPsd::<T, 3>::isotropic(t(21), t(22)),
             packet.with_longitudinal_coherence(t(25)),
@@ -805,9 +904,10 @@ fn nothing_panics_and_kernel_is_reached() {
         32,
     );
     let before = KERNEL_CALLS.load(std::sync::atomic::Ordering::Relaxed);
-    let (s0, g0) = (
+    let (s0, g0, i0) = (
         SAMPLER_CALLS.load(std::sync::atomic::Ordering::Relaxed),
         GRATING_CALLS.load(std::sync::atomic::Ordering::Relaxed),
+        INTERFACE_CALLS.load(std::sync::atomic::Ordering::Relaxed),
     );
     runner
         .run(&strat, |v| {
@@ -821,4 +921,9 @@ fn nothing_panics_and_kernel_is_reached() {
     let gratings = GRATING_CALLS.load(std::sync::atomic::Ordering::Relaxed) - g0;
     assert!(samplers >= 50, "a sampler was built only {samplers} times");
     assert!(gratings >= 50, "a grating was built only {gratings} times");
+    let interfaces = INTERFACE_CALLS.load(std::sync::atomic::Ordering::Relaxed) - i0;
+    assert!(
+        interfaces >= 50,
+        "an interface was evaluated only {interfaces} times"
+    );
 }

@@ -3,7 +3,7 @@
 //! `(cos θ_o/λ²) α M T S 2π p(h_t)` and Partial coherence tends to it (w → ∞) and to the
 //! Incoherent level (w → 0); the model levels agree when `Θ_x = Θ_y`; the diffraction term peaks
 //! at `h_t = 0` (the specular direction) and is even in `h_t`; Stokes validity is preserved
-//! (proptest, f64 and f32); Helmholtz reciprocity of the plane-wave Rayleigh–Rice BRDF; the
+//! (proptest, f64 and f32, opaque surfaces and glass interfaces in all four cases); Helmholtz reciprocity of the plane-wave Rayleigh–Rice BRDF; the
 //! known bugs of the authors' renderers (frame identity, `R_s` for s light, Malus with 2θ); the
 //! documented geometry errors. Energy conservation is in `tests/interaction_energy.rs`.
 
@@ -22,7 +22,8 @@ use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::interaction::{
     CoherenceModel, ConstantMueller, FresnelReflection, Full, Geometry, Incoherent, Intensity,
     Kernel, OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave, PolarizationModel, RayleighRice,
-    Response, RoughSurface, surface_coherence_term, surface_inverse_coherence,
+    Response, RoughDielectric, RoughSurface, Side, surface_coherence_term,
+    surface_inverse_coherence,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
@@ -397,6 +398,9 @@ struct ValidityCase {
     ell: f64,
     lambda: f64,
     metal: bool,
+    /// `None`: an opaque surface lit from above; `Some((from_below, transmit))`: a glass
+    /// interface (η = 1.5 below), the source on either side, the exit on either side.
+    interface: Option<(bool, bool)>,
 }
 
 fn shape() -> impl Strategy<Value = Matrix2<f64>> {
@@ -418,9 +422,20 @@ fn validity_case() -> impl Strategy<Value = ValidityCase> {
         -PI..PI,
         -PI..PI,
         (1e-3..0.2f64, 0.3..5.0f64, 0.4..1.0f64, any::<bool>()),
+        prop_oneof![Just(None), any::<(bool, bool)>().prop_map(Some)],
     )
         .prop_map(
-            |(s, shape_x, shape_y, theta_i, theta_o, phi_o, psi, (sigma, ell, lambda, metal))| {
+            |(
+                s,
+                shape_x,
+                shape_y,
+                theta_i,
+                theta_o,
+                phi_o,
+                psi,
+                (sigma, ell, lambda, metal),
+                interface,
+            )| {
                 // Scale the correlation into the realizability bound |μ|² ≤ √(|Θx||Θy|)/|Θ½|.
                 let bound = (shape_x.determinant() * shape_y.determinant()).sqrt()
                     / ((shape_x + shape_y) * 0.5).determinant();
@@ -443,16 +458,25 @@ fn validity_case() -> impl Strategy<Value = ValidityCase> {
                     ell,
                     lambda,
                     metal,
+                    interface,
                 }
             },
         )
 }
 
 /// Checks `S0 ≥ 0` and `|S| ≤ S0` within `rel` (relative; `abs` for outputs that underflowed),
-/// for every part of every level.
+/// for every part of every level — on an opaque surface, or at a glass interface from either
+/// side in reflection and transmission (beyond the critical angle too).
 fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), TestCaseError> {
     let lit = |m: Matrix2<f64>| m.map(T::lit);
-    let frame = Frame::sp(travel::<T>(c.theta_i), Vector3::z())
+    let (from_below, transmit) = c.interface.unwrap_or((false, false));
+    let mirror = |v: Vector3<T>| Vector3::new(v.x, v.y, -v.z);
+    let travel_dir = if from_below {
+        mirror(travel::<T>(c.theta_i))
+    } else {
+        travel::<T>(c.theta_i)
+    };
+    let frame = Frame::sp(travel_dir, Vector3::z())
         .unwrap()
         .rotated(T::lit(c.psi));
     let s = c.stokes.map(T::lit);
@@ -470,12 +494,42 @@ fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), T
     } else {
         Complex::new(T::lit(1.5), T::zero())
     };
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(c.sigma), T::lit(c.ell)).unwrap();
+    if c.interface.is_some() {
+        // Exit on the source's side (reflection) or across (transmission).
+        let up = dir::<T>(c.theta_o, c.phi_o);
+        let exit = if from_below != transmit {
+            mirror(up)
+        } else {
+            up
+        };
+        let material = RoughDielectric::new(psd, T::lit(1.5)).unwrap();
+        let g = material.geometry_for_packet(&pk, &surface(), exit).unwrap();
+        let side = if transmit {
+            Side::Transmission
+        } else {
+            Side::Reflection
+        };
+        prop_assert_eq!(g.side(), side);
+        return check_levels(&material, &pk, &g, rel, abs);
+    }
     let material = RoughSurface {
-        psd: GaussianPsd::<T, 2>::isotropic(T::lit(c.sigma), T::lit(c.ell)).unwrap(),
+        psd,
         specular: FresnelReflection::new(eta).unwrap(),
         scatter: RayleighRice::new(eta).unwrap(),
     };
     let g = Geometry::for_packet(&pk, &surface(), dir::<T>(c.theta_o, c.phi_o)).unwrap();
+    check_levels(&material, &pk, &g, rel, abs)
+}
+
+/// The validity checks of [`check_validity`] for one material and geometry.
+fn check_levels<T: Real, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
+    material: &RoughSurface<GaussianPsd<T, 2>, Sp, Sc>,
+    pk: &WavePacket<T>,
+    g: &Geometry<T>,
+    rel: f64,
+    abs: f64,
+) -> Result<(), TestCaseError> {
     let check = |what: &str, st: Stokes<T>| -> Result<(), TestCaseError> {
         // Scale before squaring: outputs of ~1e-162 would square into subnormals.
         let raw = st.vector().map(|x| x.to_f64());
@@ -497,7 +551,7 @@ fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), T
     };
     macro_rules! level {
         ($pol:ty, $coh:ty) => {{
-            let r = Kernel::<$pol, $coh>::default().evaluate(&material, &pk, &g);
+            let r = Kernel::<$pol, $coh>::default().evaluate(material, pk, g);
             let name = concat!(stringify!($pol), "×", stringify!($coh));
             check(&format!("{name} specular"), r.specular)?;
             check(&format!("{name} scattered"), r.scattered)?;
@@ -509,7 +563,7 @@ fn check_validity<T: Real>(c: &ValidityCase, rel: f64, abs: f64) -> Result<(), T
     level!(Full, PlaneWave);
     level!(OneShape, Partial);
     // The intensity level: S0 only, finite and non-negative.
-    let r = Kernel::<Intensity, Partial>::default().evaluate(&material, &pk, &g);
+    let r = Kernel::<Intensity, Partial>::default().evaluate(material, pk, g);
     for (what, x) in [("specular", r.specular), ("scattered", r.scattered)] {
         let x = x.to_f64();
         prop_assert!(x.is_finite() && x >= 0.0, "Intensity×Partial {what}: {x:e}");
