@@ -21,7 +21,7 @@ use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::{
     CoherenceWeights, FresnelReflection, Full, Geometry, Intensity, Kernel, KernelOutput, Level,
-    Partial, PlaneWave, RayleighRice, RoughSurface, surface_coherence_term,
+    Partial, PlaneWave, RayleighRice, RoughDielectric, RoughSurface, surface_coherence_term,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
@@ -89,6 +89,11 @@ struct Scene {
     /// the coherent lobe of a 10⁸ µm-wide packet at 89.99° is ~10²³ per unit S0, so brighter
     /// packets can overflow f32 — `bright_wide_lobe_overflows_without_nan`).
     s0_scale: f64,
+    /// `None`: an opaque glass-like reflector lit from above. `Some((from_below, transmit))`: a
+    /// glass interface (η = 1.5 below), the source on either side, the exit across it
+    /// (transmission: the exit directions mirrored, "specular" = Snell's direction where it
+    /// exists) or on the source's side.
+    interface: Option<(bool, bool)>,
 }
 
 fn scene(max_anisotropy: f64) -> impl Strategy<Value = Scene> {
@@ -109,9 +114,14 @@ fn scene(max_anisotropy: f64) -> impl Strategy<Value = Scene> {
             common::stokes_vector(),
             prop_oneof![1 => Just(1.0), 1 => log_uniform(1e-30, 1e12)],
         ),
+        prop_oneof![2 => Just(None), 1 => any::<(bool, bool)>().prop_map(Some)],
     )
         .prop_map(
-            |((lambda, w, a, ang, ratio), (ti, azimuth, exit, ell, sig, s, s0_scale))| Scene {
+            |(
+                (lambda, w, a, ang, ratio),
+                (ti, azimuth, exit, ell, sig, s, s0_scale),
+                interface,
+            )| Scene {
                 lambda,
                 width_over_lambda: w,
                 anisotropy: a,
@@ -124,6 +134,7 @@ fn scene(max_anisotropy: f64) -> impl Strategy<Value = Scene> {
                 sigma_over_lambda: sig,
                 stokes: s,
                 s0_scale,
+                interface,
             },
         )
 }
@@ -134,6 +145,9 @@ type Material<T> = RoughSurface<GaussianPsd<T, 2>, FresnelReflection<T>, Rayleig
 struct Built<T: Real> {
     packet: WavePacket<T>,
     material: Material<T>,
+    /// The same roughness at a glass interface (used when the scene has one).
+    glass: RoughDielectric<T, GaussianPsd<T, 2>>,
+    interface: bool,
     g: Geometry<T>,
 }
 
@@ -148,8 +162,9 @@ fn shape_matrix(s: &Scene, scale: f64) -> Matrix2<f64> {
 
 fn directions(s: &Scene) -> (Vector3<f64>, Vector3<f64>) {
     let (si, ci) = s.theta_i_deg.to_radians().sin_cos();
+    let (from_below, transmit) = s.interface.unwrap_or((false, false));
     let travel = Vector3::new(si, 0.0, -ci);
-    let exit = match s.exit {
+    let mut exit = match s.exit {
         Exit::Specular => Vector3::new(si, 0.0, ci),
         Exit::BackScatter => -travel,
         Exit::Normal => Vector3::z(),
@@ -157,6 +172,23 @@ fn directions(s: &Scene) -> (Vector3<f64>, Vector3<f64>) {
             let (so, co) = theta_deg.to_radians().sin_cos();
             Vector3::new(so * phi.cos(), so * phi.sin(), co)
         }
+    };
+    let mirror = |v: Vector3<f64>| Vector3::new(v.x, v.y, -v.z);
+    if transmit {
+        // Snell's direction for the specular exit (η = n_t/n_i), else the mirrored exit.
+        let eta = if from_below { 1.0 / 1.5 } else { 1.5 };
+        exit = match s.exit {
+            Exit::Specular if si < eta => {
+                let st = si / eta;
+                Vector3::new(st, 0.0, -(1.0 - st * st).sqrt())
+            }
+            _ => mirror(exit),
+        };
+    }
+    let (travel, exit) = if from_below {
+        (mirror(travel), mirror(exit))
+    } else {
+        (travel, exit)
     };
     let turn = |v: Vector3<f64>| {
         let (sa, ca) = s.azimuth.sin_cos();
@@ -206,10 +238,19 @@ fn build_rounded<T: Real>(s: &Scene, two_shapes: bool, round: fn(f64) -> f64) ->
         specular: FresnelReflection::new(eta).unwrap(),
         scatter: RayleighRice::new(eta).unwrap(),
     };
-    let g = Geometry::for_packet(&packet, &surface, v3(exit)).unwrap();
+    let glass = RoughDielectric::new(material.psd, l(1.5)).unwrap();
+    let g = if s.interface.is_some() {
+        glass
+            .geometry_for_packet(&packet, &surface, v3(exit))
+            .unwrap()
+    } else {
+        Geometry::for_packet(&packet, &surface, v3(exit)).unwrap()
+    };
     Built {
         packet,
         material,
+        glass,
+        interface: s.interface.is_some(),
         g,
     }
 }
@@ -241,7 +282,11 @@ fn all_levels<T: Real>(b: &Built<T>) -> Vec<(&'static str, Parts<T>)> {
     Level::ALL
         .into_iter()
         .map(|level| {
-            let r = level.evaluate(ClosedForm, &b.material, &b.packet, &b.g);
+            let r = if b.interface {
+                level.evaluate(ClosedForm, &b.glass, &b.packet, &b.g)
+            } else {
+                level.evaluate(ClosedForm, &b.material, &b.packet, &b.g)
+            };
             let intensity = |x: T| Part(Vector4::new(x, T::zero(), T::zero(), T::zero()));
             let (specular, scattered) = r.stokes().map_or_else(
                 || {
@@ -324,8 +369,13 @@ fn realizability<T: Real>(s: &Scene) -> Result<(), TestCaseError> {
         Ok(())
     };
     use gmueller::interaction::Pbsdf;
-    use_pbsdf(b.material.specular.mueller(&b.g), "Fresnel")?;
-    use_pbsdf(b.material.scatter.mueller(&b.g), "RayleighRice")?;
+    if b.interface {
+        use_pbsdf(b.glass.specular.mueller(&b.g), "FresnelInterface")?;
+        use_pbsdf(b.glass.scatter.mueller(&b.g), "RayleighRice (interface)")?;
+    } else {
+        use_pbsdf(b.material.specular.mueller(&b.g), "Fresnel")?;
+        use_pbsdf(b.material.scatter.mueller(&b.g), "RayleighRice")?;
+    }
     use_pbsdf(
         gmueller::interaction::PhaseScreen::new(T::lit(0.9))
             .unwrap()
@@ -533,9 +583,12 @@ fn bright_packet_far_tail_does_not_underflow() {
         let t = 20f64.to_radians();
         let exit = Vector3::new(l(t.sin()), l(0.0), l(t.cos()));
         let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+        let glass = RoughDielectric::new(material.psd, l(1.5)).unwrap();
         let b = Built {
             packet,
             material,
+            glass,
+            interface: false,
             g,
         };
         let mut out: Vec<_> = all_levels(&b)
@@ -591,6 +644,7 @@ fn bright_wide_lobe_overflows_without_nan() {
         sigma_over_lambda: 0.05,
         stokes,
         s0_scale: 2.653568608423507e28,
+        interface: None,
     };
     for st in [
         Vector4::new(8.3746, 0.0, 0.0, 0.0),
@@ -659,6 +713,7 @@ fn two_shape_grazing_regression() {
                 sigma_over_lambda: 0.05,
                 stokes: Vector4::from(st),
                 s0_scale: 1.0,
+                interface: None,
             };
             kernel_properties::<f64>(&s, true).unwrap();
             kernel_properties::<f32>(&s, true).unwrap();
@@ -894,6 +949,7 @@ fn grazing_anisotropic_section_is_continuous() {
                     sigma_over_lambda: 0.01,
                     stokes: Vector4::new(1.0, 0.0, 0.0, 0.0),
                     s0_scale: 1.0,
+                    interface: None,
                 };
                 let b64 = build::<f64>(&s, false);
                 let b32 = build::<f32>(&s, false);
