@@ -8,7 +8,8 @@
 //! from direction cosines (`with-geometry`: `Geometry::for_packet` inside the loop). Inputs are
 //! seeded (an LCG) and pass through `black_box`; each group also times one degenerate case
 //! (normal incidence, exact specular). `kernel_batch/{f64,f32}`: the SIMD batch path per exit
-//! against the per-direction kernel on the same 1024 exits.
+//! against the per-direction kernel on the same 1024 exits. `kernel_interface/{f64,f32}`: every
+//! level at a rough glass interface, reflection against transmission, same scenes, same run.
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -20,7 +21,7 @@ use gmueller::fresnel;
 use gmueller::interaction::batch::{DirectionsSoa, StokesSoa, plane_wave_rayleigh_rice};
 use gmueller::interaction::{
     CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, Level, LevelVisitor, OneShape,
-    Partial, PlaneWave, PolarizationModel, RayleighRice, RoughSurface,
+    Partial, PlaneWave, PolarizationModel, RayleighRice, RoughDielectric, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::mueller::batch::padded_stride;
@@ -449,7 +450,86 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
     g.finish();
 }
 
+/// Reflection against transmission at a rough glass interface (`RoughDielectric`, η = 1.5, the
+/// same Gaussian PSD), every level, per exit of a prepared packet, same run: the seeded scenes
+/// of [`scenes`] with the exits either within ~15° of the mirror direction or within ~15° of
+/// Snell's direction below the surface.
+fn interface_for<T: Real>(c: &mut Criterion, prec: &str) {
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let glass = RoughDielectric::new(psd, T::lit(1.5)).unwrap();
+    let mut rng = Lcg(0x5eed);
+    let mut cases = Vec::new();
+    for _ in 0..N {
+        let ti = rng.uniform() * 70f64.to_radians();
+        let dt = (rng.uniform() - 0.5) * 30f64.to_radians();
+        let po = (rng.uniform() - 0.5) * 0.6;
+        let psi = (rng.uniform() - 0.5) * 6.0;
+        let w = 1.0 + 20.0 * rng.uniform();
+        let s = scene::<T>(ti, ti, 0.0, psi, w);
+        let dir = |t: f64, z: f64| {
+            Vector3::new(t.sin() * po.cos(), t.sin() * po.sin(), z * t.cos()).map(T::lit)
+        };
+        let refl = dir((ti + dt).abs().min(1.4), 1.0);
+        let snell = (ti.sin() / 1.5).asin();
+        let trans = dir((snell + dt).abs().min(1.4), -1.0);
+        let g = |e| glass.geometry_for_packet(&s.packet, &surface(), e).unwrap();
+        cases.push((s.packet, g(refl), g(trans)));
+    }
+    let group = format!("kernel_interface/{prec}");
+    struct Bench<'a, T: Real> {
+        c: &'a mut Criterion,
+        group: &'a str,
+        glass: &'a RoughDielectric<T, GaussianPsd<T, 2>>,
+        cases: &'a [(WavePacket<T>, Geometry<T>, Geometry<T>)],
+    }
+    impl<T: Real> LevelVisitor<T, GaussianPsd<T, 2>> for Bench<'_, T> {
+        type Output = ();
+        fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
+        where
+            Pol: PolarizationModel,
+            Coh: CoherenceWeights<T, GaussianPsd<T, 2>>,
+        {
+            let mut g = self.c.benchmark_group(self.group);
+            let prepared: Vec<_> = self
+                .cases
+                .iter()
+                .map(|(p, _, _)| kernel.prepare(p, &surface()).unwrap())
+                .collect();
+            let name = level.name().replace('/', "x");
+            for (side, pick) in [("reflection", 0usize), ("transmission", 1)] {
+                g.bench_function(BenchmarkId::new(&name, side), |b| {
+                    let mut i = 0;
+                    b.iter(|| {
+                        i = (i + 1) & (N - 1);
+                        let (_, r, t) = &self.cases[i];
+                        let geo = if pick == 0 { r } else { t };
+                        black_box(kernel.evaluate_prepared(
+                            black_box(self.glass),
+                            black_box(&prepared[i]),
+                            black_box(geo),
+                        ))
+                    });
+                });
+            }
+            g.finish();
+        }
+    }
+    for level in Level::ALL {
+        level.dispatch(
+            ClosedForm,
+            Bench {
+                c,
+                group: &group,
+                glass: &glass,
+                cases: &cases,
+            },
+        );
+    }
+}
+
 fn benches(c: &mut Criterion) {
+    interface_for::<f64>(c, "f64");
+    interface_for::<f32>(c, "f32");
     single_shape_for::<f64>(c, "f64");
     single_shape_for::<f32>(c, "f32");
     levels_for::<f64>(c, "f64");

@@ -731,3 +731,63 @@ fn the_four_lobes_are_reported_by_side() {
         assert!(opaque.geometry(k, &facing, -d, snell).is_err());
     }
 }
+
+// ------------------------------------------------------------------ 8. smooth to rough
+
+/// The smooth-to-rough progression of a glass interface (η = 1.5, Gaussian PSD, ℓ = 2 µm,
+/// λ₀ = 0.5 µm, θi = 30° from the air and 20° from inside, unpolarized, w = 100 λ): the four
+/// lobes' fractions as σ grows from 0 past the edge of the first-order range (the largest phase,
+/// the reflected `v σ = 2 k_i σ cos θ_i`, at most 0.3; rows beyond it are marked). Within the
+/// range, power moves monotonically from the coherent lobes to the scattered ones, and the sum
+/// stays within the energy bound of `energy_of_reflection_plus_transmission`. The README's table
+/// is this test's output (`cargo test --release --test interaction_transmission -- --nocapture
+/// smooth_to_rough`).
+#[test]
+fn smooth_to_rough_progression() {
+    let k0 = TAU / LAMBDA0;
+    for (from_below, ti_deg) in [(false, 30.0), (true, 20.0)] {
+        let (n_i, _) = indices(1.5, from_below);
+        println!(
+            "\nglass, light from {} at {ti_deg}°:\n σ/nm   kσ    v_rσ   R_spec   R_scat   T_spec   T_scat   total",
+            if from_below { "inside" } else { "the air" }
+        );
+        let mut last: Option<[f64; 4]> = None;
+        for sigma_nm in [0.0_f64, 2.0, 5.0, 10.0, 15.0, 20.0, 40.0] {
+            let sigma = sigma_nm * 1e-3;
+            // σ = 0: the smooth limit (nothing scattered, α = 1).
+            let m = glass(1.5, sigma.max(1e-12), 2.0);
+            let f = fractions(
+                &m,
+                ti_deg * DEG,
+                from_below,
+                [1.0, 0.0, 0.0, 0.0],
+                100.0 * LAMBDA0,
+            );
+            let total: f64 = f.iter().sum();
+            let v_sigma = 2.0 * n_i * k0 * sigma * (ti_deg * DEG).cos();
+            let valid = v_sigma <= 0.3;
+            println!(
+                "{sigma_nm:>5} {:.3}  {v_sigma:.3}  {:.5}  {:.5}  {:.5}  {:.5}  {:.5}{}",
+                k0 * sigma,
+                f[0],
+                f[1],
+                f[2],
+                f[3],
+                total,
+                if valid { "" } else { "  (beyond first order)" }
+            );
+            if !valid {
+                continue;
+            }
+            assert!((total - 1.0).abs() <= 0.4 * (k0 * sigma).powi(2) + 1e-5);
+            if let Some(p) = last {
+                assert!(f[0] < p[0] && f[2] < p[2], "coherent lobes must lose power");
+                assert!(
+                    f[1] > p[1] && f[3] > p[3],
+                    "scattered lobes must gain power"
+                );
+            }
+            last = Some(f);
+        }
+    }
+}
