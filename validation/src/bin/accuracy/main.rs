@@ -156,6 +156,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ell_x: 1.0,
                 ell_y: 20.0,
             },
+            MaterialSpec::GlassTransmission { ell: 5.0 },
         ]
     } else {
         vec![
@@ -175,6 +176,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ell_x: 1.0,
                 ell_y: 20.0,
             },
+            MaterialSpec::GlassTransmission { ell: 0.5 },
+            MaterialSpec::GlassTransmission { ell: 5.0 },
         ]
     };
     // `--material SUBSTRING`: restrict the suite to matching materials (for exploration).
@@ -257,9 +260,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut scene_exits = Vec::new();
     let mut ref_rows = Vec::new();
     for (si, s) in specs.iter().enumerate() {
-        let exits = scenes::exit_directions(s.theta_i, 4.0, quick);
-        let sc64 = scenes::build_scene::<f64>(s, &exits);
-        let sc32 = scenes::build_scene::<f32>(s, &exits);
+        let transmission = materials[s.material].transmission();
+        let exits = match transmission {
+            Some(eta) => scenes::exit_directions_transmitted(s.theta_i, eta, quick),
+            None => scenes::exit_directions(s.theta_i, 4.0, quick),
+        };
+        let sc64 = scenes::build_scene::<f64>(s, &exits, transmission);
+        let sc32 = scenes::build_scene::<f32>(s, &exits, transmission);
         scene_exits.push(exits.len());
         let mat = &materials[s.material];
         let reference = measure::reference(&mats64[s.material], &sc64);

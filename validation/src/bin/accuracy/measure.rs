@@ -313,6 +313,13 @@ pub fn measure<T: Real>(
         (Material::Grating(m), Blur::None | Blur::Exact) => {
             levels!(v.pol, v.coh, ClosedForm, m, s, timing)
         }
+        (Material::Interface(m), Blur::None | Blur::Exact) => {
+            levels!(v.pol, v.coh, ClosedForm, m, s, timing)
+        }
+        (Material::Interface(m), Blur::GaussHermite(n)) => {
+            levels!(v.pol, v.coh, gh(n), m, s, timing)
+        }
+        (Material::Interface(m), Blur::Adaptive(t)) => levels!(v.pol, v.coh, ad(t), m, s, timing),
         _ => return None,
     })
 }
@@ -333,6 +340,12 @@ pub fn reference(mat: &Material<f64>, s: &SceneData<f64>) -> Measured {
             timing,
         ),
         Material::Grating(m) => run(
+            &Kernel::<Full, Partial<_>>::new(Partial(ClosedForm)),
+            m,
+            s,
+            timing,
+        ),
+        Material::Interface(m) => run(
             &Kernel::<Full, Partial<_>>::new(Partial(ClosedForm)),
             m,
             s,
@@ -392,6 +405,15 @@ pub fn gaussian_adaptive(mat: &Material<f64>, s: &SceneData<f64>) -> Option<Vec<
     };
     match mat {
         Material::Gauss(m) => Some(
+            run(
+                &Kernel::<Full, Partial<_>>::new(Partial(Adaptive::new(1e-10).expect("valid"))),
+                m,
+                s,
+                timing,
+            )
+            .stokes,
+        ),
+        Material::Interface(m) => Some(
             run(
                 &Kernel::<Full, Partial<_>>::new(Partial(Adaptive::new(1e-10).expect("valid"))),
                 m,

@@ -4,7 +4,9 @@
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::{FresnelReflection, Geometry, RayleighRice, RoughSurface};
+use gmueller::interaction::{
+    FresnelReflection, Geometry, RayleighRice, RoughDielectric, RoughSurface,
+};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{
     BlurMethod, ClosedForm, ClosedFormBlur, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation,
@@ -44,6 +46,9 @@ pub enum MaterialSpec {
     Grating { period: f64 },
     /// Brushed aluminium: anisotropic Gaussian PSD, ℓ across/along the grooves (λ units).
     Brushed { ell_x: f64, ell_y: f64 },
+    /// Transmission through a rough glass interface (light from the air into the glass):
+    /// isotropic Gaussian PSD with correlation length ℓ (λ units), exits inside the glass.
+    GlassTransmission { ell: f64 },
 }
 
 impl MaterialSpec {
@@ -54,6 +59,15 @@ impl MaterialSpec {
             Self::KCorr { sqrt_t, gamma } => format!("K γ={gamma} √T={sqrt_t}λ"),
             Self::Grating { period } => format!("grating Λ={period}λ"),
             Self::Brushed { ell_x, ell_y } => format!("brushed Al {ell_x}×{ell_y}λ"),
+            Self::GlassTransmission { ell } => format!("glass T ℓ={ell}λ"),
+        }
+    }
+
+    /// The relative index of the medium the light enters, for transmission materials.
+    pub fn transmission(&self) -> Option<f64> {
+        match self {
+            Self::GlassTransmission { .. } => Some(GLASS.0),
+            _ => None,
         }
     }
 
@@ -64,7 +78,10 @@ impl MaterialSpec {
 
     /// Whether the PSD is a Gaussian (closed-form blur exact).
     pub fn gaussian(&self) -> bool {
-        matches!(self, Self::Gaussian { .. } | Self::Brushed { .. })
+        matches!(
+            self,
+            Self::Gaussian { .. } | Self::Brushed { .. } | Self::GlassTransmission { .. }
+        )
     }
 }
 
@@ -107,6 +124,8 @@ pub enum Material<T: Real> {
     },
     /// Height grating.
     Grating(Surface<T, HeightGrating<T>>),
+    /// A rough glass interface, evaluated in transmission.
+    Interface(RoughDielectric<T, GaussianPsd<T, 2>>),
 }
 
 fn surface<T: Real, P>(psd: P, eta: (f64, f64)) -> Surface<T, P> {
@@ -127,6 +146,13 @@ pub fn build_material<T: Real>(spec: &MaterialSpec) -> Material<T> {
             GaussianPsd::isotropic(T::lit(sigma), T::lit(ell * l)).expect("valid"),
             GLASS,
         )),
+        MaterialSpec::GlassTransmission { ell } => Material::Interface(
+            RoughDielectric::new(
+                GaussianPsd::isotropic(T::lit(sigma), T::lit(ell * l)).expect("valid"),
+                T::lit(GLASS.0),
+            )
+            .expect("valid index"),
+        ),
         MaterialSpec::Brushed { ell_x, ell_y } => {
             let corr = Gaussian::new(Matrix2::new(
                 T::lit((ell_x * l).powi(2)),
@@ -219,6 +245,26 @@ pub struct SceneData<T: Real> {
 /// the grating's diffraction orders m = ±1, ±2, ±3 (period `grating_period` λ). The exact
 /// specular direction is left out: there the plane-wave level's specular lobe is a Dirac delta.
 pub fn exit_directions(theta_i: f64, grating_period: f64, quick: bool) -> Vec<Vector3<f64>> {
+    let mut out = grid(quick);
+    let in_plane = |s: f64| Vector3::new(s, 0.0, (1.0 - s * s).sqrt());
+    for d in [-3.0_f64, -1.0, 1.0, 3.0] {
+        let t = theta_i + d;
+        if t.abs() < 89.0 {
+            out.push(in_plane(t.to_radians().sin()));
+        }
+    }
+    for m in [-3.0_f64, -2.0, -1.0, 1.0, 2.0, 3.0] {
+        let s = theta_i.to_radians().sin() + m / grating_period;
+        if s.abs() < 0.995 {
+            out.push(in_plane(s));
+        }
+    }
+    out
+}
+
+/// The grid `θ_o` ∈ {5°, 20°, …, 80°} × φ ∈ {0°, 45°, …, 180°} above the surface (quick:
+/// {15°, 45°, 75°} × {0°, 90°, 180°}).
+fn grid(quick: bool) -> Vec<Vector3<f64>> {
     let mut out = Vec::new();
     let thetas: Vec<f64> = if quick {
         vec![15.0, 45.0, 75.0]
@@ -239,24 +285,35 @@ pub fn exit_directions(theta_i: f64, grating_period: f64, quick: bool) -> Vec<Ve
             out.push(dir(t, p));
         }
     }
-    let in_plane = |s: f64| Vector3::new(s, 0.0, (1.0 - s * s).sqrt());
+    out
+}
+
+/// The exit directions of a transmission scene (inside the medium of relative index `eta`,
+/// below the surface): the grid of [`exit_directions`] mirrored below the surface, plus in-plane
+/// directions `θ_t` ± 1°, ± 3° about Snell's direction (which itself is left out, as the exact
+/// specular direction is in reflection).
+pub fn exit_directions_transmitted(theta_i: f64, eta: f64, quick: bool) -> Vec<Vector3<f64>> {
+    let mut out: Vec<Vector3<f64>> = grid(quick)
+        .into_iter()
+        .map(|d| Vector3::new(d.x, d.y, -d.z))
+        .collect();
+    let theta_t = (theta_i.to_radians().sin() / eta).asin().to_degrees();
     for d in [-3.0_f64, -1.0, 1.0, 3.0] {
-        let t = theta_i + d;
-        if t.abs() < 89.0 {
-            out.push(in_plane(t.to_radians().sin()));
-        }
-    }
-    for m in [-3.0_f64, -2.0, -1.0, 1.0, 2.0, 3.0] {
-        let s = theta_i.to_radians().sin() + m / grating_period;
-        if s.abs() < 0.995 {
-            out.push(in_plane(s));
-        }
+        let t = (theta_t + d).to_radians();
+        out.push(Vector3::new(t.sin(), 0.0, -t.cos()));
     }
     out
 }
 
 /// Builds a scene's packet and geometries in precision `T`.
-pub fn build_scene<T: Real>(s: &SceneSpec, exits: &[Vector3<f64>]) -> SceneData<T> {
+///
+/// `transmission`: the relative index of the medium below for a transmission material (the
+/// geometries are then those of the interface, [`Geometry::at_interface`]).
+pub fn build_scene<T: Real>(
+    s: &SceneSpec,
+    exits: &[Vector3<f64>],
+    transmission: Option<f64>,
+) -> SceneData<T> {
     let ti = s.theta_i.to_radians();
     let travel = Vector3::new(T::lit(ti.sin()), T::zero(), T::lit(-ti.cos()));
     let normal = Vector3::new(T::zero(), T::zero(), T::one());
@@ -288,7 +345,13 @@ pub fn build_scene<T: Real>(s: &SceneSpec, exits: &[Vector3<f64>]) -> SceneData<
     .expect("orthonormal");
     let geoms = exits
         .iter()
-        .map(|e| Geometry::for_packet(&packet, &surface, e.map(T::lit)).expect("above the surface"))
+        .map(|e| match transmission {
+            None => Geometry::for_packet(&packet, &surface, e.map(T::lit)).expect("above"),
+            Some(eta) => {
+                Geometry::for_packet_at_interface(&packet, &surface, T::lit(eta), e.map(T::lit))
+                    .expect("a valid interface geometry")
+            }
+        })
         .collect();
     SceneData { packet, geoms }
 }
