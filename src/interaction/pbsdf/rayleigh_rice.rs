@@ -138,20 +138,26 @@ fn transmission_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Comp
     let ci = g.cos_i;
     let sin2 = |c: T| (T::one() - c * c).max(T::zero());
     let si2 = sin2(ci);
-    // κ = η sin θ_o: the exit direction's tangential wavenumber in units of k.
-    let kappa2 = g.eta * g.eta * sin2(g.cos_o);
     let (cphi, sphi) = g.exit_azimuth();
+    // κ = η sin θ_o, the exit direction's tangential wavenumber in units of k, with η = √ε the
+    // pBSDF's own index (the geometry's `relative_index` to rounding): then
+    // q_o = √(ε − κ²) = η cos θ_o exactly. Formed as the difference ε − κ² (with η from the
+    // geometry) it cancelled at grazing exits, and in f32 the rounding of ε against η² made q_o
+    // imaginary at θ_o = 89.99° from the dense side.
     let index = principal_sqrt(e);
+    let (so, co) = (sin2(g.cos_o).sqrt(), g.cos_o);
+    let kappa = index * so;
     let qi = principal_sqrt(e - one * si2);
-    let qo = principal_sqrt(e - one * kappa2);
-    // Real argument with a +0 imaginary part: an evanescent a_o is +i√(κ² − 1).
-    let ao = principal_sqrt(Complex::new(T::one() - kappa2, T::zero()));
+    let qo = index * co;
+    // a_o = √(1 − κ²) = √(1 − ε sin²θ_o): imaginary (+i√(κ² − 1)) when the exit is evanescent in
+    // the medium of incidence.
+    let ao = principal_sqrt(one - e * (so * so));
     let em1 = e - one;
     // s-type denominators D₁ = q_i + cos θ_i, D₂ = q_o + a_o; p-type D₃ = q_i + ε cos θ_i,
     // D₄ = q_o + ε a_o.
     let (d1, d2, d3, d4) = (qi + ci, qo + ao, qi + e * ci, qo + e * ao);
     let ss = em1 * cphi * recip(d1 * d2);
-    let pp = em1 * index * (qi * ao * cphi + one * (si2 * kappa2).sqrt()) * recip(d3 * d4);
+    let pp = em1 * index * (qi * ao * cphi + kappa * si2.sqrt()) * recip(d3 * d4);
     let ps = -em1 * qi * sphi * recip(d3 * d2);
     let sp = em1 * index * ao * sphi * recip(d1 * d4);
     Matrix2::new(ss, ps, sp, pp)
