@@ -22,12 +22,14 @@ use common::scene::{DEG, fresnel_rs_rp, rel_diff, surface};
 use common::{Tol, assert_all_close, assert_close, entries4};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, Pbsdf, PlaneWave,
-    PolarizationModel, Response, RoughDielectric, Side, SmoothDielectric, exitant_packet,
+    Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput, Level, OneShape, Partial, Pbsdf,
+    PlaneWave, PolarizationModel, Response, RoughDielectric, Side, SmoothDielectric,
+    exitant_packet,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
+use gmueller::psd::ClosedForm;
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector2, Vector3};
@@ -712,6 +714,11 @@ fn the_four_lobes_are_reported_by_side() {
             assert_eq!(g.side(), side);
             let r = kernel.evaluate(&material, &pk, &g);
             assert_eq!(r.side, side);
+            // Every level reports it, the run-time ones included.
+            for level in Level::ALL {
+                let out = level.evaluate(ClosedForm, &material, &pk, &g);
+                assert_eq!(out.side(), side, "{}", level.name());
+            }
             // A smooth interface: no scattered part, a coherent lobe at its centre.
             assert_eq!(r.scattered.s0(), 0.0);
             assert!(r.specular.s0() > 0.0);

@@ -52,6 +52,9 @@ pub trait KernelOutput<T: Real>: Copy + Debug + PartialEq {
     /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
     #[must_use]
     fn attenuation(&self) -> T;
+    /// The side the light left on: reflection or transmission ([`Geometry::side`]).
+    #[must_use]
+    fn side(&self) -> Side;
     /// `(specular, scattered)` Stokes radiances in the exit s/p frame; `None` at the
     /// [`Intensity`] level, which does not compute them (it is not "unpolarized").
     #[must_use]
@@ -99,6 +102,13 @@ impl<T: Real> KernelOutput<T> for LevelResponse<T> {
         match self {
             Self::Intensity(r) => r.attenuation,
             Self::Stokes(r) => r.attenuation,
+        }
+    }
+    #[inline]
+    fn side(&self) -> Side {
+        match self {
+            Self::Intensity(r) => r.side,
+            Self::Stokes(r) => r.side,
         }
     }
     #[inline]
@@ -161,6 +171,10 @@ impl<T: Real> KernelOutput<T> for Response<T> {
         self.attenuation
     }
     #[inline]
+    fn side(&self) -> Side {
+        self.side
+    }
+    #[inline]
     fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
         Some((self.specular, self.scattered))
     }
@@ -213,6 +227,10 @@ impl<T: Real> KernelOutput<T> for IntensityResponse<T> {
     #[inline]
     fn attenuation(&self) -> T {
         self.attenuation
+    }
+    #[inline]
+    fn side(&self) -> Side {
+        self.side
     }
     #[inline]
     fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
