@@ -20,7 +20,7 @@ use gmueller::interaction::{
 };
 use gmueller::mueller::Mueller;
 use gmueller::psd::GaussianPsd;
-use nalgebra::{Vector2, Vector3};
+use nalgebra::Vector2;
 
 /// Reflected fractions (specular, scattered) of unpolarized light: `∫ L cos θ_o dω / (S0 cos θ_i)`.
 fn reflected_fraction<Sp: Pbsdf<f64>, Sc: Pbsdf<f64>>(
