@@ -238,7 +238,7 @@ where
         let stokes = Stokes::new(s[0], s[1], s[2], s[3]).unwrap();
         let packet = WavePacket::from_stokes(stokes, shape, incident, lambda).unwrap();
         let g = material.geometry_for_packet(&packet, &surface, ko).unwrap();
-        let expected_side = if c["type"].as_u64().unwrap() % 2 == 0 {
+        let expected_side = if c["type"].as_u64().unwrap().is_multiple_of(2) {
             Side::Reflection
         } else {
             Side::Transmission
