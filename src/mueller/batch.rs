@@ -366,8 +366,7 @@ impl<F: Real> WithSimd for Kernel<'_, '_, '_, F> {
                 }
             }
         }
-        let outputs = out.m.each_mut().map(|o| &mut **o);
-        driver::remainder::<S, F, MuellerLanes, 8, 16>(s, &MuellerLanes, inputs, outputs, n, nv);
+        driver::remainder::<S, F, MuellerLanes, 8, 16>(s, &MuellerLanes, inputs, &mut out.m, n, nv);
     }
 }
 

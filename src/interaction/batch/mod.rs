@@ -369,7 +369,7 @@ impl<F: Real> WithSimd for Batch<'_, '_, '_, F> {
             s,
             &lanes_map,
             [xs, ys, zs],
-            [o0, o1, o2, o3],
+            &mut [o0, o1, o2, o3],
             n,
             nv,
         );

@@ -61,26 +61,12 @@ fn run_all<F: Real>(xs: &[F], mut check: impl FnMut(&str, &[F])) {
     }
 }
 
-/// Seeded directions around the specular one and near the normal (every band of
+/// Seeded unit directions around the specular one and near the normal (every band of
 /// `Frame::sp`), `n` of them.
 fn exits<F: Real>(theta_i: f64, n: usize) -> Vec<Vector3<F>> {
-    let mut x = 0x5eed_u64 + n as u64;
-    let mut uniform = || {
-        x = x
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (x >> 11) as f64 / (1u64 << 53) as f64
-    };
-    (0..n)
-        .map(|i| {
-            let (to, po) = match i % 3 {
-                0 => (theta_i + (uniform() - 0.5) * 0.5, (uniform() - 0.5) * 0.5),
-                1 => (uniform() * 0.2, uniform() * 6.0),
-                _ => ([0.0, 1e-10, 1e-5][i % 9 / 3], uniform() * 6.0),
-            };
-            let to = to.abs();
-            Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(F::lit)
-        })
+    stages::fixture::seeded_exits(theta_i, n, 0.2)
+        .iter()
+        .map(|e| e.map(F::lit))
         .collect()
 }
 

@@ -125,6 +125,23 @@ pub(crate) mod fixture {
 
     /// Seeded exits around the specular direction and near the normal, some not unit.
     fn exits<F: Real>(theta_i: f64, n: usize) -> Vec<Vector3<F>> {
+        seeded_exits(theta_i, n, 1.5)
+            .into_iter()
+            .enumerate()
+            .map(|(i, e)| {
+                let scale = [1.0, 3.0, 1e-3][i % 7 % 3];
+                e.map(|c| F::lit(c * scale))
+            })
+            .collect()
+    }
+
+    /// `n` seeded unit exit directions (in `f64`, for the caller to round or scale), in three
+    /// bands that cover every band of `Frame::sp`: around the specular one (polar angle
+    /// `θ_i ± 0.25`, azimuth `± 0.25`), near the normal (polar angle in `[0, near_normal)`,
+    /// any azimuth), and at the normal or within `1e-10`, `1e-5` of it. Polar angles are
+    /// capped at 1.56. The stage fixture and the batch loop's tests (`batch/tests.rs`) draw
+    /// their exits here.
+    pub(crate) fn seeded_exits(theta_i: f64, n: usize, near_normal: f64) -> Vec<Vector3<f64>> {
         let mut x = 0x5eed_u64 + n as u64;
         let mut uniform = || {
             x = x
@@ -136,13 +153,11 @@ pub(crate) mod fixture {
             .map(|i| {
                 let (to, po) = match i % 3 {
                     0 => (theta_i + (uniform() - 0.5) * 0.5, (uniform() - 0.5) * 0.5),
-                    1 => (uniform() * 1.5, uniform() * 6.0),
+                    1 => (uniform() * near_normal, uniform() * 6.0),
                     _ => ([0.0, 1e-10, 1e-5][i % 9 / 3], uniform() * 6.0),
                 };
                 let to = to.abs().min(1.56);
-                let scale = [1.0, 3.0, 1e-3][i % 7 % 3];
                 Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos())
-                    .map(|c| F::lit(c * scale))
             })
             .collect()
     }
