@@ -400,12 +400,7 @@ impl PolarizationModel for Intensity {
 
     #[inline]
     fn plan<T: Real>(packet: &WavePacket<T>, uses_shape: bool) -> PreparationPlan {
-        PreparationPlan(Plan {
-            sections: [false, false, uses_shape],
-            rotation: false,
-            channel_logs: false,
-            single_shape: packet.has_single_shape(),
-        })
+        PreparationPlan(Plan::one_weight(packet, uses_shape, false))
     }
 
     #[inline]
@@ -456,12 +451,7 @@ impl PolarizationModel for OneShape {
 
     #[inline]
     fn plan<T: Real>(packet: &WavePacket<T>, uses_shape: bool) -> PreparationPlan {
-        PreparationPlan(Plan {
-            sections: [false, false, uses_shape],
-            rotation: true,
-            channel_logs: false,
-            single_shape: packet.has_single_shape(),
-        })
+        PreparationPlan(Plan::one_weight(packet, uses_shape, true))
     }
 
     #[inline]

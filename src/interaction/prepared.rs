@@ -25,6 +25,25 @@ pub(crate) struct Plan {
     pub(crate) single_shape: bool,
 }
 
+impl Plan {
+    /// The plan of a one-weight level (`Intensity`, `OneShape`, and `Full` on single-shape
+    /// packets): the section `Ξ_½` when the coherence model uses shapes, the rotation `T` if
+    /// asked, no channel logarithms.
+    #[inline]
+    pub(crate) fn one_weight<T: Real>(
+        packet: &WavePacket<T>,
+        uses_shape: bool,
+        rotation: bool,
+    ) -> Self {
+        Self {
+            sections: [false, false, uses_shape],
+            rotation,
+            channel_logs: false,
+            single_shape: packet.has_single_shape(),
+        }
+    }
+}
+
 /// The per-packet part of a [`super::Kernel`] at model level (`Pol`, `Coh`), from
 /// [`super::Kernel::prepare`].
 ///
