@@ -56,14 +56,9 @@ fn dot<T: Real>(a: &Vector3<T>, b: &Vector3<T>) -> T {
 /// overflow nor underflow.
 fn normalize_checked<T: Real>(v: &Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
     ensure_finite(what, v.iter().copied())?;
-    let m = v.amax();
-    if m == T::zero() {
-        return Err(Error::InvalidBasis {
-            reason: "zero vector",
-        });
-    }
-    let u = v / m;
-    Ok(u / u.norm())
+    crate::numerics::unit_by_largest(v).ok_or(Error::InvalidBasis {
+        reason: "zero vector",
+    })
 }
 
 /// `v` minus its component along the unit vector `k`, normalized; done twice ("twice is enough")

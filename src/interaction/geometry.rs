@@ -527,16 +527,11 @@ pub(crate) fn incidence<T: Real>(
     Ok((cos_i, Frame::sp_unit(-*s, n)))
 }
 
-/// `v/|v|`, rescaled by the largest component first: `|v|` itself over- or underflows for
-/// components beyond ~1e±154 (f64) or ~1e±19 (f32), which rejected valid directions as zero.
+/// `v/|v|` by [`crate::numerics::unit_by_largest`] (`|v|` itself over- or underflows for
+/// components beyond ~1e±154 (f64) or ~1e±19 (f32), which rejected valid directions as zero).
 pub(crate) fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
     crate::error::ensure_finite(what, v.iter().copied())?;
-    let m = v.amax();
-    if m == T::zero() {
-        return Err(Error::InvalidBasis {
-            reason: "zero direction vector",
-        });
-    }
-    let u = v / m;
-    Ok(u / u.norm())
+    crate::numerics::unit_by_largest(&v).ok_or(Error::InvalidBasis {
+        reason: "zero direction vector",
+    })
 }

@@ -389,22 +389,18 @@ fn common_setup<T: Real>(
 ) -> Result<(Vector2<f64>, f64, f64, f64), Error> {
     crate::error::ensure_finite("direction to the source", to_source.iter().copied())?;
     let s = to_source.map(Real::to_f64);
-    let largest = s.amax();
-    if largest == 0.0 {
-        return Err(Error::InvalidBasis {
-            reason: "zero direction vector",
-        });
-    }
     // Where |s|² would leave the normal range (a component below ~1e-154 or above ~1e154),
-    // rescale by the largest component first: a subnormal square loses its digits, and the
-    // "unit" vector came out 1.0001 long (regression seed de4db7 of tests/bad_input.rs: a
-    // lobe centre outside the disk, samples with pdf 0).
+    // the shared normaliser rescales by the largest component first: a subnormal square loses
+    // its digits, and the "unit" vector came out 1.0001 long (regression seed de4db7 of
+    // tests/bad_input.rs: a lobe centre outside the disk, samples with pdf 0). In the normal
+    // range the plain division is kept (the sampler's outputs are unchanged bit for bit).
     let n2 = s.norm_squared();
     let s = if (f64::MIN_POSITIVE / f64::EPSILON..=f64::MAX / 4.0).contains(&n2) {
         s / n2.sqrt()
     } else {
-        let s = s / largest;
-        s / s.norm()
+        crate::numerics::unit_by_largest(&s).ok_or(Error::InvalidBasis {
+            reason: "zero direction vector",
+        })?
     };
     let (t1, t2, n) = (
         surface.x().map(Real::to_f64),

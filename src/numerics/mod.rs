@@ -19,6 +19,20 @@ pub(crate) use linalg2::{
 
 use crate::real::Real;
 
+/// `v/|v|` for a finite `v`, rescaled by its largest component first (`None` for the zero
+/// vector): `|v|` itself over- or underflows for components beyond ~1e±154 (f64) or ~1e±19
+/// (f32), and a subnormal `|v|²` keeps too few digits to normalise by. The one normaliser of
+/// user directions (frames, geometries, the sampler's slow path).
+#[inline]
+pub(crate) fn unit_by_largest<T: Real>(v: &nalgebra::Vector3<T>) -> Option<nalgebra::Vector3<T>> {
+    let m = v.amax();
+    if m == T::zero() {
+        return None;
+    }
+    let u = v / m;
+    Some(u / u.norm())
+}
+
 /// `ln Σᵢ e^{xᵢ}` without overflow or underflow (`−∞` for an empty or all-`−∞` list).
 #[inline]
 pub(crate) fn log_sum_exp<T: Real>(terms: impl Iterator<Item = T> + Clone) -> T {
