@@ -51,6 +51,7 @@ fn scene(sigma_v: f64, theta: [[f64; 2]; 2]) -> Scene {
             sigma: sigma_v / v0,
             ell: 1.0,
         },
+        eta_t: None,
     }
 }
 
