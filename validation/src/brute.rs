@@ -196,7 +196,7 @@ pub struct Scene {
     pub matter: Matter,
     /// `None`: the surface is a perfect reflector and the light leaves above it (reflection).
     /// `Some(η)`: the surface is the interface to a medium below of relative index
-    /// `η = n_t/n_i` (n_i that of the light's medium above), the aperture field is the incident
+    /// `η = n_t/n_i` (`n_i` that of the light's medium above), the aperture field is the incident
     /// field times the phase screen (`t = 1`), and the light leaves below it (transmission, see
     /// the module docs). `wavelength` is the one in the medium of incidence either way.
     pub eta_t: Option<f64>,
@@ -839,7 +839,10 @@ mod tests {
             .flat_map(|my| (-reach..=reach).map(move |mx| [mx, my]))
             .collect();
         let est = run(&scene, &grid, &dirs, 1, 1, 2, &|| {});
-        assert!(est.std_err.iter().all(|&s| s == 0.0), "a flat surface is not random");
+        assert!(
+            est.std_err.iter().all(|&s| s == 0.0),
+            "a flat surface is not random"
+        );
         let k_o = scene.k() * eta_t.unwrap_or(1.0);
         est.mean.iter().sum::<f64>() * dh * dh / (k_o * k_o) / scene.theta_i.cos()
     }
@@ -858,11 +861,20 @@ mod tests {
     /// 48.6° from the glass at 30°).
     #[test]
     fn flat_interface_transmits_eta_cos_t_over_cos_i() {
-        for (eta, theta_i) in [(1.5, 0.0), (1.5, 30.0), (1.5, 70.0), (1.0 / 1.5, 20.0), (1.0 / 1.5, 30.0)] {
+        for (eta, theta_i) in [
+            (1.5, 0.0),
+            (1.5, 30.0),
+            (1.5, 70.0),
+            (1.0 / 1.5, 20.0),
+            (1.0 / 1.5, 30.0),
+        ] {
             let f = flat_fraction(Some(eta), theta_i);
             let sin_t = theta_i.to_radians().sin() / eta;
             let want = eta * (1.0 - sin_t * sin_t).sqrt() / theta_i.to_radians().cos();
-            println!("η = {eta:.4}, θ_i = {theta_i}°: {f:.7} vs {want:.7} ({:+.1e})", f / want - 1.0);
+            println!(
+                "η = {eta:.4}, θ_i = {theta_i}°: {f:.7} vs {want:.7} ({:+.1e})",
+                f / want - 1.0
+            );
             assert!(
                 (f / want - 1.0).abs() < 1e-4,
                 "η = {eta}, θ_i = {theta_i}°: transmitted {f}, expected {want}"

@@ -164,7 +164,11 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P> + Clone + std::fmt::Deb
                     exit,
                 )
                 .expect("geometry");
-                assert_eq!(g.side(), Side::Transmission, "exit {r:?} not below the surface");
+                assert_eq!(
+                    g.side(),
+                    Side::Transmission,
+                    "exit {r:?} not below the surface"
+                );
                 g
             }
         }
@@ -253,7 +257,9 @@ pub fn method_name(scene: &Scene) -> &'static str {
             Matter::Exponential { .. } => {
                 "Intensity/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6, at_interface"
             }
-            Matter::Sinusoid { .. } => "Intensity/Partial/ClosedForm, Grating ±1 orders, at_interface",
+            Matter::Sinusoid { .. } => {
+                "Intensity/Partial/ClosedForm, Grating ±1 orders, at_interface"
+            }
         };
     }
     match scene.matter {

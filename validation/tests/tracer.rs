@@ -273,12 +273,15 @@ fn tscene(eta: f64, theta_i_deg: f64, lambda: f64, vt_sigma: f64, theta: [[f64; 
     }
 }
 
-/// Into glass from the air (η = 1.5, θ_i = 30°, λ = 0.5 µm) and out of it (η = 1/1.5,
-/// θ_i = 20°, λ = 0.5/1.5 µm in the glass; critical angle 41.8°).
+/// Into glass from the air (η = 1.5, `θ_i = 30°`, λ = 0.5 µm) and out of it (η = 1/1.5,
+/// `θ_i = 20°`, λ = 0.5/1.5 µm in the glass; critical angle 41.8°).
 fn glass_cases(vt_sigma: f64, theta: [[f64; 2]; 2]) -> [(&'static str, Scene); 2] {
     [
         ("into glass", tscene(1.5, 30.0, 0.5, vt_sigma, theta)),
-        ("out of glass", tscene(1.0 / 1.5, 20.0, 0.5 / 1.5, vt_sigma, theta)),
+        (
+            "out of glass",
+            tscene(1.0 / 1.5, 20.0, 0.5 / 1.5, vt_sigma, theta),
+        ),
     ]
 }
 
@@ -316,7 +319,13 @@ fn kernel_matches_brute_force_in_transmission() {
                 ("v without η", scat(v_no_eta), i > 0),
                 ("reflection's v", scat(v_refl), i > 0),
             ];
-            let off = |p: f64| format!("{:+.2} % ({:+.1} s.e.)", 100.0 * (p / b - 1.0), (p - b) / se);
+            let off = |p: f64| {
+                format!(
+                    "{:+.2} % ({:+.1} s.e.)",
+                    100.0 * (p / b - 1.0),
+                    (p - b) / se
+                )
+            };
             println!(
                 "{name}, h = {h:?} (θ_o = {:.1}°, vσ = {:.3}): brute {b:.6e} ± {se:.1e}, kernel {:.6e} \
                  {} (scattered {:.1} %); wrong: {}",
@@ -331,7 +340,10 @@ fn kernel_matches_brute_force_in_transmission() {
                     .collect::<Vec<_>>()
                     .join(", ")
             );
-            assert!(se < 0.02 * b, "{name}, h = {h:?}: s.e. {se:e} too large vs {b:e}");
+            assert!(
+                se < 0.02 * b,
+                "{name}, h = {h:?}: s.e. {se:e} too large vs {b:e}"
+            );
             assert!(
                 agrees(k.total(), b, se),
                 "{name}, h = {h:?}: kernel {:e} (spec {:e}, scat {:e}) vs brute {b:e} ± {se:e} ({:+.2} %)",
@@ -341,7 +353,10 @@ fn kernel_matches_brute_force_in_transmission() {
                 100.0 * (k.total() / b - 1.0)
             );
             if i == 0 {
-                assert!(k.specular > 0.95 * k.total(), "{name}: Snell not coherent-dominated");
+                assert!(
+                    k.specular > 0.95 * k.total(),
+                    "{name}: Snell not coherent-dominated"
+                );
             } else {
                 assert!(
                     k.scattered > 0.8 * k.total(),
@@ -405,7 +420,13 @@ fn transmitted_debye_waller_factor_matches_brute_force() {
                 ("reflection's α", k.total() / alpha * alpha_r),
                 ("α without η in v", k.total() / alpha * alpha_no_eta),
             ];
-            let off = |p: f64| format!("{:+.2} % ({:+.1} s.e.)", 100.0 * (p / b - 1.0), (p - b) / se);
+            let off = |p: f64| {
+                format!(
+                    "{:+.2} % ({:+.1} s.e.)",
+                    100.0 * (p / b - 1.0),
+                    (p - b) / se
+                )
+            };
             println!(
                 "{name}, h = {h:?}: α_t = {alpha:.4}, brute {b:.6e} ± {se:.1e}, kernel {:.6e} {} \
                  (specular {:.1} %); wrong: {}",
@@ -418,9 +439,18 @@ fn transmitted_debye_waller_factor_matches_brute_force() {
                     .collect::<Vec<_>>()
                     .join(", ")
             );
-            assert!(alpha < 0.8, "{name}, h = {h:?}: α_t = {alpha} does not test the attenuation");
-            assert!(k.specular > 0.95 * k.total(), "{name}, h = {h:?}: not coherent-dominated");
-            assert!(se < 0.02 * b, "{name}, h = {h:?}: s.e. {se:e} too large vs {b:e}");
+            assert!(
+                alpha < 0.8,
+                "{name}, h = {h:?}: α_t = {alpha} does not test the attenuation"
+            );
+            assert!(
+                k.specular > 0.95 * k.total(),
+                "{name}, h = {h:?}: not coherent-dominated"
+            );
+            assert!(
+                se < 0.02 * b,
+                "{name}, h = {h:?}: s.e. {se:e} too large vs {b:e}"
+            );
             assert!(
                 agrees(k.total(), b, se),
                 "{name}, h = {h:?}: kernel {:e} vs brute {b:e} ± {se:e}",
@@ -448,7 +478,14 @@ fn transmitted_debye_waller_factor_matches_brute_force() {
 /// tails' shortfall is the model's truncation, not the transmission geometry.
 #[test]
 fn brute_force_is_the_full_series_beyond_first_order_in_transmission() {
-    let hs = [[0.0, 0.0], [-4.0, 0.0], [-3.0, 0.0], [3.0, 0.0], [4.0, 0.0], [0.0, 4.0]];
+    let hs = [
+        [0.0, 0.0],
+        [-4.0, 0.0],
+        [-3.0, 0.0],
+        [3.0, 0.0],
+        [4.0, 0.0],
+        [0.0, 4.0],
+    ];
     for (name, s) in glass_cases(0.25, THETA) {
         let c = compare(&s, &s, &hs, 32);
         let Matter::Gaussian { sigma, ell } = s.matter else {
@@ -487,7 +524,10 @@ fn brute_force_is_the_full_series_beyond_first_order_in_transmission() {
                 100.0 * (series / b - 1.0),
                 (series - b) / se
             );
-            assert!(se < 0.02 * b, "{name}, h = {h:?}: s.e. {se:e} too large vs {b:e}");
+            assert!(
+                se < 0.02 * b,
+                "{name}, h = {h:?}: s.e. {se:e} too large vs {b:e}"
+            );
             assert!(
                 agrees(series, b, se),
                 "{name}, h = {h:?}: series {series:e} vs brute {b:e} ± {se:e}"
