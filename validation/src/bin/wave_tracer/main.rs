@@ -282,7 +282,7 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool) -> Vec<Conf
         4.0,
         12.0,
         5.0,
-        64,
+        48,
     );
     // From inside the glass into the air: λ = 0.5/1.5 µm in the glass, θ_i = 20° (critical 41.8°).
     // Scan ±4 rad/µm (exits 10°–57°): v grows toward grazing exits (1.6× Snell’s at 57°, 1.85× at
@@ -298,7 +298,7 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool) -> Vec<Conf
         4.0,
         12.0,
         4.0,
-        64,
+        48,
     );
     out
 }
