@@ -1,7 +1,7 @@
-//! The brute-force reference: scalar Kirchhoff phase-screen reflection of a partially coherent
-//! Gaussian Schell-model beam by random surfaces, summed explicitly on a grid and averaged over
-//! realizations. Uses no gmueller code (only `rustfft` and `std`), so that it can serve as an
-//! independent reference for the kernel.
+//! The brute-force reference: scalar Kirchhoff phase-screen reflection (and transmission, see
+//! below) of a partially coherent Gaussian Schell-model beam by random surfaces, summed
+//! explicitly on a grid and averaged over realizations. Uses no gmueller code (only `rustfft`
+//! and `std`), so that it can serve as an independent reference for the kernel.
 //!
 //! # Model
 //! ```text
@@ -38,6 +38,55 @@
 //!
 //! Remaining bias sources (small by construction): aliasing of the spectrum beyond the grid's
 //! Nyquist frequency `π/dx`, and the periodic grid (box ≥ 6 W).
+//!
+//! # Transmission ([`Scene::eta_t`] = `Some(η)`)
+//! The surface is then the interface between the light's medium above (index `n_i`, where n̂
+//! points) and a medium below (index `n_t`, `η = n_t/n_i`); `λ` and `k = 2π/λ = n_i k₀` stay the
+//! packet's, in the medium of incidence, and the medium below has `k_t = η k`, `λ_t = λ/η`.
+//! ```text
+//! aperture  a(x) = E_in(x) e^{−i v h(x)}   on the mean plane z = 0, in medium t   (t = 1)
+//! v         = k (cos θ_i − η cos θ_o) = k₀ (n_i cos θ_i − n_t cos θ_o)   (θ_o from −n̂, < 0 for η > 1 near Snell)
+//! E(r̂)      = ∫ A ψ e^{−i v h} e^{−i h_t·x} d²x,       h_t = k_t r̂_t − k d_t  (0 at Snell's direction)
+//! dP/dΩ     = (n_t/n_i) cos²θ_o / λ_t² · |E|²,          L = ⟨dP/dΩ⟩ / (|P| cos θ_o)   (radiance in medium t)
+//! exits     h_t = 2π m/(N dx):  r̂_t = (h_t + k d_t)/k_t,  r̂_z = −√(1 − |r̂_t|²)
+//! ```
+//! Derivation, from first principles (scalar field, non-magnetic media, `e^{−iωt}`):
+//! - **Phase screen.** Locally the interface at height `z = h` meets a plane wave
+//!   `e^{i k (d_t·x − cos θ_i z)}` of the incident field; the transmitted wave of direction r̂
+//!   (`r̂_z = −cos θ_o`, tangentially matched, `k_t r̂_t = k d_t`) leaves the point `(x', h)` with
+//!   the incident phase and travels `h/cos θ_o` in medium t to reach the mean plane at
+//!   `x = x' + r̂_t h/cos θ_o`. Its phase there is
+//!   `k d_t·x' − k cos θ_i h + k_t h/cos θ_o = k d_t·x + h (k_t cos θ_o − k cos θ_i) = k d_t·x − v h`
+//!   (using `k d_t·r̂_t = k_t |r̂_t|²`): the aperture field is the incident one times `e^{−i v h}`,
+//!   the sign convention of this module in both cases (reflection: `v = k (cos θ_i + cos θ_o)`,
+//!   the path `h cos θ_i` less on the way in and out). Only `v²` enters the average: the height
+//!   statistics are symmetric (`h → −h`), and `⟨e^{−ivh}⟩ = e^{−v²σ²/2}` for Gaussian heights
+//!   (the transmitted Debye–Waller factor `α_t = e^{−(vσ)²}` of the coherent part).
+//! - **Far field in a medium.** The field below the plane is the angular spectrum of `a`,
+//!   `U(x, z) = ∫ â(q) e^{i q·x − i √(k_t² − q²) z} d²q`, `â(q) = (2π)⁻² ∫ a e^{−i q·x} d²x`
+//!   (`z < 0`, outgoing). Stationary phase at `R → ∞` along r̂ gives exactly
+//!   `U ≈ −2πi k_t cos θ_o â(k_t r̂_t) e^{i k_t R}/R` (the Rayleigh–Sommerfeld far field), so
+//!   `R² |U|² = k_t² cos²θ_o/(2π)² |∫ a e^{−i k_t r̂_t·x} d²x|² = cos²θ_o/λ_t² |E(r̂)|²`; the
+//!   incident carrier `e^{i k d_t·x}` is absorbed in `h_t`.
+//! - **Intensity in a medium.** The time-averaged Poynting flux of a (locally plane) wave of
+//!   amplitude `U` in a medium of index n is `n |U|²/(2 Z₀)`: the power per solid angle is
+//!   `n_t R² |U|²/(2 Z₀)`, and the incident irradiance across the beam is `n_i |A(0)|²/(2 Z₀)`
+//!   (`= n_i/(2 Z₀)`, since `|A(0)|² = 1`). Per unit incident irradiance this is the line
+//!   `dP/dΩ` above; `n_t = n_i` gives the reflection formula.
+//! - **Radiance.** The lit patch of area `|P|` radiates `dP/dΩ = L cos θ_o |P|`, as in reflection;
+//!   `L` is the radiance in medium t (it carries the `n²` law: a flat interface at normal
+//!   incidence gives `L ∝ η · η²`, `η` from the aperture model's power and `η²` from the solid
+//!   angle compressed by refraction).
+//! - **Check: a flat interface** (`h = 0`, coherent light, a beam wide against λ). The incident
+//!   power through the surface is `cos θ_i |P|`. With `dΩ = d²r̂_t/cos θ_o = d²h_t/(k_t² cos θ_o)`
+//!   and Parseval, `∫ |E|² d²h_t = (2π)² |P|`, the transmitted power is
+//!   `∫ η cos θ_o/(λ_t² k_t²) |E|² d²h_t = η cos θ_t |P|`: the fraction `η cos θ_t/cos θ_i`, the
+//!   Fresnel transmittance `(n_t cos θ_t/n_i cos θ_i) |t|²` with `t = 1`
+//!   (`tests::flat_interface_transmits_eta_cos_t_over_cos_i` sums it over the DFT directions).
+//!
+//! The numerics are those of reflection with `v`, the exit directions and the prefactor
+//! `(n_t/n_i) cos θ_o/λ_t²` of the transmitted side; the section of the coherence by the surface
+//! (the footprint) is the same. Reflection results are unchanged, bit for bit.
 
 #![allow(dead_code)]
 
@@ -145,6 +194,12 @@ pub struct Scene {
     pub theta: [[f64; 2]; 2],
     /// The height field.
     pub matter: Matter,
+    /// `None`: the surface is a perfect reflector and the light leaves above it (reflection).
+    /// `Some(η)`: the surface is the interface to a medium below of relative index
+    /// `η = n_t/n_i` (`n_i` that of the light's medium above), the aperture field is the incident
+    /// field times the phase screen (`t = 1`), and the light leaves below it (transmission, see
+    /// the module docs). `wavelength` is the one in the medium of incidence either way.
+    pub eta_t: Option<f64>,
 }
 
 /// The sampling of the surface.
@@ -235,20 +290,71 @@ impl Scene {
         xi
     }
 
-    /// The exit direction r̂ whose `h_t = k(r̂_t − d_t)` is `h`, or `None` below the horizon.
+    /// The exit direction r̂ whose `h_t` is `h`, or `None` beyond the horizon: in reflection
+    /// `h_t = k(r̂_t − d_t)` and `r̂_z > 0`; in transmission `h_t = η k r̂_t − k d_t` and `r̂_z < 0`.
     #[must_use]
     pub fn exit_for(&self, h: [f64; 2]) -> Option<[f64; 3]> {
         let d = self.travel();
         let k = self.k();
-        let rt = [d[0] + h[0] / k, d[1] + h[1] / k];
-        let s2 = rt[0] * rt[0] + rt[1] * rt[1];
-        (s2 < 1.0).then(|| [rt[0], rt[1], (1.0 - s2).sqrt()])
+        match self.eta_t {
+            None => {
+                let rt = [d[0] + h[0] / k, d[1] + h[1] / k];
+                let s2 = rt[0] * rt[0] + rt[1] * rt[1];
+                (s2 < 1.0).then(|| [rt[0], rt[1], (1.0 - s2).sqrt()])
+            }
+            Some(eta) => {
+                let kt = eta * k;
+                let rt = [(h[0] + k * d[0]) / kt, (h[1] + k * d[1]) / kt];
+                let s2 = rt[0] * rt[0] + rt[1] * rt[1];
+                (s2 < 1.0).then(|| [rt[0], rt[1], -(1.0 - s2).sqrt()])
+            }
+        }
     }
 
-    /// `v σ` at the specular direction (the phase-screen roughness parameter).
+    /// The phase factor `v` for an exit direction with `cos θ_o = |r̂_z|`: `k (cos θ_i + cos θ_o)`
+    /// in reflection, `k (cos θ_i − η cos θ_o)` in transmission (module docs).
+    #[must_use]
+    pub fn phase_factor(&self, cos_o: f64) -> f64 {
+        let (k, cos_i) = (self.k(), self.theta_i.cos());
+        match self.eta_t {
+            None => k * (cos_i + cos_o),
+            Some(eta) => k * (cos_i - eta * cos_o),
+        }
+    }
+
+    /// The specular direction of the exit side: the mirror direction, or Snell's (`h_t = 0`;
+    /// `None` under total internal reflection).
+    #[must_use]
+    pub fn specular_exit(&self) -> Option<[f64; 3]> {
+        self.exit_for([0.0, 0.0])
+    }
+
+    /// `|v| σ` at the specular direction (the phase-screen roughness parameter): `2kσ cos θ_i`
+    /// in reflection, `kσ |cos θ_i − η cos θ_t|` in transmission (`cos θ_t = 0` beyond the
+    /// critical angle).
     #[must_use]
     pub fn v_sigma_specular(&self) -> f64 {
-        2.0 * self.k() * self.theta_i.cos() * self.matter.rms()
+        match self.eta_t {
+            None => 2.0 * self.k() * self.theta_i.cos() * self.matter.rms(),
+            Some(_) => {
+                let cos_t = self.specular_exit().map_or(0.0, |r| -r[2]);
+                self.phase_factor(cos_t).abs() * self.matter.rms()
+            }
+        }
+    }
+
+    /// The radiance prefactor `(n_t/n_i) cos θ_o/λ_t²` of the exit side (`cos θ_o/λ²` in
+    /// reflection; module docs).
+    #[must_use]
+    pub fn radiance_prefactor(&self, cos_o: f64) -> f64 {
+        let lambda = self.wavelength;
+        match self.eta_t {
+            None => cos_o / (lambda * lambda),
+            Some(eta) => {
+                let lambda_t = lambda / eta;
+                eta * cos_o / (lambda_t * lambda_t)
+            }
+        }
     }
 }
 
@@ -326,7 +432,8 @@ struct Plan {
     height_amp: Option<Vec<f64>>,
     /// Light modes `(q_x, q_y, λ_q / N²)`.
     modes: Vec<(i64, i64, f64)>,
-    /// Per direction: DFT index `(m_x, m_y)`, Taylor coefficients `(−iΔv)ⁿ/n!`, `cos θ_o/λ²/|P|`.
+    /// Per direction: DFT index `(m_x, m_y)`, Taylor coefficients `(−iΔv)ⁿ/n!`, the radiance
+    /// prefactor over `|P|` (`cos θ_o/λ²/|P|` in reflection).
     dirs: Vec<([i64; 2], Vec<C>, f64)>,
     v0: f64,
     terms: usize,
@@ -383,20 +490,22 @@ fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
     let height_amp = height_amplitudes(&mut fwd, &scene.matter, dx);
 
     // Directions, v, and the Taylor order.
-    let k = scene.k();
-    let cos_i = scene.theta_i.cos();
     let dh = grid.dh();
     let geo: Vec<(f64, f64)> = dirs
         .iter()
         .map(|m| {
             let r = scene
                 .exit_for([m[0] as f64 * dh, m[1] as f64 * dh])
-                .expect("exit direction below the horizon");
-            (r[2], k * (cos_i + r[2]))
+                .expect("exit direction beyond the horizon");
+            // cos θ_o = |r̂_z| (r̂_z > 0 in reflection, so this is r̂_z there, as before).
+            let cos_o = r[2].abs();
+            (cos_o, scene.phase_factor(cos_o))
         })
         .collect();
+    // v < 0 is possible in transmission (η > 1); in reflection v > 0 and these are the
+    // previous bounds.
     let vmin = geo.iter().map(|g| g.1).fold(f64::INFINITY, f64::min);
-    let vmax = geo.iter().map(|g| g.1).fold(0.0, f64::max);
+    let vmax = geo.iter().map(|g| g.1).fold(f64::NEG_INFINITY, f64::max);
     let v0 = 0.5 * (vmin + vmax);
     let hmax = match scene.matter {
         Matter::Sinusoid { amplitude, .. } => amplitude,
@@ -412,7 +521,6 @@ fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
             break;
         }
     }
-    let lambda = scene.wavelength;
     let plan_dirs = dirs
         .iter()
         .zip(&geo)
@@ -426,7 +534,7 @@ fn plan(scene: &Scene, grid: &Grid, dirs: &[[i64; 2]]) -> Plan {
                 }
                 c.push(cur);
             }
-            (*m, c, cos_o / (lambda * lambda) / area)
+            (*m, c, scene.radiance_prefactor(cos_o) / area)
         })
         .collect();
     Plan {
@@ -549,8 +657,8 @@ impl Worker {
 /// `dirs` are DFT indices `m`: `h_t = m · 2π/(N dx)`.
 ///
 /// # Panics
-/// If a direction is below the horizon or, for the grating, the box is not a whole number of
-/// periods.
+/// If a direction is beyond the horizon of the exit side or, for the grating, the box is not a
+/// whole number of periods.
 #[must_use]
 pub fn run(
     scene: &Scene,
@@ -700,4 +808,128 @@ pub fn fast_size(m: usize) -> usize {
         p2 *= 2;
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The power a flat surface sends into the exit side, per unit incident power, summed over
+    /// the DFT directions within 0.6 rad/µm of the specular one (10 lobe widths): with
+    /// `L = dP/dΩ/(|P| cos θ_o)` and `dΩ = d²h_t/(k_o² cos θ_o)` (`k_o` the exit medium's
+    /// wavenumber), `dP = L |P| d²h_t/k_o²`, over the incident power `cos θ_i |P|`. Nearly
+    /// coherent light (w = 20 µm): the lobe is 0.06 rad/µm wide, so `cos θ_o` is `cos θ_t`
+    /// across it to ~5e-5 (the curvature of `cos θ_o` grows toward grazing exits: 2.5e-4 at
+    /// 61°, from the glass at 35°).
+    fn flat_fraction(eta_t: Option<f64>, theta_i_deg: f64) -> f64 {
+        let scene = Scene {
+            wavelength: 0.5,
+            theta_i: theta_i_deg.to_radians(),
+            theta: [[400.0, 30.0], [30.0, 400.0]],
+            matter: Matter::Gaussian {
+                sigma: 0.0,
+                ell: 4.0,
+            },
+            eta_t,
+        };
+        let grid = auto_grid(&scene, 2.0, 1.5);
+        let dh = grid.dh();
+        let reach = (0.6 / dh).ceil() as i64;
+        let dirs: Vec<[i64; 2]> = (-reach..=reach)
+            .flat_map(|my| (-reach..=reach).map(move |mx| [mx, my]))
+            .collect();
+        let est = run(&scene, &grid, &dirs, 1, 1, 2, &|| {});
+        assert!(
+            est.std_err.iter().all(|&s| s == 0.0),
+            "a flat surface is not random"
+        );
+        let k_o = scene.k() * eta_t.unwrap_or(1.0);
+        est.mean.iter().sum::<f64>() * dh * dh / (k_o * k_o) / scene.theta_i.cos()
+    }
+
+    #[test]
+    fn flat_mirror_reflects_everything() {
+        for theta_i in [0.0, 30.0, 60.0] {
+            let f = flat_fraction(None, theta_i);
+            println!("mirror, θ_i = {theta_i}°: {f:.7} ({:+.1e})", f - 1.0);
+            assert!((f - 1.0).abs() < 1e-4, "θ_i = {theta_i}°: reflected {f}");
+        }
+    }
+
+    /// The aperture model (`t = 1`) transmits `η cos θ_t/cos θ_i` (module docs): from the air
+    /// into glass and from glass into the air (below the critical angle, 41.8°; the exit at
+    /// 48.6° from the glass at 30°).
+    #[test]
+    fn flat_interface_transmits_eta_cos_t_over_cos_i() {
+        for (eta, theta_i) in [
+            (1.5, 0.0),
+            (1.5, 30.0),
+            (1.5, 70.0),
+            (1.0 / 1.5, 20.0),
+            (1.0 / 1.5, 30.0),
+        ] {
+            let f = flat_fraction(Some(eta), theta_i);
+            let sin_t = theta_i.to_radians().sin() / eta;
+            let want = eta * (1.0 - sin_t * sin_t).sqrt() / theta_i.to_radians().cos();
+            println!(
+                "η = {eta:.4}, θ_i = {theta_i}°: {f:.7} vs {want:.7} ({:+.1e})",
+                f / want - 1.0
+            );
+            assert!(
+                (f / want - 1.0).abs() < 1e-4,
+                "η = {eta}, θ_i = {theta_i}°: transmitted {f}, expected {want}"
+            );
+        }
+    }
+
+    /// The sign convention, `e^{−i v h}` with `v = k (cos θ_i − η cos θ_o)` (`k (cos θ_i + cos θ_o)`
+    /// in reflection), against Snell's law and the mirror law at a tilted facet: the screen of a
+    /// planar surface `h = s·x` is the plane wave `e^{−i v s·x}`, which moves the lobe to
+    /// `h_t = −v s`; the exactly refracted (reflected) direction at the facet of normal
+    /// `(−s, 1)/√(1 + s²)` must have that `h_t` to first order in the slope `s`. Slopes along
+    /// t̂₁ and t̂₂, several angles, both sides of the glass, and reflection.
+    #[test]
+    fn phase_screen_sign_matches_snell_at_a_tilted_facet() {
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        for eta_t in [None, Some(1.5), Some(1.0 / 1.5)] {
+            for theta_i in [0.0, 20.0, 35.0] {
+                for slope in [[1e-5, 0.0], [0.0, 1e-5], [-7e-6, 4e-6]] {
+                    let scene = Scene {
+                        wavelength: 0.5,
+                        theta_i: f64::to_radians(theta_i),
+                        theta: [[1.0, 0.0], [0.0, 1.0]],
+                        matter: Matter::Gaussian {
+                            sigma: 0.0,
+                            ell: 1.0,
+                        },
+                        eta_t,
+                    };
+                    let d = scene.travel();
+                    let m = unit([-slope[0], -slope[1], 1.0]);
+                    let c_i = -dot(d, m);
+                    let eta = eta_t.unwrap_or(1.0);
+                    // Exact exit direction at the facet: the mirror law, or Snell's (vector form).
+                    let r = match eta_t {
+                        None => [0, 1, 2].map(|j| d[j] + 2.0 * c_i * m[j]),
+                        Some(eta) => {
+                            let c_t = (1.0 - (1.0 - c_i * c_i) / (eta * eta)).sqrt();
+                            [0, 1, 2].map(|j| d[j] / eta + (c_i / eta - c_t) * m[j])
+                        }
+                    };
+                    let k = scene.k();
+                    let h = [0, 1].map(|j| k * (eta * r[j] - d[j]));
+                    let cos_o = scene.specular_exit().expect("no total reflection")[2].abs();
+                    let v = scene.phase_factor(cos_o);
+                    for j in 0..2 {
+                        let want = -v * slope[j];
+                        assert!(
+                            (h[j] - want).abs() < 1e-4 * v.abs() * 1e-5,
+                            "{eta_t:?}, θ_i = {theta_i}°, slope {slope:?}: h_t[{j}] = {:e}, −v s = {want:e}",
+                            h[j]
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

@@ -2,6 +2,15 @@
 //! `PhaseScreen` pBSDF (`M = |r|² v² I₄`, `|r|² = 1`) for the scattered part and a constant
 //! identity Mueller matrix (a perfect mirror) for the specular part.
 //!
+//! Transmission ([`Scene::eta_t`] = `Some(η)`, light from above into the medium below): the
+//! brute force's aperture model (the field on the mean plane is the incident field times the
+//! phase screen, `t = 1`) is `PhaseScreen::interface(1, τ = η |t|² = η)` for the scattered part
+//! and the constant `η I₄` for the specular part (the smooth interface then transmits
+//! `η cos θ_t/cos θ_i`, as the brute force's flat surface does), evaluated with
+//! `Geometry::at_interface(k, surface, η, ŝ, r̂)` (`k` the packet's wavenumber, in the medium of
+//! incidence) for exits below the surface. The kernel's radiance is then the one in the exit
+//! medium (prefactor `cos θ_o/λ_t²`, `λ_t = λ/η`).
+//!
 //! Height PSDs: `GaussianPsd::isotropic(σ, ℓ)`; the exponential correlation is
 //! `KCorrelation(σ², T = ℓ², γ = 2)`, blurred with a Gaussian-mixture fit (`ClosedForm`); the
 //! sinusoidal height grating `a sin(2πx/Λ + φ)` has `R(ξ) = (a²/2) cos(2πξ/Λ)`, i.e. a
@@ -15,7 +24,7 @@
 
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    ConstantMueller, Geometry, Intensity, Kernel, Partial, PhaseScreen, RoughSurface,
+    ConstantMueller, Geometry, Intensity, Kernel, Partial, PhaseScreen, RoughSurface, Side,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
@@ -23,7 +32,7 @@ use gmueller::psd::{
     BlurMethod, ClosedForm, GaussianPsd, Grating, KCorrelation, OrderCutoff, Psd, bessel_j,
 };
 use gmueller::stokes::Stokes;
-use nalgebra::{Matrix2, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix4, Vector2, Vector3};
 
 use crate::brute::{Matter, Scene};
 
@@ -127,10 +136,42 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P> + Clone + std::fmt::Deb
 ) -> (Vec<Prediction>, f64) {
     let packet = packet(scene);
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).expect("surface");
-    let material = RoughSurface {
-        psd,
-        specular: ConstantMueller(Mueller::identity()),
-        scatter: PhaseScreen::new(1.0).expect("phase screen"),
+    let material = match scene.eta_t {
+        None => RoughSurface {
+            psd,
+            specular: ConstantMueller(Mueller::identity()),
+            scatter: PhaseScreen::new(1.0).expect("phase screen"),
+        },
+        // The aperture model: t = 1, τ = η|t|² = η (module docs).
+        Some(eta) => RoughSurface {
+            psd,
+            specular: ConstantMueller(
+                Mueller::from_matrix(Matrix4::identity() * eta).expect("η I₄"),
+            ),
+            scatter: PhaseScreen::interface(1.0, eta).expect("phase screen"),
+        },
+    };
+    let geometry = |r: &[f64; 3]| -> Geometry<f64> {
+        let exit = Vector3::new(r[0], r[1], r[2]);
+        match scene.eta_t {
+            None => Geometry::for_packet(&packet, &surface, exit).expect("geometry"),
+            Some(eta) => {
+                let g = Geometry::at_interface(
+                    packet.wavenumber(),
+                    &surface,
+                    eta,
+                    -packet.direction(),
+                    exit,
+                )
+                .expect("geometry");
+                assert_eq!(
+                    g.side(),
+                    Side::Transmission,
+                    "exit {r:?} not below the surface"
+                );
+                g
+            }
+        }
     };
     let kernel = Kernel::<Intensity, Partial<B>>::new(Partial(blur));
     let once = || -> Vec<Prediction> {
@@ -141,8 +182,7 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P> + Clone + std::fmt::Deb
         exits
             .iter()
             .map(|r| {
-                let g = Geometry::for_packet(&packet, &surface, Vector3::new(r[0], r[1], r[2]))
-                    .expect("geometry");
+                let g = geometry(r);
                 let resp = kernel.evaluate_prepared(&material, &prepared, &g);
                 Prediction {
                     specular: resp.specular,
@@ -209,6 +249,19 @@ pub fn predict_timed(
 /// A short name of the kernel level used for `scene`.
 #[must_use]
 pub fn method_name(scene: &Scene) -> &'static str {
+    if scene.eta_t.is_some() {
+        return match scene.matter {
+            Matter::Gaussian { .. } => {
+                "Intensity/Partial/ClosedForm, GaussianPsd, at_interface, PhaseScreen::interface(1, η)"
+            }
+            Matter::Exponential { .. } => {
+                "Intensity/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6, at_interface"
+            }
+            Matter::Sinusoid { .. } => {
+                "Intensity/Partial/ClosedForm, Grating ±1 orders, at_interface"
+            }
+        };
+    }
     match scene.matter {
         Matter::Gaussian { .. } => "Intensity/Partial/ClosedForm, GaussianPsd",
         Matter::Exponential { .. } => {

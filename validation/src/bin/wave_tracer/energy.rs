@@ -332,6 +332,7 @@ pub fn run(realizations: Option<usize>, quick: bool, threads: usize, seed: u64) 
                 sigma: c.k_sigma / k,
                 ell,
             },
+            eta_t: None,
         };
         let n = brute::fast_size((8.0 * c.beam_width / c.dx).ceil() as usize);
         let grid = Grid {

@@ -73,9 +73,10 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
     let hx0 = c.in_plane.first().map_or(0.0, |m| m[0] as f64 * dh);
     let hx1 = c.in_plane.last().map_or(0.0, |m| m[0] as f64 * dh);
     let curve = dense([hx0, 0.0], [hx1, 0.0]);
-    let ang = |e: &[f64; 3]| e[0].atan2(e[2]).to_degrees();
+    let ang = super::in_plane_deg;
     let (a0, a1) = (ang(&curve[0].1), ang(&curve[curve.len() - 1].1));
 
+    let snell = c.scene.eta_t.and(c.scene.specular_exit());
     let mut chart = ChartBuilder::on(&left)
         .margin(12)
         .x_label_area_size(45)
@@ -84,7 +85,13 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
         .build_cartesian_2d(a0..a1, (floor..peak * 2.0).log_scale())?;
     chart
         .configure_mesh()
-        .x_desc("exit angle θ_o in the plane of incidence (deg; specular at +30)")
+        .x_desc(match c.scene.eta_t {
+            None => "exit angle θ_o in the plane of incidence (deg; specular at +30)".to_string(),
+            Some(_) => format!(
+                "exit angle θ_o from −n̂ in the plane of incidence (deg; Snell at {:+.2}, dashed)",
+                snell.map_or(f64::NAN, |r| ang(&r))
+            ),
+        })
         .y_desc("radiance per unit incident irradiance, L/S (1/sr)")
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 15))
@@ -105,6 +112,16 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
         ))?
         .label("kernel: scattered part")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.mix(0.5)));
+    if let Some(r) = snell {
+        // Snell's direction (h_t = 0), dashed.
+        let x = ang(&r);
+        let (lo, hi) = (floor, peak * 2.0);
+        let steps = 24;
+        chart.draw_series((0..steps).step_by(2).map(|i| {
+            let at = |j: i32| lo * (hi / lo).powf(f64::from(j) / f64::from(steps));
+            PathElement::new(vec![(x, at(i)), (x, at(i + 1))], BLACK.mix(0.6))
+        }))?;
+    }
     draw_points(&mut chart, inp.iter().map(|r| (r.in_plane_deg(), r)), floor)?;
     chart
         .configure_series_labels()
@@ -126,7 +143,11 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
             .build_cartesian_2d(hy0..hy1, (floor..peak * 2.0).log_scale())?;
         chart
             .configure_mesh()
-            .x_desc("h_y, out-of-plane component of k(r - d) (rad/µm)")
+            .x_desc(if c.scene.eta_t.is_some() {
+                "h_y, out-of-plane component of η k r - k d (rad/µm)"
+            } else {
+                "h_y, out-of-plane component of k(r - d) (rad/µm)"
+            })
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 15))
             .draw()?;
