@@ -413,8 +413,11 @@ impl<T: Real> Geometry<T> {
     #[must_use]
     pub fn specular_sp(&self) -> Frame<T> {
         let n = self.surface.k();
+        if self.side == Side::Reflection {
+            let r_spec = n * (self.cos_i + self.cos_i) - self.to_source;
+            return Frame::sp_unit(r_spec, n);
+        }
         match self.specular_direction() {
-            Some(r_spec) if self.side == Side::Reflection => Frame::sp_unit(r_spec, n),
             Some(r_spec) => Frame::sp_unit(r_spec / r_spec.norm(), n),
             None => {
                 let along = n * self.cos_i - self.to_source;

@@ -77,11 +77,20 @@ impl<T: Real> RayleighRice<T> {
     /// `2k cos θ_i`, and without `√η` in transmission).
     #[must_use]
     pub fn factors(&self, g: &Geometry<T>) -> Matrix2<Complex<T>> {
-        let e = if g.incident_from_below() {
-            recip(self.epsilon)
+        if g.incident_from_below() {
+            self.factors_from_below(g)
+        } else if g.side() == Side::Reflection {
+            reflection_factors(self.epsilon, g)
         } else {
-            self.epsilon
-        };
+            transmission_factors(self.epsilon, g)
+        }
+    }
+
+    /// [`RayleighRice::factors`] for light from below the interface (relative permittivity
+    /// `1/ε`), out of line.
+    #[inline(never)]
+    fn factors_from_below(&self, g: &Geometry<T>) -> Matrix2<Complex<T>> {
+        let e = recip(self.epsilon);
         match g.side() {
             Side::Reflection => reflection_factors(e, g),
             Side::Transmission => transmission_factors(e, g),
@@ -106,7 +115,7 @@ fn jones_scale<T: Real>(g: &Geometry<T>) -> T {
 }
 
 /// Germer's reflection factors for the relative permittivity `e` seen from the source.
-#[inline]
+#[inline(always)]
 fn reflection_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Complex<T>> {
     let one = Complex::new(T::one(), T::zero());
     let (ci, co) = (g.cos_i, g.cos_o);
@@ -132,7 +141,7 @@ fn reflection_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Comple
 
 /// Elson's transmission factors (one interface) for the relative permittivity `e` seen from
 /// the source, with `(ε − 1)` taken in (see the type docs).
-#[inline]
+#[inline(never)]
 fn transmission_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Complex<T>> {
     let one = Complex::new(T::one(), T::zero());
     let ci = g.cos_i;
