@@ -187,6 +187,30 @@ impl<T: Real> Frame<T> {
         Ok(Self { x, y, k })
     }
 
+    /// A shading frame (t̂₁, t̂₂, n̂) from a surface normal alone: t̂₁ the first tangent of the
+    /// branchless orthonormal basis of n̂ (Duff et al., "Building an Orthonormal Basis,
+    /// Revisited", JCGT 6(1), 2017), t̂₂ = n̂ × t̂₁. It depends on n̂ only (continuous except
+    /// across the sign change of `n̂_z`), so a renderer gets the same frame wherever it meets the
+    /// same normal. `normal` need not be unit.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] for NaN or ∞; [`Error::InvalidBasis`] for a zero normal.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use nalgebra::Vector3;
+    /// let f = Frame::from_normal(Vector3::new(0.3_f64, -0.2, 0.9)).unwrap();
+    /// assert!((f.k() - Vector3::new(0.3, -0.2, 0.9).normalize()).norm() < 1e-15);
+    /// assert!(f.x().dot(&f.k()).abs() < 1e-15 && (f.x().cross(&f.y()) - f.k()).norm() < 1e-15);
+    /// ```
+    pub fn from_normal(normal: Vector3<T>) -> Result<Self, Error> {
+        let n = normalize_checked(&normal, "surface normal")?;
+        let t1 = orthogonalize(&duff_tangent(&n), &n);
+        let t2 = n.cross(&t1);
+        Ok(Self { x: t1, y: t2, k: n })
+    }
+
     /// The s/p frame of a beam travelling along `direction` that meets a surface with normal
     /// `normal`: x̂ = ŝ (perpendicular to the plane of incidence), ŷ = p̂, k̂ = d̂.
     ///

@@ -89,6 +89,7 @@
 #![doc = include_str!("../docs/architecture.md")]
 #![forbid(unsafe_code)]
 
+pub mod bsdf;
 pub mod error;
 pub mod frame;
 pub mod fresnel;

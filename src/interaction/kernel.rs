@@ -6,7 +6,7 @@ use super::coherence::{CoherenceModel, CoherenceWeights};
 use super::geometry::{self, Geometry};
 use super::material::RoughSurface;
 use super::pbsdf::Pbsdf;
-use super::polarization::PolarizationModel;
+use super::polarization::{MuellerResponse, PolarizationModel};
 use super::prepared::PreparedPacket;
 use crate::error::Error;
 use crate::frame::Frame;
@@ -92,8 +92,109 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
+        debug_assert!(
+            same_wavenumber(packet.wavenumber(), g.k),
+            "Kernel::evaluate: the geometry was built for k = {:e}, the packet has k = {:e}",
+            g.k.to_f64(),
+            packet.wavenumber().to_f64()
+        );
         let prepared = self.prepare_unchecked(packet, &g.surface, &g.incident_sp);
         self.evaluate_prepared(material, &prepared, g)
+    }
+
+    /// [`Kernel::evaluate`], after checking that `g` belongs to `packet`: the same wavenumber
+    /// and the source direction `ŝ = −k̂` of the packet.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] when `g.k()` differs from the packet's wavenumber by more than a
+    /// few ulps (a geometry built for another wavelength, or for the packet's wavelength in the
+    /// other medium), or when `g.to_source()` is not the packet's reversed direction (within
+    /// `64 ε`).
+    pub fn try_evaluate<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        packet: &WavePacket<T>,
+        g: &Geometry<T>,
+    ) -> Result<Pol::Output<T>, Error>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        check_geometry(packet, g)?;
+        Ok(self.evaluate(material, packet, g))
+    }
+
+    /// The kernel in BSDF form ([`MuellerResponse`]): a throughput per lobe per unit incident
+    /// irradiance, acting on Stokes vectors in the packet's frame and giving Stokes radiances in
+    /// the exit s/p frame ([`Geometry::exit_sp`]). `evaluate_mueller(..).apply(&packet.stokes())`
+    /// equals [`Kernel::evaluate`] up to rounding wherever its scale is a normal number.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughDielectric};
+    /// use gmueller::packet::{CoherenceShape, WavePacket};
+    /// use gmueller::psd::GaussianPsd;
+    /// use gmueller::stokes::Stokes;
+    /// use nalgebra::Vector3;
+    ///
+    /// let glass = RoughDielectric::new(GaussianPsd::<f64, 2>::isotropic(0.01, 2.0)?, 1.5)?;
+    /// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z())?;
+    /// let travel = Vector3::new(0.5, 0.0, -(0.75_f64).sqrt());
+    /// let s = Stokes::new(1.0, 0.3, -0.2, 0.5)?;
+    /// let packet = WavePacket::from_stokes(s, CoherenceShape::isotropic(10.0)?,
+    ///     Frame::sp(travel, Vector3::z())?, 0.5)?;
+    /// let kernel = Kernel::<Full, Partial>::default();
+    /// let g = glass.geometry_for_packet(&packet, &surface, Vector3::new(0.45, 0.05, 0.89))?;
+    /// let m = kernel.evaluate_mueller(&glass, &packet, &g);
+    /// let direct = kernel.evaluate(&glass, &packet, &g).scattered;
+    /// let via_matrix = m.apply(&s).scattered;
+    /// assert!((via_matrix.vector() - direct.vector()).norm() <= 1e-12 * direct.s0());
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    #[must_use]
+    pub fn evaluate_mueller<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        packet: &WavePacket<T>,
+        g: &Geometry<T>,
+    ) -> MuellerResponse<T, Pol::Throughput<T>>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        let prepared = self.prepare_unchecked(packet, &g.surface, &g.incident_sp);
+        self.evaluate_mueller_prepared(material, &prepared, g)
+    }
+
+    /// [`Kernel::evaluate_mueller`] with the per-packet work done by [`Kernel::prepare`].
+    #[must_use]
+    pub fn evaluate_mueller_prepared<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Pol, Coh>,
+        g: &Geometry<T>,
+    ) -> MuellerResponse<T, Pol::Throughput<T>>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        debug_assert!(
+            same_wavenumber(prepared.k, g.k),
+            "Kernel::evaluate_mueller_prepared: geometry k = {:e}, prepared packet k = {:e}",
+            g.k.to_f64(),
+            prepared.k.to_f64()
+        );
+        Pol::evaluate_mueller(&self.coherence, material, prepared, g)
     }
 
     /// The per-packet part of the kernel at this model level — the sections `Ξ_α` of the
@@ -174,6 +275,42 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
+        debug_assert!(
+            same_wavenumber(prepared.k, g.k),
+            "Kernel::evaluate_prepared: geometry k = {:e}, prepared packet k = {:e}",
+            g.k.to_f64(),
+            prepared.k.to_f64()
+        );
         Pol::evaluate(&self.coherence, material, prepared, g)
     }
+}
+
+/// `true` when two wavenumbers agree within 8 ulps.
+#[inline]
+fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
+    (a - b).abs() <= T::lit(8.0) * T::EPSILON * a.abs().max(b.abs())
+}
+
+/// `Ok` when `g` was built for `packet`: its wavenumber and its reversed direction.
+#[expect(
+    clippy::neg_cmp_op_on_partial_ord,
+    reason = "a NaN must fail the test too"
+)]
+pub(crate) fn check_geometry<T: Real>(packet: &WavePacket<T>, g: &Geometry<T>) -> Result<(), Error> {
+    if !same_wavenumber(packet.wavenumber(), g.k) {
+        return Err(Error::OutOfRange {
+            what: "geometry wavenumber (built for another wavelength or medium than the packet's)",
+            value: g.k.to_f64(),
+            expected: "the packet's wavenumber 2π/λ (in the medium of incidence)",
+        });
+    }
+    let off = (g.to_source + packet.direction()).norm();
+    if !(off <= T::lit(64.0) * T::EPSILON) {
+        return Err(Error::OutOfRange {
+            what: "geometry source direction (not the packet's reversed direction)",
+            value: off.to_f64(),
+            expected: "|ŝ + k̂| ≤ 64 ε",
+        });
+    }
+    Ok(())
 }

@@ -126,8 +126,8 @@ pub use pbsdf::{
     RayleighRice,
 };
 pub use polarization::{
-    Full, Intensity, IntensityResponse, KernelOutput, LevelResponse, OneShape, PolarizationLevel,
-    PolarizationModel, PreparationPlan, Response,
+    Full, Intensity, IntensityResponse, KernelOutput, LevelResponse, MuellerResponse, OneShape,
+    PolarizationLevel, PolarizationModel, PreparationPlan, Response, Throughput,
 };
 pub use prepared::PreparedPacket;
 pub use section::surface_inverse_coherence;

@@ -8,6 +8,7 @@ use nalgebra::{Matrix4, Vector4};
 use super::coherence::{ln_smallest_subnormal, ln_two_pi, neg_infinity};
 use super::section::surface_inverse_coherence;
 use crate::frame::{Frame, frame_change_mueller};
+use crate::numerics::{det2, det2_of_mean, pow2_scale};
 use crate::gaussian::Gaussian;
 use crate::packet::{Channel, WavePacket};
 use crate::real::Real;
@@ -77,6 +78,11 @@ pub struct PreparedPacket<T: Real, Pol, Coh> {
     pub(crate) sections: [Option<Gaussian<T, 2>>; 3],
     /// `Θ_x = Θ_y`: the `Full` level then takes the one-weight path (the three weights agree).
     pub(crate) single_shape: bool,
+    /// The packet's wavenumber `k` (in the medium of incidence).
+    pub(crate) k: T,
+    /// `ln |μ|_max = ¼ ln(|Θ_x||Θ_y|) − ½ ln|Θ_½|` (≤ 0, the Bochner bound of the shapes), for the
+    /// Full level's BSDF form only (0 otherwise).
+    pub(crate) ln_mu_max: T,
     _levels: PhantomData<(Pol, Coh)>,
 }
 
@@ -138,6 +144,11 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
         } else {
             (T::zero(), T::zero(), T::zero(), (T::zero(), T::zero()))
         };
+        let ln_mu_max = if plan.channel_logs {
+            ln_bochner_bound(packet)
+        } else {
+            T::zero()
+        };
         let k = packet.wavenumber();
         let ln_s0 = s0.ln();
         let k_over_2pi = k / T::two_pi();
@@ -155,6 +166,8 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
             t_stokes: t * hat,
             sections,
             single_shape: plan.single_shape,
+            k,
+            ln_mu_max,
             _levels: PhantomData,
         }
     }
@@ -197,6 +210,40 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
             two_rh * self.phase.1,
         );
         (self.t * v, m)
+    }
+
+    /// The Full level's BSDF form of the channel mix, from the channel weights `ln K_x`,
+    /// `ln K_y`, `ln K_½`: `T D̂` and the logarithm `m` of its scale, with
+    /// ```text
+    /// a_½ = min(ln K_½, ½(ln K_x + ln K_y) − ln|μ|_max),   m = max(ln K_x, ln K_y),  r_α = e^{a_α − m}
+    /// D̂ = [[r_x+r_y, r_x−r_y],[r_x−r_y, r_x+r_y]]/2 ⊕ r_½ I₂
+    /// ```
+    /// so that `D̂ S/S0 · e^m` is the [`Self::channel_mix`] vector for every Stokes vector the
+    /// shapes admit; the cap is the same Cauchy–Schwarz bound, for the largest admitted `|μ|`.
+    #[inline]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN maximum must take the dark branch too"
+    )]
+    pub(crate) fn channel_matrix(&self, lx: T, ly: T, lh: T) -> (Matrix4<T>, T) {
+        let half = T::lit(0.5);
+        let ah = lh.min((lx + ly) * half - self.ln_mu_max);
+        let m = lx.max(ly);
+        if !(m > neg_infinity()) {
+            return (Matrix4::zeros(), neg_infinity());
+        }
+        let rel = |a: T| if a == m { T::one() } else { (a - m).exp() };
+        let (rx, ry, rh) = (rel(lx), rel(ly), rel(ah));
+        let (a, b) = ((rx + ry) * half, (rx - ry) * half);
+        let z = T::zero();
+        #[rustfmt::skip]
+        let d = Matrix4::new(
+            a, b, z, z,
+            b, a, z, z,
+            z, z, rh, z,
+            z, z, z, rh,
+        );
+        (self.t * d, m)
     }
 
     /// `S0 α K η²/λ²` (`η` the relative index of the exit medium, 1 in reflection) when the
@@ -246,5 +293,79 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
             let e = (ln_e + self.ln_s0 + u[0].ln()).exp();
             (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
         }
+    }
+}
+
+/// `ln |μ|_max`, the logarithm of the largest degree of correlation the packet's shapes admit:
+/// `¼ (ln|Θ_x| + ln|Θ_y|) − ½ ln|Θ_½|`, capped at 0 (Bochner, [`crate::packet`]). The
+/// determinants are taken after a common power-of-two scaling (the bound is scale-invariant).
+fn ln_bochner_bound<T: Real>(packet: &WavePacket<T>) -> T {
+    let (x, y) = (packet.shape(Channel::X), packet.shape(Channel::Y));
+    let s = pow2_scale(x.amax().max(y.amax()));
+    let (nx, ny) = (x / s, y / s);
+    let (dx, dy, dh) = (det2(&nx), det2(&ny), det2_of_mean(&nx, &ny));
+    let b = T::lit(0.25) * (dx.ln() + dy.ln()) - T::lit(0.5) * dh.ln();
+    if b.is_finite() { b.min(T::zero()) } else { T::zero() }
+}
+
+impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
+    /// The packet's wavenumber `k`.
+    #[inline]
+    #[must_use]
+    pub fn wavenumber(&self) -> T {
+        self.k
+    }
+
+    /// The section `Ξ_½` of the packet's coherence by the surface (a covariance in `h_t`,
+    /// rad²/length², [`crate::interaction::surface_inverse_coherence`]), when this level computed
+    /// it (every level but the plane wave) and it is positive definite.
+    #[inline]
+    #[must_use]
+    pub fn section(&self) -> Option<&Gaussian<T, 2>> {
+        self.sections[2].as_ref()
+    }
+
+    /// The sections `Ξ_x`, `Ξ_y` where the level computed them (the Full level on a packet
+    /// with two shapes), with the channel intensities `S_x/S0`, `S_y/S0`.
+    #[inline]
+    #[must_use]
+    pub(crate) fn channel_sections(&self) -> Option<[(&Gaussian<T, 2>, T); 2]> {
+        match (&self.sections[0], &self.sections[1]) {
+            (Some(x), Some(y)) if !self.single_shape => Some([
+                (x, self.ln_sx.exp()),
+                (y, self.ln_sy.exp()),
+            ]),
+            _ => None,
+        }
+    }
+
+    /// The BSDF form's `S0`-free scale `α K η²/λ²` of a one-weight part when the weight `K` lies
+    /// in [1e-30, 1e30] and the product is a normal number (as [`Self::linear_scale`], per unit
+    /// `S0`).
+    #[inline]
+    pub(crate) fn unit_linear_scale(&self, weight: T, attenuation: T, eta: T) -> Option<T> {
+        if !crate::numerics::in_normal_range(weight) {
+            return None;
+        }
+        let p = weight * attenuation * (self.inv_lambda_sq * (eta * eta));
+        (p >= T::MIN_POSITIVE && p <= T::MAX).then_some(p)
+    }
+}
+
+/// `m · e^{ln_e}` for the BSDF form: 0 when the scale is below the smallest normal number (a
+/// matrix cannot keep the digits of a subnormal scale entry by entry, and 0 is a valid Mueller
+/// matrix), `±∞` for the nonzero entries beyond the largest (zeros stay 0).
+#[inline]
+pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+    ln_e: T,
+) -> nalgebra::SMatrix<T, R, C> {
+    let e = ln_e.exp();
+    if e >= T::MIN_POSITIVE && e <= T::MAX {
+        m * e
+    } else if e > T::MAX {
+        m.map(|x| if x == T::zero() { x } else { x * e })
+    } else {
+        nalgebra::SMatrix::zeros()
     }
 }

@@ -269,6 +269,67 @@ impl<T: Real, const N: usize> Grating<T, N> {
         })
     }
 
+    /// A sinusoidal **height** grating `z(x) = a sin(2π d̂·x/Λ)` as the PSD of a rough surface
+    /// (first order in the height, the model of [`crate::interaction::RoughSurface`]): the two
+    /// orders `±1` of efficiency `a²/4` each.
+    ///
+    /// # Formula
+    /// ```text
+    /// R(x) = ⟨z(x₀) z(x₀ + x)⟩ = (a²/2) cos(2π d̂·x/Λ) = (a²/4) (e^{iζ₁·x} + e^{−iζ₁·x}),   ζ₁ = (2π/Λ) d̂
+    /// p = (2π)^{n/2} (a²/4) [δ(ζ − ζ₁) + δ(ζ + ζ₁)],   σ² = R(0) = a²/2
+    /// ```
+    /// The kernel's Debye–Waller factor `exp(−(vσ)²)` then uses the height variance `a²/2`
+    /// (µm² for a µm amplitude), and the first-order model holds while `v a ≲ 0.3`. Not to be
+    /// confused with [`Grating::sinusoidal`], the *phase* grating `e^{iφ}` whose efficiencies sum
+    /// to 1 (dimensionless): in a `RoughSurface` its "variance" of 1 reads as a height variance
+    /// of 1 length² and makes the surface black (`α ≈ e^{−v²}`).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless `0 ≤ a` and `0 < Λ` are finite with `a²` and `2π/Λ` finite;
+    /// [`Error::InvalidBasis`] for a zero or non-finite direction.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::psd::{Grating, Psd};
+    /// use nalgebra::Vector2;
+    /// // 20 nm amplitude, 5 µm period, along x.
+    /// let g = Grating::<f64, 2>::sinusoidal_height(0.02, 5.0, &Vector2::x()).unwrap();
+    /// assert_eq!(g.orders().len(), 2);
+    /// assert!((g.variance() - 0.5 * 0.02 * 0.02).abs() < 1e-18);
+    /// assert!((g.orders()[0].0.x - std::f64::consts::TAU / 5.0).abs() < 1e-15);
+    /// ```
+    pub fn sinusoidal_height(
+        amplitude: T,
+        period: T,
+        direction: &SVector<T, N>,
+    ) -> Result<Self, Error> {
+        let a2 = amplitude * amplitude;
+        if !(amplitude >= T::zero() && a2.is_finite()) {
+            return Err(Error::OutOfRange {
+                what: "height amplitude",
+                value: amplitude.to_f64(),
+                expected: "finite and ≥ 0, with a² finite",
+            });
+        }
+        let quarter = a2 * T::lit(0.25);
+        let unit = Self::from_efficiencies(
+            period,
+            direction,
+            OrderCutoff {
+                max_frequency: T::MAX,
+                tail: T::zero(),
+            },
+            1,
+            |m| if m == 1 { 0.5 } else { 0.0 },
+        )?;
+        let orders = unit.orders.iter().map(|(z, _)| (*z, quarter)).collect();
+        Ok(Self {
+            orders,
+            kept: quarter + quarter,
+            dropped: T::zero(),
+        })
+    }
+
     /// A binary (rectangular) phase grating of depth `φ₀` and duty cycle `D ∈ (0, 1)`.
     ///
     /// Its efficiencies decay only like `1/m²`, so the cutoff's `tail` is reached late: without

@@ -39,6 +39,13 @@ impl<T: Real> FresnelReflection<T> {
         validate_eta(eta)?;
         Ok(Self { eta })
     }
+
+    /// The complex relative index `η = n + iκ`.
+    #[inline]
+    #[must_use]
+    pub fn index(&self) -> Complex<T> {
+        self.eta
+    }
 }
 
 impl<T: Real> Pbsdf<T> for FresnelReflection<T> {

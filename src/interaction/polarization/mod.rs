@@ -11,17 +11,25 @@
 //! `WavePacket::from_stokes` and `exitant_packet`) has three equal weights and takes the
 //! one-weight path of `OneShape`: same result, same cost.
 
+mod matrix;
+mod response;
+
+pub use response::{
+    IntensityResponse, KernelOutput, LevelResponse, MuellerResponse, Response, Throughput,
+};
+
 use core::fmt::Debug;
 
 use nalgebra::Vector4;
 
 use super::coherence::CoherenceWeights;
-use super::geometry::{Geometry, Side};
+use super::geometry::Geometry;
 use super::material::RoughSurface;
 use super::pbsdf::Pbsdf;
 use super::prepared::{Plan, PreparedPacket};
 use crate::packet::WavePacket;
 use crate::psd::Psd;
+use crate::mueller::Mueller;
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -38,217 +46,6 @@ pub enum PolarizationLevel {
     OneShape,
     /// Full S2.20: `Θ_x`, `Θ_y`, `Θ_½`.
     Full,
-}
-
-/// What a kernel returns for one exit direction, at any level: the intensities, and the
-/// Stokes vectors where the level computes them.
-pub trait KernelOutput<T: Real>: Copy + Debug + PartialEq {
-    /// `S0` of the coherent specular (direct) lobe, attenuation included.
-    #[must_use]
-    fn specular_intensity(&self) -> T;
-    /// `S0` of the scattered part, attenuation included.
-    #[must_use]
-    fn scattered_intensity(&self) -> T;
-    /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
-    #[must_use]
-    fn attenuation(&self) -> T;
-    /// The side the light left on: reflection or transmission ([`Geometry::side`]).
-    #[must_use]
-    fn side(&self) -> Side;
-    /// `(specular, scattered)` Stokes radiances in the exit s/p frame; `None` at the
-    /// [`Intensity`] level, which does not compute them (it is not "unpolarized").
-    #[must_use]
-    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)>;
-    /// `specular + scattered` intensity.
-    #[inline]
-    #[must_use]
-    fn total_intensity(&self) -> T {
-        self.specular_intensity() + self.scattered_intensity()
-    }
-    /// The output as a [`LevelResponse`] (so that one type holds the output of any level).
-    #[must_use]
-    fn into_level_response(self) -> LevelResponse<T>;
-    /// Every radiance multiplied by `factor` (the attenuation unchanged), e.g. `1/pdf`.
-    #[must_use]
-    fn scaled(&self, factor: T) -> Self;
-}
-
-/// What a kernel of a run-time [`super::Level`] returns: the level's own output.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum LevelResponse<T: Real> {
-    /// From the [`Intensity`] level.
-    Intensity(IntensityResponse<T>),
-    /// From the [`OneShape`] or [`Full`] level.
-    Stokes(Response<T>),
-}
-
-impl<T: Real> KernelOutput<T> for LevelResponse<T> {
-    #[inline]
-    fn specular_intensity(&self) -> T {
-        match self {
-            Self::Intensity(r) => r.specular,
-            Self::Stokes(r) => r.specular.s0(),
-        }
-    }
-    #[inline]
-    fn scattered_intensity(&self) -> T {
-        match self {
-            Self::Intensity(r) => r.scattered,
-            Self::Stokes(r) => r.scattered.s0(),
-        }
-    }
-    #[inline]
-    fn attenuation(&self) -> T {
-        match self {
-            Self::Intensity(r) => r.attenuation,
-            Self::Stokes(r) => r.attenuation,
-        }
-    }
-    #[inline]
-    fn side(&self) -> Side {
-        match self {
-            Self::Intensity(r) => r.side,
-            Self::Stokes(r) => r.side,
-        }
-    }
-    #[inline]
-    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
-        match self {
-            Self::Intensity(_) => None,
-            Self::Stokes(r) => Some((r.specular, r.scattered)),
-        }
-    }
-    #[inline]
-    fn into_level_response(self) -> LevelResponse<T> {
-        self
-    }
-    #[inline]
-    fn scaled(&self, factor: T) -> Self {
-        match self {
-            Self::Intensity(r) => Self::Intensity(r.scaled(factor)),
-            Self::Stokes(r) => Self::Stokes(r.scaled(factor)),
-        }
-    }
-}
-
-/// The [`OneShape`] and [`Full`] levels' answer for one exit direction: Stokes radiances in the
-/// exit s/p frame ([`Geometry::exit_sp`]), in the exit medium.
-///
-/// The four lobes of an interface are told apart by the side and the part: reflected or
-/// transmitted ([`Response::side`]), coherent specular (the mirror or Snell lobe, widened by the
-/// coherence) or scattered.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Response<T: Real> {
-    /// The coherent specular (direct) lobe, attenuation included.
-    pub specular: Stokes<T>,
-    /// The scattered (diffuse) part, attenuation included.
-    pub scattered: Stokes<T>,
-    /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
-    pub attenuation: T,
-    /// The side the light left on (the geometry's [`Geometry::side`]).
-    pub side: Side,
-}
-
-impl<T: Real> Response<T> {
-    /// `specular + scattered`.
-    #[must_use]
-    pub fn total(&self) -> Stokes<T> {
-        Stokes(self.specular.0 + self.scattered.0)
-    }
-}
-
-impl<T: Real> KernelOutput<T> for Response<T> {
-    #[inline]
-    fn specular_intensity(&self) -> T {
-        self.specular.s0()
-    }
-    #[inline]
-    fn scattered_intensity(&self) -> T {
-        self.scattered.s0()
-    }
-    #[inline]
-    fn attenuation(&self) -> T {
-        self.attenuation
-    }
-    #[inline]
-    fn side(&self) -> Side {
-        self.side
-    }
-    #[inline]
-    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
-        Some((self.specular, self.scattered))
-    }
-    #[inline]
-    fn into_level_response(self) -> LevelResponse<T> {
-        LevelResponse::Stokes(self)
-    }
-    #[inline]
-    fn scaled(&self, factor: T) -> Self {
-        Self {
-            specular: Stokes(self.specular.0 * factor),
-            scattered: Stokes(self.scattered.0 * factor),
-            attenuation: self.attenuation,
-            side: self.side,
-        }
-    }
-}
-
-/// The [`Intensity`] level's answer for one exit direction: radiances `L₀` only (in the exit
-/// medium).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct IntensityResponse<T: Real> {
-    /// `L₀` of the coherent specular (direct) lobe, attenuation included.
-    pub specular: T,
-    /// `L₀` of the scattered (diffuse) part, attenuation included.
-    pub scattered: T,
-    /// The roughness (Debye–Waller) attenuation `α` applied to both parts.
-    pub attenuation: T,
-    /// The side the light left on (the geometry's [`Geometry::side`]).
-    pub side: Side,
-}
-
-impl<T: Real> IntensityResponse<T> {
-    /// `specular + scattered`.
-    #[must_use]
-    pub fn total(&self) -> T {
-        self.specular + self.scattered
-    }
-}
-
-impl<T: Real> KernelOutput<T> for IntensityResponse<T> {
-    #[inline]
-    fn specular_intensity(&self) -> T {
-        self.specular
-    }
-    #[inline]
-    fn scattered_intensity(&self) -> T {
-        self.scattered
-    }
-    #[inline]
-    fn attenuation(&self) -> T {
-        self.attenuation
-    }
-    #[inline]
-    fn side(&self) -> Side {
-        self.side
-    }
-    #[inline]
-    fn stokes(&self) -> Option<(Stokes<T>, Stokes<T>)> {
-        None
-    }
-    #[inline]
-    fn into_level_response(self) -> LevelResponse<T> {
-        LevelResponse::Intensity(self)
-    }
-    #[inline]
-    fn scaled(&self, factor: T) -> Self {
-        Self {
-            specular: self.specular * factor,
-            scattered: self.scattered * factor,
-            attenuation: self.attenuation,
-            side: self.side,
-        }
-    }
 }
 
 /// How much of the polarization a kernel keeps (a model level), and how it evaluates S2.20.
@@ -275,6 +72,26 @@ pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> Self::Output<T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>;
+
+    /// What the level's BSDF form holds per lobe: a Mueller matrix at the Stokes levels, a
+    /// scalar at the intensity level.
+    type Throughput<T: Real>: Throughput<T>;
+
+    /// The level's S2.20 for one exit direction `g` in BSDF form: per unit incident
+    /// irradiance, acting on Stokes vectors in the packet's frame ([`MuellerResponse`]).
+    #[must_use]
+    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> MuellerResponse<T, Self::Throughput<T>>
     where
         T: Real,
         P: Psd<T, 2>,
@@ -395,6 +212,25 @@ where
 }
 
 impl PolarizationModel for Intensity {
+
+    type Throughput<T: Real> = T;
+
+    #[inline]
+    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> MuellerResponse<T, T>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>,
+    {
+        matrix::intensity(coherence, material, prepared, g)
+    }
     const LEVEL: PolarizationLevel = PolarizationLevel::Intensity;
     type Output<T: Real> = IntensityResponse<T>;
 
@@ -446,6 +282,25 @@ impl PolarizationModel for Intensity {
 }
 
 impl PolarizationModel for OneShape {
+
+    type Throughput<T: Real> = Mueller<T>;
+
+    #[inline]
+    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> MuellerResponse<T, Mueller<T>>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>,
+    {
+        matrix::one_shape(coherence, material, prepared, g)
+    }
     const LEVEL: PolarizationLevel = PolarizationLevel::OneShape;
     type Output<T: Real> = Response<T>;
 
@@ -473,6 +328,29 @@ impl PolarizationModel for OneShape {
 }
 
 impl PolarizationModel for Full {
+
+    type Throughput<T: Real> = Mueller<T>;
+
+    #[inline]
+    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+        coherence: &Coh,
+        material: &RoughSurface<P, Sp, Sc>,
+        prepared: &PreparedPacket<T, Self, Coh>,
+        g: &Geometry<T>,
+    ) -> MuellerResponse<T, Mueller<T>>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, P>,
+    {
+        if !Coh::USES_SHAPE || prepared.single_shape {
+            matrix::one_shape(coherence, material, prepared, g)
+        } else {
+            matrix::full(coherence, material, prepared, g)
+        }
+    }
     const LEVEL: PolarizationLevel = PolarizationLevel::Full;
     type Output<T: Real> = Response<T>;
 

@@ -1,0 +1,557 @@
+//! The layer a renderer calls: the kernel of [`crate::interaction`] as a BSDF — evaluation in
+//! Mueller form with lobe flags, sampling and pdf in both tracing directions, and the
+//! coherence one sample of light carries. `docs/renderer.md` is the guide.
+//!
+//! # Radiometry
+//! ```text
+//! M(ŝ → r̂) = f(ŝ → r̂) · cos θ_i          (per unit incident irradiance across the beam)
+//! L_o(r̂)   = M S                          (S the beam irradiance of a packet: radiance × solid angle)
+//! L_o(r̂)   = ∫ M(ŝ → r̂) L_i(ŝ) dω_s       (backward: an estimate is M L_i / p(ŝ))
+//! ρ(ŝ)     = ∫ M(ŝ → r̂) cos θ_o dω_o / cos θ_i    (the albedo; forward: M cos θ_o/(cos θ_i p(r̂)))
+//! ```
+//! [`Bsdf::eval`] returns `M` (Mitsuba's `BSDF::eval` convention, `f · |cos|` of the light
+//! direction), as a throughput: a Mueller matrix at the Stokes levels, `M₀₀` at the intensity
+//! level ([`Throughput`]). In transmission `M` is radiance in the exit medium: it carries the
+//! `n²` of radiance across the interface.
+//!
+//! # Frames
+//! `M` acts on Stokes vectors in the incident packet's frame and returns them in the exit s/p
+//! frame ([`Geometry::exit_sp`] of [`BsdfValue::geometry`]): `x̂ = ŝ_perp` (perpendicular to the
+//! plane of exitance), `ŷ = p̂`, `k̂ = r̂`. The source helpers ([`sources`], [`Bsdf::surface_packet`])
+//! build packets in the incident s/p frame ([`Geometry::incident_sp`]), where the rotation `T`
+//! of the kernel is the identity; a path's throughput is chained with
+//! [`Throughput::frame_change`] from one vertex's exit frame to the next vertex's incident
+//! frame (the same ray). S3 follows this crate's `e^{−iωt}` (Mitsuba 3 prints the opposite sign:
+//! [`crate::frame::convention`]).
+//!
+//! # Lobes
+//! Each evaluation holds the coherent specular lobe (mirror or Snell direction, widened by the
+//! coherence) and the scattered part separately ([`crate::interaction::MuellerResponse`]), on
+//! the side of the exit direction. At the plane-wave level the specular lobe (and a grating's
+//! orders) are Dirac deltas: `eval` leaves them out and [`Bsdf::flags`] says
+//! [`LobeFlags::DELTA`]; the samplers draw them with their probability and return their
+//! throughput ([`BsdfSample`]).
+//!
+//! # Reciprocity
+//! The plane-wave level is reciprocal, `M(b → a) = D M(a → b)ᵀ D` with `D = diag(1, 1, −1, 1)`
+//! in reflection (and `f_t(i → o)/n_o² = f_t(o → i)/n_i²` across an interface). The partially
+//! coherent kernel is **not**: the incident footprint (the section `Ξ` of the light's
+//! coherence) enters, and it belongs to the light, not to the exit direction. A backward
+//! tracer therefore samples ŝ for a given r̂ ([`Bsdf::incident_sampler`]) but always
+//! **evaluates in the physical direction**, `M(ŝ → r̂)` with the coherence of the light arriving
+//! along ŝ — never `M(r̂ → ŝ)` with the roles swapped (`tests/bsdf_reciprocity.rs` measures
+//! what swapping costs).
+//!
+//! # Cost (no heap allocation anywhere)
+//! [`Bsdf::prepare`] once per light packet (the kernel's per-packet work), then [`Bsdf::eval`]
+//! per exit direction; a sampler is built per shading point (a 2×2 Cholesky factor per lobe,
+//! one Fresnel evaluation) and draws in closed form. Measured in `benches/bsdf.rs`.
+
+mod flags;
+mod interface;
+mod lobes;
+mod sampler;
+pub mod sources;
+
+pub use flags::LobeFlags;
+pub use interface::Interface;
+pub use lobes::{PsdLobes, SamplingPsd};
+pub use sampler::{DirectionSample, LobeSampler, Part, SampledLobe};
+pub use sources::{SurfaceCoherence, area_light, distant_disk};
+
+use nalgebra::{Matrix2, Vector3};
+
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::interaction::{
+    CoherenceLevel, CoherenceWeights, Geometry, Kernel, MuellerResponse, Pbsdf,
+    PolarizationModel, PreparedPacket, RoughSurface, Throughput,
+};
+use crate::mueller::Mueller;
+use crate::packet::WavePacket;
+use crate::real::Real;
+use crate::stokes::Stokes;
+use sampler::Setup;
+
+/// A material at one shading point, for one wavelength, at the kernel's model level: what a
+/// renderer calls (module docs).
+///
+/// `surface` is the shading frame (t̂₁, t̂₂, n̂) ([`Frame::from_normal`] builds one from a normal);
+/// for a dielectric n̂ points into the medium "above" (out of the glass for glass in air,
+/// [`crate::interaction::RoughDielectric`]'s `η = n_below/n_above`); an opaque material is lit
+/// and seen from the side n̂ points to. `wavelength` is the light's wavelength in the medium
+/// above (the vacuum wavelength for an object in air); below an interface it is `λ/η`.
+///
+/// # Examples
+/// ```
+/// use gmueller::bsdf::{Bsdf, SurfaceCoherence};
+/// use gmueller::frame::Frame;
+/// use gmueller::interaction::{Full, Kernel, Partial, RoughDielectric};
+/// use gmueller::psd::GaussianPsd;
+/// use gmueller::stokes::Stokes;
+/// use nalgebra::Vector3;
+///
+/// let glass = RoughDielectric::new(GaussianPsd::<f64, 2>::isotropic(0.01, 2.0)?, 1.5)?;
+/// let frame = Frame::from_normal(Vector3::z())?;
+/// let bsdf = Bsdf::new(&glass, Kernel::<Full, Partial>::default(), frame, 0.5)?;
+/// // Backward: the camera looks along −r̂; draw the direction the light comes from.
+/// let to_camera = Vector3::new(0.3, 0.1, 0.95);
+/// let sky = SurfaceCoherence::new(20.0)?; // 20 µm on the surface
+/// let sampler = bsdf.incident_sampler(to_camera, &sky)?;
+/// if let Some(s) = sampler.sample(0.4, [0.2, 0.7]) {
+///     assert!((sampler.pdf(&s.direction) - s.pdf).abs() <= 1e-12 * s.pdf || s.lobe.delta);
+///     // The light arriving along s.direction, with the assumed coherence, evaluated in the
+///     // physical direction (ŝ → r̂):
+///     let light = bsdf.surface_packet(Stokes::unpolarized(1.0)?, s.direction, &sky)?;
+///     let v = bsdf.eval(&bsdf.prepare(&light)?, to_camera)?;
+///     assert!(v.response.total().matrix()[(0, 0)] >= 0.0);
+/// }
+/// # Ok::<(), gmueller::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh> {
+    material: &'m RoughSurface<P, Sp, Sc>,
+    kernel: Kernel<Pol, Coh>,
+    surface: Frame<T>,
+    k_above: T,
+    eta: Option<T>,
+}
+
+/// A light packet prepared at a shading point ([`Bsdf::prepare`]): the kernel's per-packet
+/// work, the direction to the source and the medium it arrives in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Incident<T: Real, Pol, Coh> {
+    prepared: PreparedPacket<T, Pol, Coh>,
+    to_source: Vector3<T>,
+    facing: Frame<T>,
+    from_below: bool,
+}
+
+impl<T: Real, Pol, Coh> Incident<T, Pol, Coh> {
+    /// ŝ, the unit direction toward the source.
+    #[must_use]
+    pub fn to_source(&self) -> Vector3<T> {
+        self.to_source
+    }
+
+    /// The kernel's per-packet work.
+    #[must_use]
+    pub fn prepared(&self) -> &PreparedPacket<T, Pol, Coh> {
+        &self.prepared
+    }
+}
+
+/// [`Bsdf::eval`]'s answer: the kernel in BSDF form and the geometry it was evaluated in
+/// (its [`Geometry::exit_sp`] is the output frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BsdfValue<T: Real, M> {
+    /// The specular and scattered throughputs, per unit incident irradiance.
+    pub response: MuellerResponse<T, M>,
+    /// The geometry (frames, angles, side).
+    pub geometry: Geometry<T>,
+}
+
+/// A sampled direction with its Monte Carlo weight ([`Bsdf::sample_exit`],
+/// [`Bsdf::sample_incident`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BsdfSample<T: Real, M> {
+    /// The direction, its pdf and lobe.
+    pub sample: DirectionSample<T>,
+    /// The Monte Carlo weight: forward, the fraction of the incident power carried,
+    /// `M cos θ_o/(cos θ_i p)`; backward, the radiance throughput `M/p` (module docs). For a
+    /// delta lobe, the lobe's integral in place of `M`, divided by its probability.
+    pub weight: M,
+    /// The geometry of the sampled pair of directions (frames: `weight` maps the incident
+    /// packet's frame to [`Geometry::exit_sp`]).
+    pub geometry: Geometry<T>,
+}
+
+/// What [`Bsdf::sample_exit`] and [`Bsdf::sample_incident`] return: a weighted sample, `None`
+/// for an evanescent draw.
+pub type SampleResult<T, Pol> =
+    Result<Option<BsdfSample<T, <Pol as PolarizationModel>::Throughput<T>>>, Error>;
+
+/// `true` when two wavenumbers agree within 16 ulps.
+fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
+    (a - b).abs() <= T::lit(16.0) * T::EPSILON * a.abs().max(b.abs())
+}
+
+/// `v/|v|`, rejecting zero and non-finite directions.
+fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
+    crate::error::ensure_finite(what, v.iter().copied())?;
+    crate::numerics::unit_by_largest(&v).ok_or(Error::InvalidBasis {
+        reason: "zero direction vector",
+    })
+}
+
+impl<'m, T, P, Sp, Sc, Pol, Coh> Bsdf<'m, T, P, Sp, Sc, Pol, Coh>
+where
+    T: Real,
+    P: SamplingPsd<T>,
+    Sp: Interface<T>,
+    Sc: Pbsdf<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, P>,
+{
+    /// The material `material` at the shading frame `surface`, at `wavelength` (in the medium
+    /// above; see the type docs), evaluated by `kernel`.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless the wavelength is finite and positive with the wavenumbers
+    /// of both media normal numbers.
+    pub fn new(
+        material: &'m RoughSurface<P, Sp, Sc>,
+        kernel: Kernel<Pol, Coh>,
+        surface: Frame<T>,
+        wavelength: T,
+    ) -> Result<Self, Error> {
+        let k = T::two_pi() / wavelength;
+        let eta = material.specular.transmission_index();
+        let normal = |x: T| x.is_finite() && x >= T::MIN_POSITIVE;
+        if !(wavelength > T::zero() && normal(k) && eta.is_none_or(|e| normal(e * k))) {
+            return Err(Error::OutOfRange {
+                what: "wavelength at the shading point",
+                value: wavelength.to_f64(),
+                expected: "finite and > 0, with 2π/λ (and η 2π/λ) normal numbers",
+            });
+        }
+        Ok(Self {
+            material,
+            kernel,
+            surface,
+            k_above: k,
+            eta,
+        })
+    }
+
+    /// The shading frame.
+    #[must_use]
+    pub fn surface(&self) -> &Frame<T> {
+        &self.surface
+    }
+
+    /// The lobes this BSDF has ([`LobeFlags`]).
+    #[must_use]
+    pub fn flags(&self) -> LobeFlags {
+        let mut f = LobeFlags::REFLECTION;
+        if self.eta.is_some() {
+            f = f | LobeFlags::TRANSMISSION;
+        }
+        let delta = Coh::LEVEL == CoherenceLevel::PlaneWave;
+        f = f | if delta {
+            LobeFlags::DELTA
+        } else {
+            LobeFlags::COHERENT_SPECULAR
+        };
+        if self.material.psd.variance() > T::zero() {
+            f = f | match (self.material.psd.lobes(), delta) {
+                (PsdLobes::None, _) => LobeFlags::NONE,
+                (PsdLobes::Orders(_) | PsdLobes::Origin, true) => LobeFlags::DELTA,
+                _ => LobeFlags::SCATTERED,
+            };
+        }
+        f
+    }
+
+    /// The wavenumber of the medium on the side of `direction` (pointing away from the
+    /// surface): `2π/λ` above, `η 2π/λ` below an interface.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] for a direction in the plane of the surface, or below an opaque
+    /// one.
+    pub fn wavenumber(&self, direction: &Vector3<T>) -> Result<T, Error> {
+        let c = direction.dot(&self.surface.k());
+        if c > T::zero() {
+            return Ok(self.k_above);
+        }
+        match self.eta {
+            Some(eta) if c < T::zero() => Ok(self.k_above * eta),
+            _ => Err(Error::OutOfRange {
+                what: "direction at the shading point (in the surface's plane, or below an opaque surface)",
+                value: c.to_f64(),
+                expected: "> 0 (opaque), ≠ 0 (interface)",
+            }),
+        }
+    }
+
+    /// The wavelength of the medium on the side of `direction` (what a packet arriving from
+    /// there must carry).
+    ///
+    /// # Errors
+    /// As [`Bsdf::wavenumber`].
+    pub fn wavelength(&self, direction: &Vector3<T>) -> Result<T, Error> {
+        Ok(T::two_pi() / self.wavenumber(direction)?)
+    }
+
+    /// The geometry of light from `to_source` leaving along `exit` at this shading point
+    /// ([`Geometry::at_interface`] for a dielectric, [`Geometry::new`] for an opaque surface),
+    /// at the wavenumber of the source's medium.
+    ///
+    /// # Errors
+    /// As those constructors, and as [`Bsdf::wavenumber`] for ŝ.
+    pub fn geometry(&self, to_source: Vector3<T>, exit: Vector3<T>) -> Result<Geometry<T>, Error> {
+        let k = self.wavenumber(&to_source)?;
+        match self.eta {
+            Some(eta) => Geometry::at_interface(k, &self.surface, eta, to_source, exit),
+            None => Geometry::new(k, &self.surface, to_source, exit),
+        }
+    }
+
+    /// A packet arriving from `to_source` with surface-isotropic coherence `coherence`
+    /// ([`SurfaceCoherence::packet`]) at the wavelength of the source's medium, carrying
+    /// `stokes` in the incident s/p frame.
+    ///
+    /// # Errors
+    /// As [`SurfaceCoherence::packet`] and [`Bsdf::wavenumber`].
+    pub fn surface_packet(
+        &self,
+        stokes: Stokes<T>,
+        to_source: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<WavePacket<T>, Error> {
+        let lambda = self.wavelength(&to_source)?;
+        coherence.packet(stokes, to_source, &self.surface, lambda)
+    }
+
+    /// The kernel's per-packet work for `packet` at this shading point.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] when the packet's wavelength is not the one of the medium it
+    /// arrives from ([`Bsdf::wavelength`] of `−k̂`, within 16 ulps): a packet built for another
+    /// wavelength, or for the vacuum wavelength inside glass; as [`Kernel::prepare`].
+    pub fn prepare(&self, packet: &WavePacket<T>) -> Result<Incident<T, Pol, Coh>, Error> {
+        let s = -packet.direction();
+        let k = self.wavenumber(&s)?;
+        if !same_wavenumber(k, packet.wavenumber()) {
+            return Err(Error::OutOfRange {
+                what: "packet wavelength (not the wavelength of the medium it arrives from)",
+                value: packet.wavelength().to_f64(),
+                expected: "Bsdf::wavelength(−k̂): λ above the surface, λ/η below an interface",
+            });
+        }
+        let facing = self.surface.facing(&s);
+        Ok(Incident {
+            prepared: self.kernel.prepare(packet, &facing)?,
+            to_source: s,
+            facing,
+            from_below: s.dot(&self.surface.k()) < T::zero(),
+        })
+    }
+
+    /// The kernel in BSDF form for the prepared packet leaving along `exit`: `M(ŝ → r̂)` per
+    /// lobe (module docs; Dirac lobes excluded).
+    ///
+    /// # Errors
+    /// As [`Bsdf::geometry`].
+    pub fn eval(
+        &self,
+        incident: &Incident<T, Pol, Coh>,
+        exit: Vector3<T>,
+    ) -> Result<BsdfValue<T, Pol::Throughput<T>>, Error> {
+        let g = self.geometry(incident.to_source, exit)?;
+        Ok(BsdfValue {
+            response: self
+                .kernel
+                .evaluate_mueller_prepared(self.material, &incident.prepared, &g),
+            geometry: g,
+        })
+    }
+
+    /// The kernel's Stokes form for the prepared packet leaving along `exit` (what
+    /// `eval(..).response.apply(&packet.stokes())` equals, with the kernel's log-space range).
+    ///
+    /// # Errors
+    /// As [`Bsdf::geometry`].
+    pub fn eval_stokes(
+        &self,
+        incident: &Incident<T, Pol, Coh>,
+        exit: Vector3<T>,
+    ) -> Result<Pol::Output<T>, Error> {
+        let g = self.geometry(incident.to_source, exit)?;
+        Ok(self
+            .kernel
+            .evaluate_prepared(self.material, &incident.prepared, &g))
+    }
+
+    /// The sampler of exit directions for the prepared packet (forward tracing): its lobes are
+    /// the packet's own (the sections `Ξ` of its coherence).
+    ///
+    /// # Errors
+    /// [`Error::NotPositiveDefinite`] when a lobe covariance over- or underflows the type.
+    pub fn exit_sampler(
+        &self,
+        incident: &Incident<T, Pol, Coh>,
+    ) -> Result<LobeSampler<'m, T>, Error> {
+        let prepared = &incident.prepared;
+        let k = prepared.wavenumber();
+        let k_across = self
+            .eta
+            .map(|e| if incident.from_below { k / e } else { k * e });
+        let cos_i = incident.to_source.dot(&incident.facing.k());
+        let reflectance = self.material.specular.reflectance(cos_i, incident.from_below);
+        let section = prepared.section().map(|g| *g.covariance());
+        let (level, specular) = match (Coh::USES_SHAPE, section) {
+            (true, None) => (CoherenceLevel::PlaneWave, false),
+            _ => (Coh::LEVEL, true),
+        };
+        let (channels, channel_count) = match (prepared.channel_sections(), section) {
+            (Some([(x, wx), (y, wy)]), _) => {
+                let total = wx + wy;
+                (
+                    [(wx / total, *x.covariance()), (wy / total, *y.covariance())],
+                    2,
+                )
+            }
+            (None, Some(xi)) => ([(T::one(), xi), (T::zero(), xi)], 1),
+            (None, None) => ([(T::one(), Matrix2::identity()); 2], 0),
+        };
+        self.sampler(&Setup {
+            known: incident.to_source,
+            facing: incident.facing,
+            k_known: k,
+            k_across,
+            forward: true,
+            reflectance,
+            variance: self.material.psd.variance(),
+            lobes: self.material.psd.lobes(),
+            level,
+            specular,
+            channels,
+            channel_count,
+            blur: if level == CoherenceLevel::PlaneWave {
+                None
+            } else {
+                section
+            },
+        })
+    }
+
+    /// The sampler of directions to the source for light leaving along `exit` (backward
+    /// tracing), for light arriving with the surface coherence `coherence` (module docs,
+    /// "Reciprocity"; [`sources`]).
+    ///
+    /// # Errors
+    /// As [`Bsdf::wavenumber`] for `exit`; [`Error::NotPositiveDefinite`] when a lobe
+    /// covariance over- or underflows the type.
+    pub fn incident_sampler(
+        &self,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<LobeSampler<'m, T>, Error> {
+        let r = unit(exit, "exit direction")?;
+        let k = self.wavenumber(&r)?;
+        let below = r.dot(&self.surface.k()) < T::zero();
+        let k_across = self
+            .eta
+            .map(|e| if below { self.k_above } else { self.k_above * e });
+        let facing = self.surface.facing(&r);
+        let cos_o = r.dot(&facing.k());
+        let xi = coherence.inverse_coherence();
+        let plane = Coh::LEVEL == CoherenceLevel::PlaneWave;
+        self.sampler(&Setup {
+            known: r,
+            facing,
+            k_known: k,
+            k_across,
+            forward: false,
+            reflectance: self.material.specular.reflectance(cos_o, below),
+            variance: self.material.psd.variance(),
+            lobes: self.material.psd.lobes(),
+            level: Coh::LEVEL,
+            specular: true,
+            channels: [(T::one(), xi), (T::zero(), xi)],
+            channel_count: usize::from(!plane),
+            blur: (!plane).then_some(xi),
+        })
+    }
+
+    fn sampler(&self, setup: &Setup<'m, T>) -> Result<LobeSampler<'m, T>, Error> {
+        LobeSampler::new(setup).ok_or(Error::NotPositiveDefinite {
+            what: "sampling lobe covariance (over- or underflows the scalar type)",
+            min_eigenvalue: 0.0,
+        })
+    }
+
+    /// The integral of a Dirac lobe of geometry `g` and PSD weight `w`: `α M_part T w`.
+    fn delta_integral(&self, g: &Geometry<T>, lobe: &SampledLobe, w: T, t: &Mueller<T>) -> Mueller<T> {
+        let m = match lobe.part {
+            Part::Specular => self.material.specular.mueller(g),
+            Part::Scattered => self.material.scatter.mueller(g),
+        };
+        let v = g.phase_factor();
+        let alpha = (-(v * v) * self.material.psd.variance()).exp();
+        Mueller((m * *t).0 * (alpha * w))
+    }
+
+    /// Draws an exit direction for the prepared packet and weighs it: the fraction of the
+    /// incident power it carries, `M cos θ_o/(cos θ_i p)` (a Mueller matrix from the packet's
+    /// frame to the exit s/p frame at the Stokes levels), so that its mean over draws is the
+    /// albedo ([`BsdfSample::weight`]). `None` for an evanescent draw.
+    ///
+    /// # Errors
+    /// As [`Bsdf::exit_sampler`] and [`Bsdf::geometry`].
+    pub fn sample_exit(
+        &self,
+        incident: &Incident<T, Pol, Coh>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> SampleResult<T, Pol> {
+        let Some(s) = self.exit_sampler(incident)?.sample(u_lobe, u) else {
+            return Ok(None);
+        };
+        let g = self.geometry(incident.to_source, s.direction)?;
+        let flux = g.cos_o() / g.cos_i();
+        let weight = if s.lobe.delta {
+            let t = Mueller(incident.prepared.t);
+            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &t);
+            Pol::Throughput::<T>::from_mueller(&m).scaled(flux / s.pdf)
+        } else {
+            let v = self
+                .kernel
+                .evaluate_mueller_prepared(self.material, &incident.prepared, &g);
+            v.total().scaled(flux / s.pdf)
+        };
+        Ok(Some(BsdfSample {
+            sample: s,
+            weight,
+            geometry: g,
+        }))
+    }
+
+    /// Draws a direction to the source for light leaving along `exit`, arriving with the
+    /// surface coherence `coherence`, and weighs it: the radiance throughput `M(ŝ → r̂)/p(ŝ)`
+    /// evaluated in the physical direction (a Mueller matrix from the incident s/p frame of ŝ
+    /// to the exit s/p frame at the Stokes levels). `None` for an evanescent draw.
+    ///
+    /// # Errors
+    /// As [`Bsdf::incident_sampler`], [`Bsdf::surface_packet`] and [`Bsdf::geometry`].
+    pub fn sample_incident(
+        &self,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> SampleResult<T, Pol> {
+        let Some(s) = self.incident_sampler(exit, coherence)?.sample(u_lobe, u) else {
+            return Ok(None);
+        };
+        let g = self.geometry(s.direction, exit)?;
+        let weight = if s.lobe.delta {
+            // The delta's integral over ŝ: (k_o² cos θ_o)/(k_i² cos θ_i) times its integral over r̂.
+            let ratio = g.relative_index();
+            let jac = ratio * ratio * g.cos_o() / g.cos_i();
+            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &Mueller::identity());
+            Pol::Throughput::<T>::from_mueller(&m).scaled(jac / s.pdf)
+        } else {
+            let light = self.surface_packet(Stokes::unpolarized(T::one())?, s.direction, coherence)?;
+            let v = self.eval(&self.prepare(&light)?, exit)?;
+            v.response.total().scaled(T::one() / s.pdf)
+        };
+        Ok(Some(BsdfSample {
+            sample: s,
+            weight,
+            geometry: g,
+        }))
+    }
+}
+

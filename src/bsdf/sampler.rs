@@ -1,0 +1,630 @@
+//! The lobe-mixture sampler: one direction from three uniforms, in either tracing direction,
+//! with a density that is the sampler's own exactly.
+//!
+//! # Formula
+//! Both directions point away from the surface; the known one (`d_a`, wavenumber `k_a` of its
+//! medium) is the direction to the source when tracing forward (sampling the exit r̂) and the
+//! exit direction when tracing backward (sampling the direction to the source ŝ):
+//! ```text
+//! h_t = k_a u_a + k_b u_b          (u = the tangential components, in the frame the kernel uses)
+//! u_b = (h_t − k_a u_a)/k_b,       p_ω(d_b) = p_h(h_t) · k_b² |cos θ_b|          (d²h_t = k_b² cos θ_b dω_b)
+//! p_h = Σ_parts P_part · p_part(h_t)                                           (the lobes of `lobes.rs`)
+//! ```
+//! `k_b = k_a` on the known side (reflection) and the other medium's wavenumber across an
+//! interface (transmission). A draw whose `|u_b| ≥ 1` (evanescent) is rejected; Dirac lobes
+//! (the specular lobe of a plane wave, grating orders of a plane wave) are drawn with their
+//! probability and excluded from the density, as pbrt and Mitsuba do.
+//!
+//! # Part probabilities
+//! ```text
+//! E = [R α_r,  R (1 − α_r),  T α_t,  T (1 − α_t)]      (reflected/transmitted × specular/scattered)
+//! R = Fresnel reflectance at the known angle,  T = 1 − R (0 for a conductor, and for the specular
+//! part where no Snell partner exists),  α = exp(−(vσ)²) at the specular direction of the side
+//! P = (1 − ε) E/ΣE + ε/n           over the n parts that exist,  ε = 1/50
+//! ```
+//! (the Kirchhoff estimate of each part's energy, which the first-order kernel follows to
+//! `(vσ)²`; the floor `ε` keeps every existing part drawable, e.g. the scattered transmission
+//! under total internal reflection, whose estimate is 0).
+
+use nalgebra::{Matrix2, Vector2, Vector3};
+
+use super::lobes::{GaussLobe, PowerLobe, PsdLobes};
+use crate::frame::Frame;
+use crate::interaction::{CoherenceLevel, Side};
+use crate::psd::GaussianPsd;
+use crate::real::Real;
+
+/// The floor `ε` of the part probabilities (module docs).
+const PART_FLOOR: f64 = 1.0 / 50.0;
+/// The weight of a blurred grating order whose centre lies beyond the propagating directions
+/// (by more than three blur widths), relative to its efficiency.
+const HIDDEN_ORDER_WEIGHT: f64 = 1e-3;
+
+/// Which part of the kernel a sample was drawn from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Part {
+    /// The coherent specular lobe (mirror or Snell direction, widened by the coherence).
+    Specular,
+    /// The scattered part (the PSD's lobes, grating orders).
+    Scattered,
+}
+
+/// The lobe a sample came from: side, part, and whether it is a Dirac delta.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SampledLobe {
+    /// Reflection or transmission.
+    pub side: Side,
+    /// Specular or scattered.
+    pub part: Part,
+    /// A Dirac delta (the specular lobe, or a grating order, at the plane-wave level): the
+    /// sample's `pdf` is then the probability of choosing it, and its value is not in `eval`.
+    pub delta: bool,
+}
+
+/// One direction drawn by the sampler.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionSample<T: Real> {
+    /// The drawn unit direction, pointing away from the surface (the exit r̂ when tracing
+    /// forward, the direction to the source ŝ when tracing backward).
+    pub direction: Vector3<T>,
+    /// Its density per unit solid angle, equal to the sampler's `pdf(direction)`; for a delta
+    /// lobe the probability of having chosen it.
+    pub pdf: T,
+    /// The lobe it was drawn from.
+    pub lobe: SampledLobe,
+    /// For a delta lobe, its weight in the PSD: `η_m` of a grating order, `R(0)` of a smooth
+    /// PSD's order, 1 for the specular delta; 0 otherwise.
+    pub delta_weight: T,
+}
+
+/// The map between `h_t` and the unknown direction on one side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SideMap<T: Real> {
+    t1: Vector3<T>,
+    t2: Vector3<T>,
+    /// The normal of the unknown direction's half-space.
+    n: Vector3<T>,
+    /// `k_a u_a` in this side's tangent frame.
+    known_h: Vector2<T>,
+    /// `k_b`.
+    k: T,
+}
+
+impl<T: Real> SideMap<T> {
+    /// `h_t` of an unknown direction `d` (unit) on this side, `None` if `d` is not in its
+    /// half-space.
+    #[inline]
+    fn h_of(&self, d: &Vector3<T>) -> Option<(Vector2<T>, T)> {
+        let c = d.dot(&self.n);
+        (c > T::zero())
+            .then(|| (self.known_h + Vector2::new(d.dot(&self.t1), d.dot(&self.t2)) * self.k, c))
+    }
+
+    /// The unknown direction of `h_t`, `None` where it is evanescent.
+    #[inline]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN must fail the test too"
+    )]
+    fn direction(&self, h: &Vector2<T>) -> Option<Vector3<T>> {
+        let u = (h - self.known_h) / self.k;
+        let r2 = u.norm_squared();
+        // r2 < 1 − ε keeps cos θ_b a normal number (no density 0 at the horizon).
+        if !(r2 < T::one() - T::EPSILON) {
+            return None;
+        }
+        let c = (T::one() - r2).sqrt();
+        Some(self.t1 * u.x + self.t2 * u.y + self.n * c)
+    }
+}
+
+/// The specular lobe of a side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Specular<T: Real> {
+    /// A Dirac delta at `h_t = 0` (plane wave).
+    Delta,
+    /// One or two channel Gaussians `(weight, 𝒩(0, Ξ_α))`.
+    Gauss([(T, GaussLobe<T>); 2], usize),
+}
+
+/// The scattered lobes, built once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Scatter<'a, T: Real> {
+    None,
+    /// One Gaussian lobe (Gaussian PSD; a smooth PSD's order or the incoherent limit, blurred).
+    One(GaussLobe<T>),
+    /// Gaussian mixture components blurred by `Ξ` (`None`: plane wave), weights `σ_j²/Σσ²`.
+    Mixture {
+        comps: &'a [GaussianPsd<T, 2>],
+        blur: Option<Matrix2<T>>,
+        total: T,
+    },
+    /// Grating orders: blurred by the Gaussian `shape` (centred at 0), or Dirac deltas.
+    Orders {
+        orders: &'a [(Vector2<T>, T)],
+        shape: Option<GaussLobe<T>>,
+        reach: T,
+        totals: [T; 2],
+    },
+    /// The K-correlation power lobe, mixed ½/½ with the blurred core where there is a blur.
+    Power {
+        power: PowerLobe<T>,
+        core: Option<GaussLobe<T>>,
+    },
+    /// A Dirac order at `h_t = 0` (a smooth PSD of positive weight, plane wave).
+    OriginDelta(T),
+}
+
+/// What the sampler is built from (assembled by [`super::Bsdf`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Setup<'a, T: Real> {
+    /// The known direction (unit, pointing away from the surface).
+    pub known: Vector3<T>,
+    /// The caller's surface frame oriented toward the known direction.
+    pub facing: Frame<T>,
+    /// `k_a`, the wavenumber of the known direction's medium.
+    pub k_known: T,
+    /// The wavenumber across the interface (`None`: opaque).
+    pub k_across: Option<T>,
+    /// Forward (the known direction is the source's): the kernel's frame is `facing` for both
+    /// sides; backward: the transmitted side's is `facing.reversed()`.
+    pub forward: bool,
+    /// The Fresnel reflectance at the known angle, from its side.
+    pub reflectance: T,
+    /// The PSD's variance `σ²`.
+    pub variance: T,
+    /// The PSD's lobes.
+    pub lobes: PsdLobes<'a, T>,
+    /// The coherence level.
+    pub level: CoherenceLevel,
+    /// Whether the kernel has a specular lobe (no section of a partially coherent packet: none).
+    pub specular: bool,
+    /// The specular channels `(weight, Ξ_α)` (weights summing to 1) and their count (0 for a
+    /// plane wave).
+    pub channels: [(T, Matrix2<T>); 2],
+    pub channel_count: usize,
+    /// `Ξ`, the blur of the scattered lobes (`None` for a plane wave).
+    pub blur: Option<Matrix2<T>>,
+}
+
+/// The sampler of one shading point in one tracing direction (see the module docs). Built
+/// by [`super::Bsdf::exit_sampler`] and [`super::Bsdf::incident_sampler`]; it borrows the
+/// material's PSD and allocates nothing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LobeSampler<'a, T: Real> {
+    sides: [SideMap<T>; 2],
+    /// `[reflected specular, reflected scattered, transmitted specular, transmitted scattered]`.
+    probs: [T; 4],
+    specular: Option<Specular<T>>,
+    scatter: Scatter<'a, T>,
+    transmits: bool,
+}
+
+/// A uniform clamped into `[0, 1⁻]` (NaN → 0).
+#[inline]
+fn clamp01<T: Real>(v: T) -> T {
+    v.max(T::zero()).min(T::one() - T::lit(0.5) * T::EPSILON)
+}
+
+impl<'a, T: Real> LobeSampler<'a, T> {
+    /// The sampler for `setup` (module docs). `None` when no lobe can be built (the lobe
+    /// covariances over- or underflow the type).
+    pub(crate) fn new(setup: &Setup<'a, T>) -> Option<Self> {
+        let f = &setup.facing;
+        let (t1, t2, n) = (f.x(), f.y(), f.k());
+        let ka = setup.k_known;
+        let d = setup.known;
+        let ua = Vector2::new(d.dot(&t1), d.dot(&t2));
+        let cos_a = d.dot(&n);
+        let reflect = SideMap {
+            t1,
+            t2,
+            n,
+            known_h: ua * ka,
+            k: ka,
+        };
+        let kb = setup.k_across.unwrap_or(ka);
+        // Backward transmission: the kernel's frame faces the (unknown) source below.
+        let t2_b = if setup.forward { t2 } else { -t2 };
+        let transmit = SideMap {
+            t1,
+            t2: t2_b,
+            n: -n,
+            known_h: Vector2::new(ua.x, if setup.forward { ua.y } else { -ua.y }) * ka,
+            k: kb,
+        };
+        let transmits = setup.k_across.is_some();
+        let sigma2 = setup.variance;
+
+        let specular = if !setup.specular {
+            None
+        } else if setup.level == CoherenceLevel::PlaneWave {
+            Some(Specular::Delta)
+        } else {
+            let mut lobes = [(T::zero(), GaussLobe::new(Vector2::zeros(), &Matrix2::identity())?); 2];
+            for (i, (w, xi)) in setup.channels.iter().take(setup.channel_count).enumerate() {
+                lobes[i] = (*w, GaussLobe::new(Vector2::zeros(), xi)?);
+            }
+            Some(Specular::Gauss(lobes, setup.channel_count.max(1)))
+        };
+
+        let scatter = scatter_lobes(setup, &[reflect, transmit])?;
+        let has_scatter = sigma2 > T::zero()
+            && match scatter {
+                Scatter::None => false,
+                Scatter::Orders { totals, .. } => totals[0] > T::zero() || totals[1] > T::zero(),
+                _ => true,
+            };
+
+        // Energies (module docs).
+        let r = setup.reflectance.max(T::zero()).min(T::one());
+        let alpha_r = (-(T::lit(2.0) * ka * cos_a).powi(2) * sigma2).exp();
+        let cos_b2 = T::one() - transmit.known_h.norm_squared() / (kb * kb);
+        let snell = transmits && cos_b2 > T::zero();
+        let cos_b = cos_b2.max(T::zero()).sqrt();
+        let alpha_t = (-(ka * cos_a - kb * cos_b).powi(2) * sigma2).exp();
+        let t = if transmits { T::one() - r } else { T::zero() };
+        let scat_t = match scatter {
+            Scatter::Orders { totals, .. } => totals[1] > T::zero(),
+            _ => true,
+        };
+        let scat_r = match scatter {
+            Scatter::Orders { totals, .. } => totals[0] > T::zero(),
+            _ => true,
+        };
+        let present = [
+            specular.is_some(),
+            has_scatter && scat_r,
+            snell && specular.is_some(),
+            transmits && has_scatter && scat_t,
+        ];
+        let energy = [
+            r * alpha_r,
+            r * (T::one() - alpha_r),
+            if snell { t * alpha_t } else { T::zero() },
+            t * (T::one() - alpha_t),
+        ];
+        let count = T::lit(present.iter().filter(|&&p| p).count() as f64);
+        let total: T = (0..4)
+            .filter(|&i| present[i])
+            .fold(T::zero(), |a, i| a + energy[i]);
+        let eps = T::lit(PART_FLOOR);
+        let mut probs = [T::zero(); 4];
+        for i in 0..4 {
+            if present[i] {
+                probs[i] = if total > T::zero() && total.is_finite() {
+                    (T::one() - eps) * energy[i] / total + eps / count
+                } else {
+                    T::one() / count
+                };
+            }
+        }
+        Some(Self {
+            sides: [reflect, transmit],
+            probs,
+            specular,
+            scatter,
+            transmits,
+        })
+    }
+
+    /// The part probabilities `[reflected specular, reflected scattered, transmitted specular,
+    /// transmitted scattered]` (module docs).
+    #[must_use]
+    pub fn part_probabilities(&self) -> [T; 4] {
+        self.probs
+    }
+
+    /// Draws a direction from three uniforms in `[0, 1)`: `u_lobe` chooses the part (and,
+    /// rescaled, the component), `u` the point in the lobe. `None` when the draw is evanescent
+    /// (its probability is the lobes' mass outside the propagating directions; the density of
+    /// what is returned is [`LobeSampler::pdf`], which integrates to the rest).
+    ///
+    /// Every input is accepted without panic (uniforms are clamped into `[0, 1)`).
+    #[must_use]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN must fail the test too"
+    )]
+    pub fn sample(&self, u_lobe: T, u: [T; 2]) -> Option<DirectionSample<T>> {
+        let mut v = clamp01(u_lobe);
+        let u = [clamp01(u[0]), clamp01(u[1])];
+        let mut acc = T::zero();
+        let mut part = 3;
+        for (i, &p) in self.probs.iter().enumerate() {
+            if p > T::zero() && (v < acc + p || i == 3) {
+                part = i;
+                v = clamp01((v - acc) / p);
+                break;
+            }
+            acc += p;
+        }
+        if !(self.probs[part] > T::zero()) {
+            return None;
+        }
+        let side_index = part / 2;
+        let side = if side_index == 0 {
+            Side::Reflection
+        } else {
+            Side::Transmission
+        };
+        let map = &self.sides[side_index];
+        // `delta`: the Dirac lobe's weight in the PSD and its share among its part's lobes.
+        let (h, delta) = if part % 2 == 0 {
+            match self.specular? {
+                Specular::Delta => (Vector2::zeros(), Some((T::one(), T::one()))),
+                Specular::Gauss(lobes, count) => {
+                    let lobe = if count == 2 && v >= lobes[0].0 {
+                        &lobes[1].1
+                    } else {
+                        &lobes[0].1
+                    };
+                    (lobe.sample(u), None)
+                }
+            }
+        } else {
+            self.sample_scatter(side_index, v, u)?
+        };
+        let direction = map.direction(&h)?;
+        let lobe = SampledLobe {
+            side,
+            part: if part % 2 == 0 {
+                Part::Specular
+            } else {
+                Part::Scattered
+            },
+            delta: delta.is_some(),
+        };
+        let (pdf, delta_weight) = match delta {
+            Some((weight, share)) => (self.probs[part] * share, weight),
+            None => (self.pdf(&direction), T::zero()),
+        };
+        Some(DirectionSample {
+            direction,
+            pdf,
+            lobe,
+            delta_weight,
+        })
+    }
+
+    /// A point of the scattered lobes of side `side`, with `(weight, share)` for a Dirac order.
+    #[allow(clippy::type_complexity)]
+    fn sample_scatter(
+        &self,
+        side: usize,
+        v: T,
+        u: [T; 2],
+    ) -> Option<(Vector2<T>, Option<(T, T)>)> {
+        match self.scatter {
+            Scatter::None => None,
+            Scatter::One(lobe) => Some((lobe.sample(u), None)),
+            Scatter::Mixture { comps, blur, total } => {
+                let target = v * total;
+                let mut acc = T::zero();
+                let last = comps.len() - 1;
+                for (j, c) in comps.iter().enumerate() {
+                    acc += c.variance_of();
+                    if target < acc || j == last {
+                        let lobe = mixture_lobe(c, blur.as_ref())?;
+                        return Some((lobe.sample(u), None));
+                    }
+                }
+                None
+            }
+            Scatter::Orders {
+                orders,
+                shape,
+                reach,
+                totals,
+            } => {
+                let map = &self.sides[side];
+                let target = v * totals[side];
+                let mut acc = T::zero();
+                let blurred = shape.is_some();
+                let mut chosen = None;
+                for (z, e) in orders {
+                    let w = order_weight(map, z, *e, reach, blurred);
+                    if w > T::zero() {
+                        acc += w;
+                        chosen = Some((*z, *e, w));
+                        if target < acc {
+                            break;
+                        }
+                    }
+                }
+                let (z, e, w) = chosen?;
+                Some(match shape {
+                    Some(lobe) => (z + lobe.sample(u), None),
+                    None => (z, Some((e, w / totals[side]))),
+                })
+            }
+            Scatter::Power { power, core } => match core {
+                Some(core) if v >= T::lit(0.5) => Some((core.sample(u), None)),
+                _ => Some((power.sample(u), None)),
+            },
+            Scatter::OriginDelta(w) => Some((Vector2::zeros(), Some((w, T::one())))),
+        }
+    }
+
+    /// The density per unit solid angle of drawing `direction` (normalised here); 0 where no
+    /// non-delta lobe reaches (the half-space of an opaque surface's other side included).
+    ///
+    /// # Formula
+    /// ```text
+    /// p_ω(d) = k_b² |cos θ_b| Σ_parts P_part p_part(h_t(d))          (delta lobes excluded)
+    /// ```
+    #[must_use]
+    pub fn pdf(&self, direction: &Vector3<T>) -> T {
+        let n = direction.norm();
+        if !(n > T::zero() && n.is_finite()) {
+            return T::zero();
+        }
+        let d = direction / n;
+        for side in 0..2 {
+            if side == 1 && !self.transmits {
+                break;
+            }
+            let map = &self.sides[side];
+            if let Some((h, cos)) = map.h_of(&d) {
+                let spec = self.probs[2 * side]
+                    * match self.specular {
+                        Some(Specular::Gauss(lobes, count)) => lobes[..count]
+                            .iter()
+                            .fold(T::zero(), |a, (w, l)| a + *w * l.density(&h)),
+                        _ => T::zero(),
+                    };
+                let scat = if self.probs[2 * side + 1] > T::zero() {
+                    self.probs[2 * side + 1] * self.scatter_density(side, &h)
+                } else {
+                    T::zero()
+                };
+                return (spec + scat) * (map.k * map.k) * cos;
+            }
+        }
+        T::zero()
+    }
+
+    /// The scattered lobes' density at `h` on side `side` (deltas excluded).
+    fn scatter_density(&self, side: usize, h: &Vector2<T>) -> T {
+        match self.scatter {
+            Scatter::None | Scatter::OriginDelta(_) => T::zero(),
+            Scatter::One(lobe) => lobe.density(h),
+            Scatter::Mixture { comps, blur, total } => {
+                comps.iter().fold(T::zero(), |a, c| {
+                    a + mixture_lobe(c, blur.as_ref())
+                        .map_or(T::zero(), |l| c.variance_of() * l.density(h))
+                }) / total
+            }
+            Scatter::Orders {
+                orders,
+                shape,
+                reach,
+                totals,
+            } => match shape {
+                None => T::zero(),
+                Some(lobe) => {
+                    let map = &self.sides[side];
+                    orders.iter().fold(T::zero(), |a, (z, e)| {
+                        let w = order_weight(map, z, *e, reach, true);
+                        if w > T::zero() {
+                            a + w * lobe.density(&(h - z))
+                        } else {
+                            a
+                        }
+                    }) / totals[side]
+                }
+            },
+            Scatter::Power { power, core } => match core {
+                Some(core) => {
+                    T::lit(0.5) * (power.log_density(h).exp() + core.density(h))
+                }
+                None => power.log_density(h).exp(),
+            },
+        }
+    }
+}
+
+/// The weight of order `(z, e)` on a side: `e` if its centre (widened by `reach`, the blur's
+/// width) maps to a propagating direction, otherwise `HIDDEN_ORDER_WEIGHT · e` for a blurred
+/// order (its tail may still reach) and 0 for a Dirac order (it cannot).
+#[inline]
+fn order_weight<T: Real>(map: &SideMap<T>, z: &Vector2<T>, e: T, reach: T, blurred: bool) -> T {
+    let r = (z - map.known_h).norm();
+    if r < map.k + reach {
+        e
+    } else if blurred {
+        e * T::lit(HIDDEN_ORDER_WEIGHT)
+    } else {
+        T::zero()
+    }
+}
+
+/// The lobe of a mixture component, `𝒩(0, C_j + Ξ)`.
+#[inline]
+fn mixture_lobe<T: Real>(c: &GaussianPsd<T, 2>, blur: Option<&Matrix2<T>>) -> Option<GaussLobe<T>> {
+    let cov = *c.spectral_shape().covariance();
+    GaussLobe::new(Vector2::zeros(), &blur.map_or(cov, |b| cov + b))
+}
+
+/// Variance of a mixture component.
+trait VarianceOf<T> {
+    fn variance_of(&self) -> T;
+}
+impl<T: Real> VarianceOf<T> for GaussianPsd<T, 2> {
+    #[inline]
+    fn variance_of(&self) -> T {
+        crate::psd::Psd::<T, 2>::variance(self)
+    }
+}
+
+/// The scattered lobes of `setup` (module docs of `lobes.rs`).
+fn scatter_lobes<'a, T: Real>(
+    setup: &Setup<'a, T>,
+    sides: &[SideMap<T>; 2],
+) -> Option<Scatter<'a, T>> {
+    let blur = setup.blur;
+    if setup.level == CoherenceLevel::Incoherent {
+        // K ∝ g^Ξ(h_t) ∫p: the lobe is the coherence's alone.
+        return Some(match (setup.lobes, blur) {
+            (PsdLobes::None, _) => Scatter::None,
+            (_, Some(b)) => Scatter::One(GaussLobe::new(Vector2::zeros(), &b)?),
+            (_, None) => Scatter::None,
+        });
+    }
+    Some(match setup.lobes {
+        PsdLobes::None => Scatter::None,
+        PsdLobes::Origin => match blur {
+            Some(b) => Scatter::One(GaussLobe::new(Vector2::zeros(), &b)?),
+            None => Scatter::OriginDelta(setup.variance),
+        },
+        PsdLobes::Gaussian(cp) => {
+            Scatter::One(GaussLobe::new(Vector2::zeros(), &blur.map_or(cp, |b| cp + b))?)
+        }
+        PsdLobes::Mixture(comps) => {
+            if comps.is_empty() {
+                Scatter::None
+            } else {
+                let total = comps.iter().fold(T::zero(), |a, c| a + c.variance_of());
+                Scatter::Mixture { comps, blur, total }
+            }
+        }
+        PsdLobes::Orders(orders) => {
+            let (shape, reach) = match blur {
+                Some(b) => (
+                    Some(GaussLobe::new(Vector2::zeros(), &b)?),
+                    T::lit(3.0) * (b[(0, 0)] + b[(1, 1)]).sqrt(),
+                ),
+                None => (None, T::zero()),
+            };
+            let blurred = shape.is_some();
+            let mut totals = [T::zero(); 2];
+            for (s, total) in totals.iter_mut().enumerate() {
+                *total = orders.iter().fold(T::zero(), |a, (z, e)| {
+                    a + order_weight(&sides[s], z, *e, reach, blurred)
+                });
+            }
+            Scatter::Orders {
+                orders,
+                shape,
+                reach,
+                totals,
+            }
+        }
+        PsdLobes::KCorrelation { t, gamma } => {
+            let core = match blur {
+                Some(b) => {
+                    let c = T::one() / ((gamma + T::one()) * t);
+                    Some(GaussLobe::new(
+                        Vector2::zeros(),
+                        &(Matrix2::identity() * c + b),
+                    )?)
+                }
+                None => None,
+            };
+            Scatter::Power {
+                power: PowerLobe::new(t, gamma),
+                core,
+            }
+        }
+    })
+}
