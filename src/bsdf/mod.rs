@@ -313,6 +313,21 @@ where
         coherence.packet(stokes, to_source, &self.surface, lambda)
     }
 
+    /// A sample of a distant disk source of solid angle `Ω` along `to_source`
+    /// ([`sources::distant_disk`]) at the wavelength of the source's medium.
+    ///
+    /// # Errors
+    /// As [`sources::distant_disk`] and [`Bsdf::wavenumber`].
+    pub fn distant_packet(
+        &self,
+        stokes: Stokes<T>,
+        solid_angle: T,
+        to_source: Vector3<T>,
+    ) -> Result<WavePacket<T>, Error> {
+        let lambda = self.wavelength(&to_source)?;
+        distant_disk(stokes, solid_angle, to_source, &self.surface, lambda)
+    }
+
     /// The kernel's per-packet work for `packet` at this shading point.
     ///
     /// # Errors
@@ -483,22 +498,18 @@ where
         Mueller((m * *t).0 * (alpha * w))
     }
 
-    /// Draws an exit direction for the prepared packet and weighs it: the fraction of the
-    /// incident power it carries, `M cos θ_o/(cos θ_i p)` (a Mueller matrix from the packet's
-    /// frame to the exit s/p frame at the Stokes levels), so that its mean over draws is the
-    /// albedo ([`BsdfSample::weight`]). `None` for an evanescent draw.
+    /// The Monte Carlo weight of an exit direction `s` drawn by this packet's
+    /// [`Bsdf::exit_sampler`]: the fraction of the incident power it carries,
+    /// `M cos θ_o/(cos θ_i p)` (for a delta lobe its integral `α M_part T w` in place of `M`),
+    /// a throughput from the packet's frame to the exit s/p frame, with the geometry.
     ///
     /// # Errors
-    /// As [`Bsdf::exit_sampler`] and [`Bsdf::geometry`].
-    pub fn sample_exit(
+    /// As [`Bsdf::geometry`].
+    pub fn exit_weight(
         &self,
         incident: &Incident<T, Pol, Coh>,
-        u_lobe: T,
-        u: [T; 2],
-    ) -> SampleResult<T, Pol> {
-        let Some(s) = self.exit_sampler(incident)?.sample(u_lobe, u) else {
-            return Ok(None);
-        };
+        s: &DirectionSample<T>,
+    ) -> Result<(Pol::Throughput<T>, Geometry<T>), Error> {
         let g = self.geometry(incident.to_source, s.direction)?;
         let flux = g.cos_o() / g.cos_i();
         let weight = if s.lobe.delta {
@@ -511,20 +522,66 @@ where
                 .evaluate_mueller_prepared(self.material, &incident.prepared, &g);
             v.total().scaled(flux / s.pdf)
         };
+        Ok((weight, g))
+    }
+
+    /// The Monte Carlo weight of a direction to the source `s` drawn by
+    /// [`Bsdf::incident_sampler`]`(exit, coherence)`: the radiance throughput `M(ŝ → r̂)/p(ŝ)`,
+    /// evaluated in the physical direction for light arriving with `coherence` (for a delta
+    /// lobe its integral over ŝ, `α M_part w (k_o² cos θ_o)/(k_i² cos θ_i)`), a throughput from
+    /// the incident s/p frame of ŝ ([`Geometry::incident_sp`]) to the exit s/p frame, with the
+    /// geometry.
+    ///
+    /// # Errors
+    /// As [`Bsdf::surface_packet`] and [`Bsdf::geometry`].
+    pub fn incident_weight(
+        &self,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        s: &DirectionSample<T>,
+    ) -> Result<(Pol::Throughput<T>, Geometry<T>), Error> {
+        if s.lobe.delta {
+            let g = self.geometry(s.direction, exit)?;
+            // The delta's integral over ŝ: (k_o² cos θ_o)/(k_i² cos θ_i) times its integral over r̂.
+            let ratio = g.relative_index();
+            let jac = ratio * ratio * g.cos_o() / g.cos_i();
+            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &Mueller::identity());
+            return Ok((Pol::Throughput::<T>::from_mueller(&m).scaled(jac / s.pdf), g));
+        }
+        let light = self.surface_packet(Stokes::unpolarized(T::one())?, s.direction, coherence)?;
+        let v = self.eval(&self.prepare(&light)?, exit)?;
+        Ok((v.response.total().scaled(T::one() / s.pdf), v.geometry))
+    }
+
+    /// Draws an exit direction for the prepared packet and weighs it ([`Bsdf::exit_sampler`],
+    /// [`Bsdf::exit_weight`]): the mean of the weight over draws is the albedo matrix. `None`
+    /// for an evanescent draw.
+    ///
+    /// # Errors
+    /// As [`Bsdf::exit_sampler`] and [`Bsdf::geometry`].
+    pub fn sample_exit(
+        &self,
+        incident: &Incident<T, Pol, Coh>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> SampleResult<T, Pol> {
+        let Some(s) = self.exit_sampler(incident)?.sample(u_lobe, u) else {
+            return Ok(None);
+        };
+        let (weight, geometry) = self.exit_weight(incident, &s)?;
         Ok(Some(BsdfSample {
             sample: s,
             weight,
-            geometry: g,
+            geometry,
         }))
     }
 
     /// Draws a direction to the source for light leaving along `exit`, arriving with the
-    /// surface coherence `coherence`, and weighs it: the radiance throughput `M(ŝ → r̂)/p(ŝ)`
-    /// evaluated in the physical direction (a Mueller matrix from the incident s/p frame of ŝ
-    /// to the exit s/p frame at the Stokes levels). `None` for an evanescent draw.
+    /// surface coherence `coherence`, and weighs it ([`Bsdf::incident_sampler`],
+    /// [`Bsdf::incident_weight`]). `None` for an evanescent draw.
     ///
     /// # Errors
-    /// As [`Bsdf::incident_sampler`], [`Bsdf::surface_packet`] and [`Bsdf::geometry`].
+    /// As [`Bsdf::incident_sampler`] and [`Bsdf::incident_weight`].
     pub fn sample_incident(
         &self,
         exit: Vector3<T>,
@@ -535,23 +592,11 @@ where
         let Some(s) = self.incident_sampler(exit, coherence)?.sample(u_lobe, u) else {
             return Ok(None);
         };
-        let g = self.geometry(s.direction, exit)?;
-        let weight = if s.lobe.delta {
-            // The delta's integral over ŝ: (k_o² cos θ_o)/(k_i² cos θ_i) times its integral over r̂.
-            let ratio = g.relative_index();
-            let jac = ratio * ratio * g.cos_o() / g.cos_i();
-            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &Mueller::identity());
-            Pol::Throughput::<T>::from_mueller(&m).scaled(jac / s.pdf)
-        } else {
-            let light = self.surface_packet(Stokes::unpolarized(T::one())?, s.direction, coherence)?;
-            let v = self.eval(&self.prepare(&light)?, exit)?;
-            v.response.total().scaled(T::one() / s.pdf)
-        };
+        let (weight, geometry) = self.incident_weight(exit, coherence, &s)?;
         Ok(Some(BsdfSample {
             sample: s,
             weight,
-            geometry: g,
+            geometry,
         }))
     }
 }
-

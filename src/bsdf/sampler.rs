@@ -315,6 +315,27 @@ impl<'a, T: Real> LobeSampler<'a, T> {
         self.probs
     }
 
+    /// The same lobes with other part probabilities (each clamped to ≥ 0 and set to 0 for a part
+    /// this sampler does not have, then normalised; all zero leaves the probabilities as they
+    /// were): for tuning a mixture, or drawing from one part alone. `pdf` follows the new
+    /// probabilities, so sampling stays exact.
+    #[must_use]
+    pub fn with_part_probabilities(&self, probs: [T; 4]) -> Self {
+        let mut p = [T::zero(); 4];
+        let mut total = T::zero();
+        for i in 0..4 {
+            if self.probs[i] > T::zero() && probs[i] > T::zero() && probs[i].is_finite() {
+                p[i] = probs[i];
+                total += probs[i];
+            }
+        }
+        let mut out = *self;
+        if total > T::zero() {
+            out.probs = p.map(|x| x / total);
+        }
+        out
+    }
+
     /// Draws a direction from three uniforms in `[0, 1)`: `u_lobe` chooses the part (and,
     /// rescaled, the component), `u` the point in the lobe. `None` when the draw is evanescent
     /// (its probability is the lobes' mass outside the propagating directions; the density of

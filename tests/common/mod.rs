@@ -286,6 +286,7 @@ pub fn cube_quad<const N: usize>(
 // ---------------------------------------------------------------- test-side formulas
 
 /// Independent (crate-free) formulas used as expected values: see `tests/common/oracle.rs`.
+pub mod chi2;
 pub mod hemisphere;
 pub mod oracle;
 pub mod quadrature;

@@ -1,0 +1,370 @@
+//! Verifies the renderer layer's samplers (`gmueller::bsdf`) against their own densities, in
+//! both hemispheres and both tracing directions: Pearson's chi-square on 100 000 seeded draws
+//! per case (Cartesian bins in the projected disk of each hemisphere, edges at the quantiles
+//! of a separate pilot draw so that narrow lobes are bracketed, expected counts from adaptive
+//! Gauss–Legendre quadrature of `pdf`, `tests/common/chi2.rs`), for every lobe kind: rough glass
+//! from above and below (Snell lobes, total internal reflection), a conductor, K-correlation,
+//! Gaussian-mixture and grating PSDs, the smooth limit, the plane-wave level's Dirac lobes
+//! (drawn with their probability) and the two-shape Full level. The same test rejects a
+//! density with the `cos θ` Jacobian applied twice. Also: `sample.pdf == pdf(sample.direction)`
+//! bit for bit, and the fraction of delta draws against the part probabilities.
+
+mod common;
+
+use common::chi2::{self, Disk, Grid};
+use common::rng::SplitMix64;
+use gmueller::bsdf::{Bsdf, LobeSampler, SurfaceCoherence};
+use gmueller::frame::Frame;
+use gmueller::interaction::{
+    Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, RoughConductor,
+    RoughDielectric, SmoothDielectric,
+};
+use gmueller::packet::{CoherenceShape, WavePacket};
+use gmueller::psd::{GaussHermite, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Vector2, Vector3};
+use num_complex::Complex;
+
+const N: usize = 100_000;
+const LAMBDA: f64 = 0.5;
+
+fn frame() -> Frame<f64> {
+    // A tilted shading frame, so that nothing lines up with the world axes.
+    Frame::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap()
+}
+
+fn disk(f: &Frame<f64>) -> Disk {
+    Disk {
+        t1: f.x(),
+        t2: f.y(),
+        n: f.k(),
+    }
+}
+
+/// A direction at polar angle `deg` from `±n̂` (`side`), azimuth `phi_deg` in the frame.
+fn dir(f: &Frame<f64>, deg: f64, phi_deg: f64, side: f64) -> Vector3<f64> {
+    let (t, p) = (deg.to_radians(), phi_deg.to_radians());
+    f.x() * (t.sin() * p.cos()) + f.y() * (t.sin() * p.sin()) + f.k() * (side * t.cos())
+}
+
+/// Quantile edges of a pilot draw (seed distinct from the test's) merged with a coarse grid,
+/// per hemisphere that the pilot reaches.
+fn grids(disk: &Disk, draw: &mut dyn FnMut(usize) -> Option<Vector3<f64>>) -> Vec<Grid> {
+    let mut per_side: [(Vec<f64>, Vec<f64>); 2] = Default::default();
+    for i in 0..4000 {
+        if let Some(d) = draw(i) {
+            let (side, u) = disk.coords(&d);
+            let s = usize::from(side < 0.0);
+            per_side[s].0.push(u.x);
+            per_side[s].1.push(u.y);
+        }
+    }
+    let qs = [
+        0.005, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98, 0.995,
+    ];
+    let mut out = Vec::new();
+    for (s, (xs, ys)) in per_side.iter_mut().enumerate() {
+        let side = if s == 0 { 1.0 } else { -1.0 };
+        let edges_of = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            let mut e = chi2::edges(8, &[], &[]);
+            if v.len() > 50 {
+                for q in qs {
+                    e.push(v[((v.len() - 1) as f64 * q) as usize]);
+                }
+            }
+            e.sort_by(f64::total_cmp);
+            e.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+            e
+        };
+        out.push(Grid {
+            side,
+            ex: edges_of(xs),
+            ey: edges_of(ys),
+        });
+    }
+    out
+}
+
+/// Draws from `sampler` with the uniforms of `seed`: non-delta directions, checking
+/// `pdf(direction) == pdf` on the way; delta draws are counted.
+struct Draws<'s, 'a> {
+    sampler: &'s LobeSampler<'a, f64>,
+    rng: SplitMix64,
+    deltas: usize,
+}
+
+impl Draws<'_, '_> {
+    fn next(&mut self) -> Option<Vector3<f64>> {
+        let (a, b, c) = (self.rng.unit(), self.rng.unit(), self.rng.unit());
+        let s = self.sampler.sample(a, [b, c])?;
+        if s.lobe.delta {
+            self.deltas += 1;
+            return None;
+        }
+        assert_eq!(self.sampler.pdf(&s.direction), s.pdf, "pdf of the sample");
+        assert!(s.pdf > 0.0 && s.pdf.is_finite());
+        assert!((s.direction.norm() - 1.0).abs() < 1e-12);
+        Some(s.direction)
+    }
+}
+
+/// The chi-square test of one sampler (module docs); returns the delta fraction drawn.
+fn check(name: &str, f: &Frame<f64>, sampler: &LobeSampler<'_, f64>, seed: u64) -> f64 {
+    let disk = disk(f);
+    let mut pilot = Draws {
+        sampler,
+        rng: SplitMix64(seed ^ 0x5eed),
+        deltas: 0,
+    };
+    let grids = grids(&disk, &mut |_| pilot.next());
+    let mut draws = Draws {
+        sampler,
+        rng: SplitMix64(seed),
+        deltas: 0,
+    };
+    let pdf = |d: &Vector3<f64>| sampler.pdf(d);
+    let out = chi2::test(&disk, &grids, &pdf, N, &mut |_| draws.next());
+    println!(
+        "{name}: chi2 {:.1} dof {} (99.9% {:.1}), parts {:?}",
+        out.chi2,
+        out.dof,
+        out.quantile,
+        sampler.part_probabilities()
+    );
+    assert!(
+        out.passes(),
+        "{name}: chi2 {} > {} (dof {})",
+        out.chi2,
+        out.quantile,
+        out.dof
+    );
+    assert!(out.dof >= 20, "{name}: too few bins ({})", out.dof);
+    draws.deltas as f64 / N as f64
+}
+
+/// The fraction of delta draws agrees with the probability of the delta parts.
+fn check_delta_fraction(name: &str, fraction: f64, expected: f64) {
+    let se = (expected * (1.0 - expected) / N as f64).sqrt();
+    assert!(
+        (fraction - expected).abs() <= 4.5 * se + 1e-12,
+        "{name}: delta fraction {fraction} vs {expected} (s.e. {se})"
+    );
+}
+
+fn glass() -> RoughDielectric<f64, GaussianPsd<f64, 2>> {
+    RoughDielectric::new(GaussianPsd::isotropic(0.02, 1.0).unwrap(), 1.5).unwrap()
+}
+
+fn unpolarized() -> Stokes<f64> {
+    Stokes::unpolarized(1.0).unwrap()
+}
+
+#[test]
+fn rough_glass_forward_from_both_sides() {
+    let f = frame();
+    let m = glass();
+    let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
+    let c = SurfaceCoherence::new(3.0).unwrap();
+    // From the air at 35°; from inside at 25° and beyond the critical angle (41.8°) at 55°.
+    for (i, (deg, side)) in [(35.0, 1.0), (25.0, -1.0), (55.0, -1.0)].iter().enumerate() {
+        let s = dir(&f, *deg, 30.0, *side);
+        let packet = b.surface_packet(unpolarized(), s, &c).unwrap();
+        let inc = b.prepare(&packet).unwrap();
+        let sampler = b.exit_sampler(&inc).unwrap();
+        check(&format!("glass forward {deg}° side {side}"), &f, &sampler, 11 + i as u64);
+    }
+}
+
+#[test]
+fn rough_glass_backward_from_both_sides() {
+    let f = frame();
+    let m = glass();
+    let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
+    let c = SurfaceCoherence::new(3.0).unwrap();
+    for (i, (deg, side)) in [(40.0, 1.0), (30.0, -1.0), (60.0, -1.0)].iter().enumerate() {
+        let r = dir(&f, *deg, -50.0, *side);
+        let sampler = b.incident_sampler(r, &c).unwrap();
+        check(&format!("glass backward {deg}° side {side}"), &f, &sampler, 21 + i as u64);
+    }
+}
+
+#[test]
+fn conductor_k_correlation_and_mixture() {
+    let f = frame();
+    let c = SurfaceCoherence::new(2.0).unwrap();
+    let gold = RoughConductor::new(
+        GaussianPsd::isotropic(0.015, 1.5).unwrap(),
+        Complex::new(0.47, 2.4),
+    )
+    .unwrap();
+    let b = Bsdf::new(&gold, Kernel::<OneShape, Partial>::default(), f, LAMBDA).unwrap();
+    let s = dir(&f, 50.0, 10.0, 1.0);
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    check("gold forward", &f, &b.exit_sampler(&inc).unwrap(), 31);
+    check(
+        "gold backward",
+        &f,
+        &b.incident_sampler(dir(&f, 20.0, 100.0, 1.0), &c).unwrap(),
+        32,
+    );
+
+    let kc = RoughDielectric::new(KCorrelation::new(4e-4, 4.0, 2.5).unwrap(), 1.5).unwrap();
+    let blur = Partial(GaussHermite::new(8).unwrap());
+    let b = Bsdf::new(&kc, Kernel::<Full, _>::new(blur), f, LAMBDA).unwrap();
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    check("K-correlation forward", &f, &b.exit_sampler(&inc).unwrap(), 33);
+    check(
+        "K-correlation backward (exit below)",
+        &f,
+        &b.incident_sampler(dir(&f, 30.0, 200.0, -1.0), &c).unwrap(),
+        34,
+    );
+
+    let mix = GaussianMixturePsd::new(vec![
+        GaussianPsd::isotropic(0.01, 0.7).unwrap(),
+        GaussianPsd::isotropic(0.02, 3.0).unwrap(),
+    ])
+    .unwrap();
+    let mixed = RoughDielectric::new(mix, 1.5).unwrap();
+    let b = Bsdf::new(&mixed, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    check("mixture forward", &f, &b.exit_sampler(&inc).unwrap(), 35);
+}
+
+#[test]
+fn grating_orders_blurred_and_as_deltas() {
+    let f = frame();
+    let grating = Grating::sinusoidal_height(0.03, 2.0, &Vector2::new(0.9, 0.3)).unwrap();
+    let metal = RoughConductor::new(grating, Complex::new(0.2, 3.4)).unwrap();
+    let c = SurfaceCoherence::new(6.0).unwrap();
+    let s = dir(&f, 20.0, 0.0, 1.0);
+    let b = Bsdf::new(&metal, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    check("grating forward, blurred", &f, &b.exit_sampler(&inc).unwrap(), 41);
+    check(
+        "grating backward, blurred",
+        &f,
+        &b.incident_sampler(dir(&f, 35.0, 160.0, 1.0), &c).unwrap(),
+        42,
+    );
+    // Plane waves: specular and orders are deltas; only the delta fraction can be drawn.
+    let b = Bsdf::new(&metal, Kernel::<Intensity, PlaneWave>::default(), f, LAMBDA).unwrap();
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let sampler = b.exit_sampler(&inc).unwrap();
+    let p = sampler.part_probabilities();
+    let mut rng = SplitMix64(43);
+    let mut deltas = 0;
+    for _ in 0..N {
+        let s = sampler.sample(rng.unit(), [rng.unit(), rng.unit()]);
+        if let Some(s) = s {
+            assert!(s.lobe.delta && s.delta_weight > 0.0 && s.pdf > 0.0);
+            deltas += 1;
+        }
+    }
+    // Every order kept is visible at 20°: all draws are deltas.
+    check_delta_fraction("grating plane wave", deltas as f64 / N as f64, p[0] + p[1]);
+}
+
+#[test]
+fn plane_wave_level_specular_delta_and_scattered_lobe() {
+    let f = frame();
+    let m = glass();
+    let b = Bsdf::new(&m, Kernel::<OneShape, PlaneWave>::default(), f, LAMBDA).unwrap();
+    let c = SurfaceCoherence::new(3.0).unwrap();
+    let s = dir(&f, 30.0, 45.0, 1.0);
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let sampler = b.exit_sampler(&inc).unwrap();
+    let frac = check("glass plane wave forward", &f, &sampler, 51);
+    let p = sampler.part_probabilities();
+    check_delta_fraction("glass plane wave forward", frac, p[0] + p[2]);
+    let sampler = b.incident_sampler(dir(&f, 45.0, 0.0, -1.0), &c).unwrap();
+    let frac = check("glass plane wave backward (exit below)", &f, &sampler, 52);
+    let p = sampler.part_probabilities();
+    check_delta_fraction("glass plane wave backward", frac, p[0] + p[2]);
+}
+
+#[test]
+fn smooth_incoherent_and_two_shape_levels() {
+    let f = frame();
+    let c = SurfaceCoherence::new(3.0).unwrap();
+    let s = dir(&f, 40.0, -20.0, 1.0);
+    let smooth: SmoothDielectric<f64> = SmoothDielectric::smooth(1.5).unwrap();
+    let b = Bsdf::new(&smooth, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let sampler = b.exit_sampler(&inc).unwrap();
+    assert_eq!(sampler.part_probabilities()[1], 0.0);
+    check("smooth glass forward", &f, &sampler, 61);
+
+    let m = glass();
+    let b = Bsdf::new(&m, Kernel::<OneShape, Incoherent>::default(), f, LAMBDA).unwrap();
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    check("glass incoherent forward", &f, &b.exit_sampler(&inc).unwrap(), 62);
+
+    // Two shapes: x and y channels with different coherence (|μ| = 0 is realizable).
+    let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
+    let beam = Frame::sp(-s, f.k()).unwrap();
+    let wx = CoherenceShape::new(Matrix2::new(4.0, 0.5, 0.5, 2.0)).unwrap();
+    let wy = CoherenceShape::new(Matrix2::new(1.5, 0.0, 0.0, 9.0)).unwrap();
+    let packet = WavePacket::new(Stokes::new(1.0, 0.4, 0.0, 0.0).unwrap(), wx, wy, beam, LAMBDA)
+        .unwrap();
+    let inc = b.prepare(&packet).unwrap();
+    check("glass two shapes forward", &f, &b.exit_sampler(&inc).unwrap(), 63);
+}
+
+#[test]
+fn chi_square_rejects_a_density_with_a_wrong_jacobian() {
+    let f = frame();
+    let m = glass();
+    let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
+    let c = SurfaceCoherence::new(3.0).unwrap();
+    let s = dir(&f, 60.0, 0.0, 1.0);
+    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let sampler = b.exit_sampler(&inc).unwrap();
+    let disk = disk(&f);
+    let mut pilot = Draws {
+        sampler: &sampler,
+        rng: SplitMix64(71),
+        deltas: 0,
+    };
+    let grids = grids(&disk, &mut |_| pilot.next());
+    // The Jacobian d²u = |cos θ| dω applied twice (a pdf in u taken for one in ω and
+    // converted again); forgetting it instead makes the expected counts diverge at the horizon.
+    let wrong = |d: &Vector3<f64>| sampler.pdf(d) * d.dot(&f.k()).abs();
+    let mut draws = Draws {
+        sampler: &sampler,
+        rng: SplitMix64(72),
+        deltas: 0,
+    };
+    let out = chi2::test(&disk, &grids, &wrong, N, &mut |_| draws.next());
+    assert!(!out.passes(), "a density with cos θ twice passed: {out:?}");
+}
+
+#[test]
+fn f32_sampler_draws_from_its_pdf() {
+    let f = Frame::<f32>::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap();
+    let m = RoughDielectric::new(GaussianPsd::<f32, 2>::isotropic(0.02, 1.0).unwrap(), 1.5)
+        .unwrap();
+    let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, 0.5).unwrap();
+    let c = SurfaceCoherence::new(3.0f32).unwrap();
+    let r = f.x() * 0.5 + f.k() * (0.75f32).sqrt();
+    let sampler = b.incident_sampler(r, &c).unwrap();
+    let mut rng = SplitMix64(81);
+    let mut some = 0;
+    for _ in 0..N {
+        let u = [rng.unit() as f32, rng.unit() as f32, rng.unit() as f32];
+        if let Some(s) = sampler.sample(u[0], [u[1], u[2]]) {
+            assert_eq!(sampler.pdf(&s.direction), s.pdf);
+            assert!(s.pdf > 0.0 && s.pdf.is_finite(), "{s:?}");
+            assert!((s.direction.norm() - 1.0).abs() < 1e-6);
+            some += 1;
+        }
+    }
+    assert!(some > N / 2);
+    // Extreme uniforms: never a panic, never a NaN.
+    for u in [0.0f32, 1.0, -1.0, 2.0, f32::NAN, f32::INFINITY, 1.0 - f32::EPSILON] {
+        if let Some(s) = sampler.sample(u, [u, u]) {
+            assert!(s.pdf.is_finite() && s.pdf > 0.0 && s.direction.iter().all(|x| x.is_finite()));
+        }
+    }
+}
