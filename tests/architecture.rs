@@ -23,6 +23,7 @@ const LAYERS: &[&str] = &[
     "packet",
     "psd",
     "interaction",
+    "bsdf",
 ];
 
 /// The submodules of `interaction`, bottom first.

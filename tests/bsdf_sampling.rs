@@ -172,7 +172,12 @@ fn rough_glass_forward_from_both_sides() {
         let packet = b.surface_packet(unpolarized(), s, &c).unwrap();
         let inc = b.prepare(&packet).unwrap();
         let sampler = b.exit_sampler(&inc).unwrap();
-        check(&format!("glass forward {deg}° side {side}"), &f, &sampler, 11 + i as u64);
+        check(
+            &format!("glass forward {deg}° side {side}"),
+            &f,
+            &sampler,
+            11 + i as u64,
+        );
     }
 }
 
@@ -185,7 +190,12 @@ fn rough_glass_backward_from_both_sides() {
     for (i, (deg, side)) in [(40.0, 1.0), (30.0, -1.0), (60.0, -1.0)].iter().enumerate() {
         let r = dir(&f, *deg, -50.0, *side);
         let sampler = b.incident_sampler(r, &c).unwrap();
-        check(&format!("glass backward {deg}° side {side}"), &f, &sampler, 21 + i as u64);
+        check(
+            &format!("glass backward {deg}° side {side}"),
+            &f,
+            &sampler,
+            21 + i as u64,
+        );
     }
 }
 
@@ -200,7 +210,9 @@ fn conductor_k_correlation_and_mixture() {
     .unwrap();
     let b = Bsdf::new(&gold, Kernel::<OneShape, Partial>::default(), f, LAMBDA).unwrap();
     let s = dir(&f, 50.0, 10.0, 1.0);
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
     check("gold forward", &f, &b.exit_sampler(&inc).unwrap(), 31);
     check(
         "gold backward",
@@ -212,8 +224,15 @@ fn conductor_k_correlation_and_mixture() {
     let kc = RoughDielectric::new(KCorrelation::new(4e-4, 4.0, 2.5).unwrap(), 1.5).unwrap();
     let blur = Partial(GaussHermite::new(8).unwrap());
     let b = Bsdf::new(&kc, Kernel::<Full, _>::new(blur), f, LAMBDA).unwrap();
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
-    check("K-correlation forward", &f, &b.exit_sampler(&inc).unwrap(), 33);
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
+    check(
+        "K-correlation forward",
+        &f,
+        &b.exit_sampler(&inc).unwrap(),
+        33,
+    );
     check(
         "K-correlation backward (exit below)",
         &f,
@@ -228,7 +247,9 @@ fn conductor_k_correlation_and_mixture() {
     .unwrap();
     let mixed = RoughDielectric::new(mix, 1.5).unwrap();
     let b = Bsdf::new(&mixed, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
     check("mixture forward", &f, &b.exit_sampler(&inc).unwrap(), 35);
 }
 
@@ -240,8 +261,15 @@ fn grating_orders_blurred_and_as_deltas() {
     let c = SurfaceCoherence::new(6.0).unwrap();
     let s = dir(&f, 20.0, 0.0, 1.0);
     let b = Bsdf::new(&metal, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
-    check("grating forward, blurred", &f, &b.exit_sampler(&inc).unwrap(), 41);
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
+    check(
+        "grating forward, blurred",
+        &f,
+        &b.exit_sampler(&inc).unwrap(),
+        41,
+    );
     check(
         "grating backward, blurred",
         &f,
@@ -250,7 +278,9 @@ fn grating_orders_blurred_and_as_deltas() {
     );
     // Plane waves: specular and orders are deltas; only the delta fraction can be drawn.
     let b = Bsdf::new(&metal, Kernel::<Intensity, PlaneWave>::default(), f, LAMBDA).unwrap();
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
     let sampler = b.exit_sampler(&inc).unwrap();
     let p = sampler.part_probabilities();
     let mut rng = SplitMix64(43);
@@ -273,7 +303,9 @@ fn plane_wave_level_specular_delta_and_scattered_lobe() {
     let b = Bsdf::new(&m, Kernel::<OneShape, PlaneWave>::default(), f, LAMBDA).unwrap();
     let c = SurfaceCoherence::new(3.0).unwrap();
     let s = dir(&f, 30.0, 45.0, 1.0);
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
     let sampler = b.exit_sampler(&inc).unwrap();
     let frac = check("glass plane wave forward", &f, &sampler, 51);
     let p = sampler.part_probabilities();
@@ -291,25 +323,45 @@ fn smooth_incoherent_and_two_shape_levels() {
     let s = dir(&f, 40.0, -20.0, 1.0);
     let smooth: SmoothDielectric<f64> = SmoothDielectric::smooth(1.5).unwrap();
     let b = Bsdf::new(&smooth, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
     let sampler = b.exit_sampler(&inc).unwrap();
     assert_eq!(sampler.part_probabilities()[1], 0.0);
     check("smooth glass forward", &f, &sampler, 61);
 
     let m = glass();
     let b = Bsdf::new(&m, Kernel::<OneShape, Incoherent>::default(), f, LAMBDA).unwrap();
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
-    check("glass incoherent forward", &f, &b.exit_sampler(&inc).unwrap(), 62);
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
+    check(
+        "glass incoherent forward",
+        &f,
+        &b.exit_sampler(&inc).unwrap(),
+        62,
+    );
 
     // Two shapes: x and y channels with different coherence (|μ| = 0 is realizable).
     let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
     let beam = Frame::sp(-s, f.k()).unwrap();
     let wx = CoherenceShape::new(Matrix2::new(4.0, 0.5, 0.5, 2.0)).unwrap();
     let wy = CoherenceShape::new(Matrix2::new(1.5, 0.0, 0.0, 9.0)).unwrap();
-    let packet = WavePacket::new(Stokes::new(1.0, 0.4, 0.0, 0.0).unwrap(), wx, wy, beam, LAMBDA)
-        .unwrap();
+    let packet = WavePacket::new(
+        Stokes::new(1.0, 0.4, 0.0, 0.0).unwrap(),
+        wx,
+        wy,
+        beam,
+        LAMBDA,
+    )
+    .unwrap();
     let inc = b.prepare(&packet).unwrap();
-    check("glass two shapes forward", &f, &b.exit_sampler(&inc).unwrap(), 63);
+    check(
+        "glass two shapes forward",
+        &f,
+        &b.exit_sampler(&inc).unwrap(),
+        63,
+    );
 }
 
 #[test]
@@ -319,7 +371,9 @@ fn chi_square_rejects_a_density_with_a_wrong_jacobian() {
     let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
     let c = SurfaceCoherence::new(3.0).unwrap();
     let s = dir(&f, 60.0, 0.0, 1.0);
-    let inc = b.prepare(&b.surface_packet(unpolarized(), s, &c).unwrap()).unwrap();
+    let inc = b
+        .prepare(&b.surface_packet(unpolarized(), s, &c).unwrap())
+        .unwrap();
     let sampler = b.exit_sampler(&inc).unwrap();
     let disk = disk(&f);
     let mut pilot = Draws {
@@ -343,8 +397,8 @@ fn chi_square_rejects_a_density_with_a_wrong_jacobian() {
 #[test]
 fn f32_sampler_draws_from_its_pdf() {
     let f = Frame::<f32>::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap();
-    let m = RoughDielectric::new(GaussianPsd::<f32, 2>::isotropic(0.02, 1.0).unwrap(), 1.5)
-        .unwrap();
+    let m =
+        RoughDielectric::new(GaussianPsd::<f32, 2>::isotropic(0.02, 1.0).unwrap(), 1.5).unwrap();
     let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, 0.5).unwrap();
     let c = SurfaceCoherence::new(3.0f32).unwrap();
     let r = f.x() * 0.5 + f.k() * (0.75f32).sqrt();
@@ -362,7 +416,15 @@ fn f32_sampler_draws_from_its_pdf() {
     }
     assert!(some > N / 2);
     // Extreme uniforms: never a panic, never a NaN.
-    for u in [0.0f32, 1.0, -1.0, 2.0, f32::NAN, f32::INFINITY, 1.0 - f32::EPSILON] {
+    for u in [
+        0.0f32,
+        1.0,
+        -1.0,
+        2.0,
+        f32::NAN,
+        f32::INFINITY,
+        1.0 - f32::EPSILON,
+    ] {
         if let Some(s) = sampler.sample(u, [u, u]) {
             assert!(s.pdf.is_finite() && s.pdf > 0.0 && s.direction.iter().all(|x| x.is_finite()));
         }

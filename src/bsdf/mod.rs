@@ -64,8 +64,8 @@ use nalgebra::{Matrix2, Vector3};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, Geometry, Kernel, MuellerResponse, Pbsdf,
-    PolarizationModel, PreparedPacket, RoughSurface, Throughput,
+    CoherenceLevel, CoherenceWeights, Geometry, Kernel, MuellerResponse, Pbsdf, PolarizationModel,
+    PreparedPacket, RoughSurface, Throughput,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -403,7 +403,10 @@ where
             .eta
             .map(|e| if incident.from_below { k / e } else { k * e });
         let cos_i = incident.to_source.dot(&incident.facing.k());
-        let reflectance = self.material.specular.reflectance(cos_i, incident.from_below);
+        let reflectance = self
+            .material
+            .specular
+            .reflectance(cos_i, incident.from_below);
         let section = prepared.section().map(|g| *g.covariance());
         let (level, specular) = match (Coh::USES_SHAPE, section) {
             (true, None) => (CoherenceLevel::PlaneWave, false),
@@ -456,9 +459,13 @@ where
         let r = unit(exit, "exit direction")?;
         let k = self.wavenumber(&r)?;
         let below = r.dot(&self.surface.k()) < T::zero();
-        let k_across = self
-            .eta
-            .map(|e| if below { self.k_above } else { self.k_above * e });
+        let k_across = self.eta.map(|e| {
+            if below {
+                self.k_above
+            } else {
+                self.k_above * e
+            }
+        });
         let facing = self.surface.facing(&r);
         let cos_o = r.dot(&facing.k());
         let xi = coherence.inverse_coherence();
@@ -488,7 +495,13 @@ where
     }
 
     /// The integral of a Dirac lobe of geometry `g` and PSD weight `w`: `α M_part T w`.
-    fn delta_integral(&self, g: &Geometry<T>, lobe: &SampledLobe, w: T, t: &Mueller<T>) -> Mueller<T> {
+    fn delta_integral(
+        &self,
+        g: &Geometry<T>,
+        lobe: &SampledLobe,
+        w: T,
+        t: &Mueller<T>,
+    ) -> Mueller<T> {
         let m = match lobe.part {
             Part::Specular => self.material.specular.mueller(g),
             Part::Scattered => self.material.scatter.mueller(g),
@@ -546,7 +559,10 @@ where
             let ratio = g.relative_index();
             let jac = ratio * ratio * g.cos_o() / g.cos_i();
             let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &Mueller::identity());
-            return Ok((Pol::Throughput::<T>::from_mueller(&m).scaled(jac / s.pdf), g));
+            return Ok((
+                Pol::Throughput::<T>::from_mueller(&m).scaled(jac / s.pdf),
+                g,
+            ));
         }
         let light = self.surface_packet(Stokes::unpolarized(T::one())?, s.direction, coherence)?;
         let v = self.eval(&self.prepare(&light)?, exit)?;

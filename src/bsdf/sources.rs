@@ -124,7 +124,8 @@ impl<T: Real> SurfaceCoherence<T> {
     ) -> Result<WavePacket<T>, Error> {
         let (frame, cos_i) = incident_frame(to_source, surface)?;
         let w2 = self.width * self.width;
-        let shape = CoherenceShape::new(Matrix2::new(w2, T::zero(), T::zero(), w2 * cos_i * cos_i))?;
+        let shape =
+            CoherenceShape::new(Matrix2::new(w2, T::zero(), T::zero(), w2 * cos_i * cos_i))?;
         WavePacket::from_stokes(stokes, shape, frame, wavelength)
     }
 }

@@ -296,7 +296,10 @@ fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
     clippy::neg_cmp_op_on_partial_ord,
     reason = "a NaN must fail the test too"
 )]
-pub(crate) fn check_geometry<T: Real>(packet: &WavePacket<T>, g: &Geometry<T>) -> Result<(), Error> {
+pub(crate) fn check_geometry<T: Real>(
+    packet: &WavePacket<T>,
+    g: &Geometry<T>,
+) -> Result<(), Error> {
     if !same_wavenumber(packet.wavenumber(), g.k) {
         return Err(Error::OutOfRange {
             what: "geometry wavenumber (built for another wavelength or medium than the packet's)",

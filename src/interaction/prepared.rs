@@ -8,8 +8,8 @@ use nalgebra::{Matrix4, Vector4};
 use super::coherence::{ln_smallest_subnormal, ln_two_pi, neg_infinity};
 use super::section::surface_inverse_coherence;
 use crate::frame::{Frame, frame_change_mueller};
-use crate::numerics::{det2, det2_of_mean, pow2_scale};
 use crate::gaussian::Gaussian;
+use crate::numerics::{det2, det2_of_mean, pow2_scale};
 use crate::packet::{Channel, WavePacket};
 use crate::real::Real;
 
@@ -305,7 +305,11 @@ fn ln_bochner_bound<T: Real>(packet: &WavePacket<T>) -> T {
     let (nx, ny) = (x / s, y / s);
     let (dx, dy, dh) = (det2(&nx), det2(&ny), det2_of_mean(&nx, &ny));
     let b = T::lit(0.25) * (dx.ln() + dy.ln()) - T::lit(0.5) * dh.ln();
-    if b.is_finite() { b.min(T::zero()) } else { T::zero() }
+    if b.is_finite() {
+        b.min(T::zero())
+    } else {
+        T::zero()
+    }
 }
 
 impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
@@ -331,10 +335,9 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     #[must_use]
     pub(crate) fn channel_sections(&self) -> Option<[(&Gaussian<T, 2>, T); 2]> {
         match (&self.sections[0], &self.sections[1]) {
-            (Some(x), Some(y)) if !self.single_shape => Some([
-                (x, self.ln_sx.exp()),
-                (y, self.ln_sy.exp()),
-            ]),
+            (Some(x), Some(y)) if !self.single_shape => {
+                Some([(x, self.ln_sx.exp()), (y, self.ln_sy.exp())])
+            }
             _ => None,
         }
     }

@@ -94,14 +94,10 @@ where
     } else {
         unit_scaled(Matrix1::new(material.specular.m00(g) * g.cos_o), ls)[0]
     };
-    let scattered = one_weight_scatter(
-        coherence,
-        psd,
-        prepared,
-        g,
-        (attenuation, ln_front),
-        || Matrix1::new(material.scatter.m00(g) * g.cos_o),
-    )[0];
+    let scattered =
+        one_weight_scatter(coherence, psd, prepared, g, (attenuation, ln_front), || {
+            Matrix1::new(material.scatter.m00(g) * g.cos_o)
+        })[0];
     MuellerResponse {
         specular,
         scattered,
@@ -135,14 +131,10 @@ where
     } else {
         Matrix4::zeros()
     };
-    let scattered = one_weight_scatter(
-        coherence,
-        psd,
-        prepared,
-        g,
-        (attenuation, ln_front),
-        || material.scatter.mueller(g).0 * t,
-    );
+    let scattered =
+        one_weight_scatter(coherence, psd, prepared, g, (attenuation, ln_front), || {
+            material.scatter.mueller(g).0 * t
+        });
     MuellerResponse {
         specular: Mueller(specular),
         scattered: Mueller(scattered),

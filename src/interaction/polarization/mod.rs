@@ -27,9 +27,9 @@ use super::geometry::Geometry;
 use super::material::RoughSurface;
 use super::pbsdf::Pbsdf;
 use super::prepared::{Plan, PreparedPacket};
+use crate::mueller::Mueller;
 use crate::packet::WavePacket;
 use crate::psd::Psd;
-use crate::mueller::Mueller;
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -212,7 +212,6 @@ where
 }
 
 impl PolarizationModel for Intensity {
-
     type Throughput<T: Real> = T;
 
     #[inline]
@@ -282,7 +281,6 @@ impl PolarizationModel for Intensity {
 }
 
 impl PolarizationModel for OneShape {
-
     type Throughput<T: Real> = Mueller<T>;
 
     #[inline]
@@ -328,7 +326,6 @@ impl PolarizationModel for OneShape {
 }
 
 impl PolarizationModel for Full {
-
     type Throughput<T: Real> = Mueller<T>;
 
     #[inline]

@@ -228,7 +228,6 @@ impl<T: Real> KernelOutput<T> for IntensityResponse<T> {
     }
 }
 
-
 pub(crate) mod sealed {
     pub trait Sealed {}
 }
