@@ -200,9 +200,7 @@ fn furnace_energy_at_most_one_for_conductors_gratings_and_other_psds() {
         check(&format!("gold {deg}°"), m, se, None);
         // The reflectance of the smooth metal bounds the rough one's energy from above up to
         // the first-order imbalance.
-        let r = gold
-            .specular
-            .reflectance((deg as f64).to_radians().cos(), false);
+        let r = gold.specular.reflectance(deg.to_radians().cos(), false);
         assert!(
             m <= r + bound(0.01) + 4.0 * se,
             "gold {deg}°: {m} > R = {r}"
@@ -311,9 +309,12 @@ fn backward_furnace_excess_is_the_finite_coherence_term() {
 }
 
 /// Cached draws per part for the mixture search (module docs).
+/// One draw of a part: `f(x)` and `q_k(x)` for every part `k` (`None`: evanescent).
+type Draw = Option<(f64, [f64; 4])>;
+
 struct PartDraws {
-    /// Per part present: per draw, `f(x)` and `q_k(x)` for every part `k` (`None`: evanescent).
-    draws: Vec<(usize, Vec<Option<(f64, [f64; 4])>>)>,
+    /// Per part present: its draws.
+    draws: Vec<(usize, Vec<Draw>)>,
 }
 
 impl PartDraws {
@@ -386,7 +387,7 @@ const MIN_PART: f64 = 1e-3;
 fn best_mixture(d: &PartDraws, n: usize, start: [f64; 4]) -> ([f64; 4], f64) {
     let parts = d.parts();
     let mut best = (start, d.rel_se(&start, n).1);
-    let mut visit = |raw: [f64; 4], best: &mut ([f64; 4], f64)| {
+    let visit = |raw: [f64; 4], best: &mut ([f64; 4], f64)| {
         let mut p = [0.0; 4];
         let mut total = 0.0;
         for &j in &parts {
@@ -446,10 +447,10 @@ fn mixture_is_within_two_of_the_best_at_sunlight_coherence() {
         "N = {n}; rel. s.e. of the albedo of unpolarized sunlight (Ω = 6.8e-5 sr, λ = 0.55 µm)"
     );
     println!("case                          ours      best      ratio   ours p / best p");
-    let mut run = |name: &str,
-                   sampler: &LobeSampler<'_, f64>,
-                   fx: &dyn Fn(&Vector3<f64>) -> f64,
-                   direct: &mut dyn FnMut(&mut SplitMix64) -> Option<f64>| {
+    let run = |name: &str,
+               sampler: &LobeSampler<'_, f64>,
+               fx: &dyn Fn(&Vector3<f64>) -> f64,
+               direct: &mut dyn FnMut(&mut SplitMix64) -> Option<f64>| {
         let d = PartDraws::new(sampler, fx, 20_000, 17);
         let ours = sampler.part_probabilities();
         let (mean, r_ours) = d.rel_se(&ours, n);
