@@ -45,8 +45,8 @@ pub(crate) struct GaussLobe<T: Real> {
     pub(crate) centre: Vector2<T>,
     /// Lower-triangular Cholesky factor (l₀₀, l₁₀, l₁₁).
     pub(crate) l: [T; 3],
-    /// `−ln 2π − ln(l₀₀ l₁₁)`.
-    pub(crate) ln_norm: T,
+    /// `1/(2π l₀₀ l₁₁)`, the density at the centre.
+    pub(crate) norm: T,
 }
 
 impl<T: Real> GaussLobe<T> {
@@ -71,11 +71,11 @@ impl<T: Real> GaussLobe<T> {
             return None;
         }
         let l11 = r.sqrt();
-        let ln_norm = -ln_two_pi::<T>() - (l00 * l11).ln();
-        ln_norm.is_finite().then_some(Self {
+        let norm = (T::two_pi() * l00 * l11).recip();
+        (norm.is_finite() && norm >= T::MIN_POSITIVE).then_some(Self {
             centre,
             l: [l00, l10, l11],
-            ln_norm,
+            norm,
         })
     }
 
@@ -89,19 +89,13 @@ impl<T: Real> GaussLobe<T> {
         self.centre + Vector2::new(l00 * z0, l10 * z0 + l11 * z1)
     }
 
-    /// `ln 𝒩(h; c, L Lᵀ)`.
-    #[inline]
-    pub(crate) fn log_density(&self, h: &Vector2<T>) -> T {
-        let [l00, l10, l11] = self.l;
-        let z0 = (h.x - self.centre.x) / l00;
-        let z1 = (h.y - self.centre.y - l10 * z0) / l11;
-        self.ln_norm - T::lit(0.5) * (z0 * z0 + z1 * z1)
-    }
-
     /// `𝒩(h; c, L Lᵀ)`.
     #[inline]
     pub(crate) fn density(&self, h: &Vector2<T>) -> T {
-        self.log_density(h).exp()
+        let [l00, l10, l11] = self.l;
+        let z0 = (h.x - self.centre.x) / l00;
+        let z1 = (h.y - self.centre.y - l10 * z0) / l11;
+        self.norm * (-T::lit(0.5) * (z0 * z0 + z1 * z1)).exp()
     }
 }
 

@@ -1,0 +1,235 @@
+//! Criterion benches of the renderer layer (`gmueller::bsdf`) against the kernel it wraps, per
+//! model level (all nine) and precision, on rough glass (Gaussian PSD σ = 10 nm, ℓ = 2 µm,
+//! η = 1.5) at 64 seeded shading configurations (incidence 0–70° from either side, exits near
+//! the mirror or Snell direction, sunlight or 3–30 µm of surface coherence):
+//! - `evaluate_prepared`: `Kernel::evaluate_prepared` with the packet prepared and the
+//!   geometry built outside the loop (the baseline);
+//! - `eval`: `Bsdf::eval` (the geometry built inside, the BSDF form);
+//! - `exit_build+sample+pdf`: `Bsdf::exit_sampler` + `LobeSampler::sample` + `LobeSampler::pdf`
+//!   (forward: what a light tracer pays per bounce before evaluating);
+//! - `incident_build+sample+pdf`: `Bsdf::incident_sampler` + `sample` + `pdf` (backward);
+//! - `pdf`: `LobeSampler::pdf` of a built sampler (what MIS pays per light sample).
+//!
+//! The budget is `build + draw + pdf ≤ 2 × evaluate_prepared` at the same level and
+//! precision. Each group also has one degenerate case (normal incidence).
+//!
+//! Run: `cargo bench --bench bsdf -- --warm-up-time 0.5 --measurement-time 1.5`.
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use gmueller::Real;
+use gmueller::bsdf::{Bsdf, Incident, SurfaceCoherence};
+use gmueller::frame::Frame;
+use gmueller::interaction::{
+    CoherenceWeights, Geometry, Kernel, Level, LevelVisitor, PolarizationModel, RoughDielectric,
+};
+use gmueller::psd::{ClosedForm, GaussianPsd};
+use gmueller::stokes::Stokes;
+use nalgebra::Vector3;
+
+#[path = "../tests/common/rng.rs"]
+mod rng;
+use rng::SplitMix64;
+
+const N: usize = 64;
+
+/// One seeded shading configuration.
+struct Case<T: Real> {
+    to_source: Vector3<T>,
+    exit: Vector3<T>,
+    sun: bool,
+    width: f64,
+}
+
+fn frame<T: Real>() -> Frame<T> {
+    Frame::from_normal(Vector3::new(0.1, -0.2, 1.0).map(T::lit)).unwrap()
+}
+
+fn dir<T: Real>(f: &Frame<T>, theta: f64, phi: f64, side: f64) -> Vector3<T> {
+    let v = Vector3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        side * theta.cos(),
+    );
+    f.x() * T::lit(v.x) + f.y() * T::lit(v.y) + f.k() * T::lit(v.z)
+}
+
+fn cases<T: Real>() -> Vec<Case<T>> {
+    let f = frame::<T>();
+    let mut rng = SplitMix64(0xb5df);
+    let mut out: Vec<Case<T>> = (0..N)
+        .map(|i| {
+            let below = i % 4 == 3;
+            let side = if below { -1.0 } else { 1.0 };
+            let ti = rng.unit() * 70f64.to_radians();
+            let phi = rng.unit() * std::f64::consts::TAU;
+            let to_source = dir(&f, ti, phi, side);
+            // Reflection (3 of 4) near the mirror direction, else transmission near Snell's.
+            let dt = (rng.unit() - 0.5) * 0.2;
+            let exit = if i % 3 != 2 {
+                dir(
+                    &f,
+                    (ti + dt).abs().min(1.4),
+                    phi + std::f64::consts::PI,
+                    side,
+                )
+            } else {
+                let n = if below { 1.5 } else { 1.0 / 1.5 };
+                let tt = (ti.sin() * n).min(0.99).asin();
+                dir(
+                    &f,
+                    (tt + dt).abs().min(1.4),
+                    phi + std::f64::consts::PI,
+                    -side,
+                )
+            };
+            Case {
+                to_source,
+                exit,
+                sun: i % 2 == 0,
+                width: 3.0 + 27.0 * rng.unit(),
+            }
+        })
+        .collect();
+    // The degenerate case: normal incidence, normal exit.
+    out[0] = Case {
+        to_source: f.k(),
+        exit: f.k(),
+        sun: true,
+        width: 10.0,
+    };
+    out
+}
+
+struct Bench<'a, T: Real> {
+    c: &'a mut Criterion,
+    prec: &'a str,
+    glass: &'a RoughDielectric<T, GaussianPsd<T, 2>>,
+    cases: &'a [Case<T>],
+}
+
+impl<T: Real> LevelVisitor<T, GaussianPsd<T, 2>> for Bench<'_, T> {
+    type Output = ();
+    fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
+    where
+        Pol: PolarizationModel,
+        Coh: CoherenceWeights<T, GaussianPsd<T, 2>>,
+    {
+        let f = frame::<T>();
+        let b = Bsdf::new(self.glass, kernel.clone(), f, T::lit(0.55)).unwrap();
+        let stokes = Stokes::unpolarized(T::one()).unwrap();
+        let coherence: Vec<SurfaceCoherence<T>> = self
+            .cases
+            .iter()
+            .map(|c| SurfaceCoherence::new(T::lit(c.width)).unwrap())
+            .collect();
+        let incidents: Vec<Incident<T, Pol, Coh>> = self
+            .cases
+            .iter()
+            .zip(&coherence)
+            .map(|(c, coh)| {
+                let p = if c.sun {
+                    b.distant_packet(stokes, T::lit(6.8e-5), c.to_source)
+                } else {
+                    b.surface_packet(stokes, c.to_source, coh)
+                };
+                b.prepare(&p.unwrap()).unwrap()
+            })
+            .collect();
+        let geometries: Vec<Geometry<T>> = self
+            .cases
+            .iter()
+            .map(|c| b.geometry(c.to_source, c.exit).unwrap())
+            .collect();
+        let samplers: Vec<_> = incidents
+            .iter()
+            .map(|inc| b.exit_sampler(inc).unwrap())
+            .collect();
+        let mut rng = SplitMix64(7);
+        let uniforms: Vec<[T; 3]> = (0..N)
+            .map(|_| [rng.unit(), rng.unit(), rng.unit()].map(T::lit))
+            .collect();
+        let probes: Vec<Vector3<T>> = self.cases.iter().map(|c| c.exit).collect();
+        let name = level.name().replace('/', "x");
+        let mut g = self.c.benchmark_group(format!("bsdf/{}", self.prec));
+        g.bench_function(BenchmarkId::new("evaluate_prepared", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                black_box(kernel.evaluate_prepared(
+                    black_box(self.glass),
+                    black_box(incidents[i].prepared()),
+                    black_box(&geometries[i]),
+                ))
+            });
+        });
+        g.bench_function(BenchmarkId::new("eval", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                black_box(b.eval(black_box(&incidents[i]), black_box(self.cases[i].exit)))
+            });
+        });
+        g.bench_function(BenchmarkId::new("exit_build+sample+pdf", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                let s = b.exit_sampler(black_box(&incidents[i])).unwrap();
+                let u = uniforms[i];
+                let d = s.sample(u[0], [u[1], u[2]]);
+                black_box((d, s.pdf(black_box(&probes[i]))))
+            });
+        });
+        g.bench_function(
+            BenchmarkId::new("incident_build+sample+pdf", &name),
+            |bench| {
+                let mut i = 0;
+                bench.iter(|| {
+                    i = (i + 1) & (N - 1);
+                    let s = b
+                        .incident_sampler(black_box(self.cases[i].exit), &coherence[i])
+                        .unwrap();
+                    let u = uniforms[i];
+                    let d = s.sample(u[0], [u[1], u[2]]);
+                    black_box((d, s.pdf(black_box(&self.cases[i].to_source))))
+                });
+            },
+        );
+        g.bench_function(BenchmarkId::new("pdf", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                black_box(samplers[i].pdf(black_box(&probes[i])))
+            });
+        });
+        g.finish();
+    }
+}
+
+fn for_precision<T: Real>(c: &mut Criterion, prec: &str) {
+    let glass = RoughDielectric::new(
+        GaussianPsd::<T, 2>::isotropic(T::lit(0.01), T::lit(2.0)).unwrap(),
+        T::lit(1.5),
+    )
+    .unwrap();
+    let cases = cases::<T>();
+    for level in Level::ALL {
+        level.dispatch(
+            ClosedForm,
+            Bench {
+                c,
+                prec,
+                glass: &glass,
+                cases: &cases,
+            },
+        );
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    for_precision::<f64>(c, "f64");
+    for_precision::<f32>(c, "f32");
+}
+
+criterion_group!(bsdf, benches);
+criterion_main!(bsdf);
