@@ -24,6 +24,9 @@
 //!   materials ([`interaction::RoughDielectric`], [`interaction::RoughConductor`] and their smooth
 //!   limits); [`interaction::batch`], the plane-wave Rayleigh–Rice kernel over batches of
 //!   directions (reflection).
+//! - [`bsdf`]: the layer a renderer calls — the kernel as a BSDF (Mueller matrices per lobe in
+//!   documented frames, lobe flags), sampling and pdf in both tracing directions, and the
+//!   coherence one Monte Carlo sample of light carries (`docs/renderer.md`).
 //!
 //! ## Quick start
 //! ```
@@ -112,3 +115,8 @@ pub use real::Real;
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
+
+/// The renderer guide's Rust examples (`docs/renderer.md`), compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../docs/renderer.md")]
+pub struct RendererGuideDoctests;
