@@ -3,7 +3,9 @@
 //! level (Intensity/OneShape/Full × PlaneWave/Partial/Incoherent) with a Gaussian PSD + `ClosedForm`
 //! and with a K-correlation PSD + Gauss–Hermite blur, on an opaque surface and at a glass
 //! interface in reflection and transmission, plus `Mueller::from_jones`, frame changes and
-//! `Geometry::for_packet`; the count must be zero.
+//! `Geometry::for_packet`; and the renderer layer (`gmueller::bsdf`: light helpers, `prepare`,
+//! `eval` in both forms, both samplers with their draws, densities and weights) at every level
+//! on rough glass and a grating; the count must be zero.
 //!
 //! The counting allocator needs `unsafe impl GlobalAlloc`: the crate's `[lints]` deny
 //! `unsafe_code` for every target and the library forbids it in `src/lib.rs`; this test file alone
@@ -267,4 +269,97 @@ fn kernel_evaluation_allocates_nothing() {
     assert!(n >= 1 && v.len() == 16, "the counting allocator counts");
     all_levels::<f64>();
     all_levels::<f32>();
+}
+
+/// The renderer layer at every level on rough glass (both sides) and a grating: `Bsdf::new`,
+/// the light helpers, `prepare`, `eval`, both samplers with `sample`, `pdf` and their weights.
+fn renderer_layer<T: Real>() {
+    use gmueller::bsdf::{Bsdf, SamplingPsd, SurfaceCoherence};
+    use gmueller::interaction::Throughput;
+    use gmueller::psd::Grating;
+
+    struct RunBsdf<'a, T: Real, P> {
+        material: &'a RoughSurface<P, gmueller::interaction::FresnelInterface<T>, RayleighRice<T>>,
+    }
+    impl<T: Real, P: SamplingPsd<T>> LevelVisitor<T, P> for RunBsdf<'_, T, P> {
+        type Output = ();
+        fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
+        where
+            Pol: PolarizationModel,
+            Coh: CoherenceWeights<T, P>,
+        {
+            let frame = Frame::from_normal(Vector3::new(0.1, 0.2, 1.0).map(T::lit)).unwrap();
+            let coherence = SurfaceCoherence::new(T::lit(8.0)).unwrap();
+            let stokes = Stokes::unpolarized(T::one()).unwrap();
+            let dirs = [
+                Vector3::new(-0.4, 0.1, 0.9),
+                Vector3::new(0.3, -0.2, -0.93),
+                Vector3::new(0.0, 0.0, 1.0),
+                Vector3::new(0.6, 0.5, 0.2),
+            ]
+            .map(|v| v.map(T::lit));
+            let (n, ok) = count(|| {
+                let b = Bsdf::new(self.material, kernel, frame, T::lit(0.55)).unwrap();
+                let mut ok = true;
+                for (i, s) in dirs.iter().enumerate() {
+                    let exit = dirs[(i + 1) % dirs.len()];
+                    let p = if i % 2 == 0 {
+                        b.distant_packet(stokes, T::lit(6.8e-5), *s)
+                    } else {
+                        b.surface_packet(stokes, *s, &coherence)
+                    };
+                    let inc = b.prepare(&p.unwrap()).unwrap();
+                    ok &= b.eval(black_box(&inc), exit).is_ok();
+                    ok &= b.eval_stokes(&inc, exit).is_ok();
+                    let fwd = b.exit_sampler(&inc).unwrap();
+                    let bwd = b.incident_sampler(exit, &coherence).unwrap();
+                    for u in [0.1, 0.5, 0.97] {
+                        let u = T::lit(u);
+                        if let Some(d) = fwd.sample(u, [u, T::lit(0.3)]) {
+                            ok &= fwd.pdf(&d.direction) == d.pdf || d.lobe.delta;
+                            ok &= b.exit_weight(&inc, &d).unwrap().0.m00().is_finite();
+                        }
+                        if let Some(d) = bwd.sample(u, [T::lit(0.7), u]) {
+                            ok &= bwd.pdf(&d.direction) == d.pdf || d.lobe.delta;
+                            let w = b.incident_weight(exit, &coherence, &d).unwrap().0;
+                            ok &= w.m00().is_finite();
+                        }
+                    }
+                }
+                ok
+            });
+            assert!(ok, "{}", level.name());
+            assert_eq!(
+                n,
+                0,
+                "{n} allocations in the renderer layer at {}",
+                level.name()
+            );
+        }
+    }
+    let glass = RoughDielectric::new(
+        GaussianPsd::<T, 2>::isotropic(T::lit(0.01), T::lit(2.0)).unwrap(),
+        T::lit(1.5),
+    )
+    .unwrap();
+    let grating = RoughDielectric::new(
+        Grating::<T, 2>::sinusoidal_height(
+            T::lit(0.02),
+            T::lit(3.0),
+            &nalgebra::Vector2::new(T::one(), T::lit(0.3)),
+        )
+        .unwrap(),
+        T::lit(1.5),
+    )
+    .unwrap();
+    for level in Level::ALL {
+        level.dispatch(ClosedForm, RunBsdf { material: &glass });
+        level.dispatch(ClosedForm, RunBsdf { material: &grating });
+    }
+}
+
+#[test]
+fn renderer_layer_allocates_nothing() {
+    renderer_layer::<f64>();
+    renderer_layer::<f32>();
 }
