@@ -79,6 +79,14 @@ impl<T: Real> GaussLobe<T> {
         })
     }
 
+    /// A lower bound of the lobe's standard deviation along its narrowest axis: the smallest
+    /// singular value of `L` is at least `|l₀₀ l₁₁| / ‖L‖_F`.
+    #[inline]
+    pub(crate) fn narrowest(&self) -> T {
+        let [a, b, c] = self.l;
+        (a * c).abs() / (a * a + b * b + c * c).sqrt()
+    }
+
     /// A draw from two uniforms in `[0, 1)` (Box–Muller).
     #[inline]
     pub(crate) fn sample(&self, u: [T; 2]) -> Vector2<T> {

@@ -392,7 +392,9 @@ where
     /// the packet's own (the sections `Ξ` of its coherence).
     ///
     /// # Errors
-    /// [`Error::NotPositiveDefinite`] when a lobe covariance over- or underflows the type.
+    /// [`Error::Unrealizable`] when a lobe covariance over- or underflows the type, or a lobe is
+    /// narrower than `8ε` (machine epsilons of `T`) in the projected disk — too narrow for the
+    /// float grid of directions there (`f32`: coherence wider than ~10⁵ λ; `f64`: ~10¹⁴ λ).
     pub fn exit_sampler(
         &self,
         incident: &Incident<T, Pol, Coh>,
@@ -449,8 +451,7 @@ where
     /// "Reciprocity"; [`sources`]).
     ///
     /// # Errors
-    /// As [`Bsdf::wavenumber`] for `exit`; [`Error::NotPositiveDefinite`] when a lobe
-    /// covariance over- or underflows the type.
+    /// As [`Bsdf::wavenumber`] for `exit`; as [`Bsdf::exit_sampler`] for the lobes.
     pub fn incident_sampler(
         &self,
         exit: Vector3<T>,
@@ -488,10 +489,7 @@ where
     }
 
     fn sampler(&self, setup: &Setup<'m, T>) -> Result<LobeSampler<'m, T>, Error> {
-        LobeSampler::new(setup).ok_or(Error::NotPositiveDefinite {
-            what: "sampling lobe covariance (over- or underflows the scalar type)",
-            min_eigenvalue: 0.0,
-        })
+        LobeSampler::new(setup).map_err(|reason| Error::Unrealizable { reason })
     }
 
     /// The integral of a Dirac lobe of geometry `g` and PSD weight `w`: `α M_part T w`.

@@ -40,6 +40,9 @@ use crate::interaction::{CoherenceLevel, Side};
 use crate::psd::GaussianPsd;
 use crate::real::Real;
 
+/// The narrowest Gaussian lobe a sampler accepts, in machine epsilons of the scalar type
+/// (standard deviation in the projected disk).
+const MIN_WIDTH_ULPS: f64 = 8.0;
 /// The floor `ε` of the part probabilities (module docs).
 const PART_FLOOR: f64 = 1e-3;
 /// The weight of a blurred grating order whose centre lies beyond the propagating directions
@@ -217,9 +220,52 @@ fn clamp01<T: Real>(v: T) -> T {
 }
 
 impl<'a, T: Real> LobeSampler<'a, T> {
-    /// The sampler for `setup` (module docs). `None` when no lobe can be built (the lobe
-    /// covariances over- or underflow the type).
-    pub(crate) fn new(setup: &Setup<'a, T>) -> Option<Self> {
+    /// The sampler for `setup` (module docs), or why it cannot be built.
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN width must fail the test too"
+    )]
+    pub(crate) fn new(setup: &Setup<'a, T>) -> Result<Self, &'static str> {
+        let s = Self::build(setup)
+            .ok_or("sampling lobe covariance over- or underflows the scalar type")?;
+        // Every Gaussian lobe must resolve on the float grid of the projected disk (spacing ≤ ε
+        // there): a narrower one puts all its draws on a few representable directions, where
+        // its density can underflow to 0.
+        let k = s.sides[0].k.max(s.sides[1].k);
+        if !(s.narrowest() / k >= T::lit(MIN_WIDTH_ULPS) * T::EPSILON) {
+            return Err(
+                "sampling lobe narrower than 8ε in the projected disk (not resolvable \
+                        in the scalar type): a smaller coherence width, or f64",
+            );
+        }
+        Ok(s)
+    }
+
+    /// The narrowest standard deviation (in `h_t`) of the lobes, `+∞` without Gaussian lobes.
+    fn narrowest(&self) -> T {
+        let mut w = T::MAX;
+        if let Some(Specular::Gauss(lobes, count)) = self.specular {
+            for (_, l) in &lobes[..count] {
+                w = w.min(l.narrowest());
+            }
+        }
+        match self.scatter {
+            Scatter::One(l)
+            | Scatter::Orders { shape: Some(l), .. }
+            | Scatter::Power { core: Some(l), .. } => w = w.min(l.narrowest()),
+            Scatter::Mixture { comps, blur, .. } => {
+                for c in comps {
+                    w = w.min(mixture_lobe(c, blur.as_ref()).map_or(T::zero(), |l| l.narrowest()));
+                }
+            }
+            _ => {}
+        }
+        w
+    }
+
+    /// The lobes, probabilities and maps of `setup`; `None` when a covariance over- or
+    /// underflows.
+    fn build(setup: &Setup<'a, T>) -> Option<Self> {
         let f = &setup.facing;
         let (t1, t2, n) = (f.x(), f.y(), f.k());
         let ka = setup.k_known;

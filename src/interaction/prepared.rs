@@ -355,9 +355,24 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     }
 }
 
-/// `m · e^{ln_e}` for the BSDF form: 0 when the scale is below the smallest normal number (a
-/// matrix cannot keep the digits of a subnormal scale entry by entry, and 0 is a valid Mueller
-/// matrix), `±∞` for the nonzero entries beyond the largest (zeros stay 0).
+/// 0 when every entry of `m` is below the smallest normal number (a matrix whose entries are
+/// all subnormal has lost the digits that keep it valid, and 0 is a valid Mueller matrix);
+/// `m` otherwise.
+#[inline]
+pub(crate) fn flush_subnormal<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+) -> nalgebra::SMatrix<T, R, C> {
+    if m.amax() >= T::MIN_POSITIVE {
+        m
+    } else {
+        nalgebra::SMatrix::zeros()
+    }
+}
+
+/// `m · e^{ln_e}` for the BSDF form: 0 when the scale, or every entry of the result, is below
+/// the smallest normal number (a matrix cannot keep the digits of a subnormal scale entry by
+/// entry, and 0 is a valid Mueller matrix), `±∞` for the nonzero entries beyond the largest
+/// (zeros stay 0).
 #[inline]
 pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
     m: nalgebra::SMatrix<T, R, C>,
@@ -365,7 +380,7 @@ pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
 ) -> nalgebra::SMatrix<T, R, C> {
     let e = ln_e.exp();
     if e >= T::MIN_POSITIVE && e <= T::MAX {
-        m * e
+        flush_subnormal(m * e)
     } else if e > T::MAX {
         m.map(|x| if x == T::zero() { x } else { x * e })
     } else {

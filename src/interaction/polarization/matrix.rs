@@ -17,7 +17,7 @@ use super::super::coherence::CoherenceWeights;
 use super::super::geometry::Geometry;
 use super::super::material::RoughSurface;
 use super::super::pbsdf::Pbsdf;
-use super::super::prepared::{PreparedPacket, unit_scaled};
+use super::super::prepared::{PreparedPacket, flush_subnormal, unit_scaled};
 use super::front;
 use super::response::MuellerResponse;
 use crate::mueller::Mueller;
@@ -59,7 +59,7 @@ where
     let xi = prepared.sections[2].as_ref();
     let kd = coherence.scatter_weight(psd, xi, &g.h_t);
     match prepared.unit_linear_scale(kd, attenuation, g.eta) {
-        Some(e) => u() * e,
+        Some(e) => flush_subnormal(u() * e),
         None => {
             let ld = ln_front + coherence.log_scatter_weight(psd, xi, &g.h_t);
             if is_dark(ld) {

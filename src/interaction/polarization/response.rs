@@ -280,6 +280,12 @@ pub trait Throughput<T: Real>: Copy + Debug + PartialEq + sealed::Sealed {
     /// The throughput of a Mueller matrix at this level: the matrix itself, or its `M₀₀`.
     #[must_use]
     fn from_mueller(m: &Mueller<T>) -> Self;
+    /// A light of this level from a Stokes vector: the vector itself, or its `S0`.
+    #[must_use]
+    fn light(s: &Stokes<T>) -> Self::Light;
+    /// The Stokes vector of a light, `None` at the intensity level (which has none).
+    #[must_use]
+    fn light_stokes(light: &Self::Light) -> Option<Stokes<T>>;
 }
 
 impl<T: Real> sealed::Sealed for Mueller<T> {}
@@ -331,6 +337,14 @@ impl<T: Real> Throughput<T> for Mueller<T> {
     fn from_mueller(m: &Mueller<T>) -> Self {
         *m
     }
+    #[inline]
+    fn light(s: &Stokes<T>) -> Stokes<T> {
+        *s
+    }
+    #[inline]
+    fn light_stokes(light: &Stokes<T>) -> Option<Stokes<T>> {
+        Some(*light)
+    }
 }
 
 impl<T: Real> Throughput<T> for T {
@@ -378,6 +392,14 @@ impl<T: Real> Throughput<T> for T {
     #[inline]
     fn from_mueller(m: &Mueller<T>) -> Self {
         m.0[(0, 0)]
+    }
+    #[inline]
+    fn light(s: &Stokes<T>) -> T {
+        s.s0()
+    }
+    #[inline]
+    fn light_stokes(_light: &T) -> Option<Stokes<T>> {
+        None
     }
 }
 
@@ -443,12 +465,15 @@ impl<T: Real, M: Throughput<T>> MuellerResponse<T, M> {
 
 impl<T: Real> MuellerResponse<T, Mueller<T>> {
     /// The Stokes radiances for the incident Stokes vector `s` (in the packet's frame): the
-    /// kernel's [`Response`] for a packet with `s` and the coherence this was evaluated for.
+    /// kernel's [`Response`] for a packet with `s` and the coherence this was evaluated for,
+    /// valid Stokes vectors (each product projected onto the cone where rounding left it
+    /// outside, as the kernel's own).
     #[must_use]
     pub fn apply(&self, s: &Stokes<T>) -> Response<T> {
+        let cone = |m: &Mueller<T>| Stokes(super::onto_cone(m.0 * s.0));
         Response {
-            specular: self.specular * *s,
-            scattered: self.scattered * *s,
+            specular: cone(&self.specular),
+            scattered: cone(&self.scattered),
             attenuation: self.attenuation,
             side: self.side,
         }
