@@ -3,6 +3,15 @@
 //! (material, incident direction, wavelength) that serves every packet, with `sample` and `pdf`
 //! that agree exactly.
 //!
+//! **Renderers: use [`crate::bsdf`] instead.** This sampler tabulates an angular CDF at
+//! construction (about a thousand kernel-sized evaluations, ~50 µs, on the heap), targets only
+//! the scattered part of the reflection side (not the coherent specular lobe, which under
+//! sunlight carries most of the energy), and samples exit directions only. The renderer layer's
+//! [`crate::bsdf::LobeSampler`] draws every lobe of both sides in closed form from the packet's
+//! own coherence, in either tracing direction, for a few hundred nanoseconds and no allocation.
+//! This one stays as the main paper's maximally-incoherent proposal (one table for all packets
+//! of a minimum width), with its tests.
+//!
 //! # Formula (the proposal and its Jacobians)
 //! ```text
 //! u = r̂_t = (r̂·t̂₁, r̂·t̂₂) ∈ unit disk,  c = −ŝ_t     (projected-disk coordinates; h_t = k(u − c))
