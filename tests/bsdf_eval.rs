@@ -1,0 +1,769 @@
+//! Verifies the kernel in BSDF form (`Kernel::evaluate_mueller`, `MuellerResponse`) and the
+//! promises of the renderer layer around it (`gmueller::bsdf`), against the kernel's Stokes form
+//! and against computations of this file:
+//! - **Matrix form = Stokes form** (property tests from the fixed seed of `tests/common`, f64 and
+//!   f32): random realizable packets (Stokes vectors inside the cone, near and on its surface;
+//!   one coherence shape, or two with `|μ|` up to the Bochner bound, the bound itself included),
+//!   five materials (rough glass lit from either side, a conductor, K-correlation blurred by
+//!   `Partial(GaussHermite)`, a Gaussian mixture, a sinusoidal height grating), exits on both
+//!   sides up to 89.99° and at any azimuth (half of them within a few lobe widths of the specular
+//!   direction), all nine levels: `evaluate_mueller(..).apply(S)` equals `evaluate(..)` per lobe,
+//!   entry by entry, within `16 S0 MIN_POSITIVE + rel · max(S0_a, S0_b, M₀₀ S0)` (`rel` below;
+//!   `M₀₀ S0` is the size of every term of `M S`, since `|M_ij| ≤ M₀₀` for a realizable matrix).
+//!   A lobe whose matrix is flushed to 0 while the Stokes form is not is counted, and asserted to
+//!   be one whose scale is below the smallest normal number; most lobes are compared.
+//! - The intensity level's scalar equals `M₀₀` of the one-shape level's matrix.
+//! - **Validity**: one-shape matrices are Cloude-realizable and map valid Stokes vectors to valid
+//!   ones; two-shape (Full) matrices map every Stokes vector the shapes admit to a valid one, and
+//!   a fully correlated vector the shapes do not admit to an invalid one (degree of polarization
+//!   `1/|μ|_max` at the specular direction, where the cap is exact).
+//! - `Bsdf::eval`/`eval_stokes` equal the kernel's two forms; `Bsdf::prepare` and
+//!   `Kernel::try_evaluate` reject packets and geometries of another wavelength, medium or
+//!   direction; the new API returns errors, never panics, on bad finite input and NaN uniforms.
+//! - **Delta lobes**: the plane-wave level's Dirac throughputs (`exit_weight`/`incident_weight`
+//!   × pdf) equal the limit of the partially coherent lobe's integral as the coherence width grows
+//!   (adaptive Gauss–Legendre quadrature of the `Partial` lobe at w = 50, 200, 1000 µm), for the
+//!   specular reflection and transmission of rough glass and a grating order, forward and
+//!   backward; and backward = η² × forward for the same pair of directions.
+//! - `SurfaceCoherence::packet`'s section is `I/σ²`; `Frame::from_normal` is orthonormal and
+//!   right-handed; `Grating::sinusoidal_height` has the orders of its formula; `Bsdf::flags`.
+
+mod common;
+
+use std::cell::RefCell;
+
+use common::Tol;
+use common::quadrature::integrate;
+use gmueller::Real;
+use gmueller::bsdf::{Bsdf, LobeFlags, SurfaceCoherence};
+use gmueller::error::Error;
+use gmueller::frame::Frame;
+use gmueller::interaction::{
+    CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, MuellerResponse, OneShape,
+    Partial, Pbsdf, PlaneWave, PolarizationModel, Response, RoughConductor, RoughDielectric,
+    RoughSurface, SmoothConductor, SmoothDielectric, surface_coherence_term,
+    surface_inverse_coherence,
+};
+use gmueller::mueller::Mueller;
+use gmueller::packet::{Channel, CoherenceShape, WavePacket};
+use gmueller::psd::{
+    BlurMethod, ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation,
+    Psd,
+};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Matrix4, Vector2, Vector3, Vector4};
+use num_complex::Complex;
+use proptest::prelude::*;
+use proptest::test_runner::{TestCaseError, TestRunner};
+
+/// The vacuum wavelength (µm) and the relative index of the dielectrics.
+const LAMBDA: f64 = 0.5;
+const ETA: f64 = 1.5;
+
+// ------------------------------------------------------------------ materials
+
+fn glass<T: Real>() -> RoughDielectric<T, GaussianPsd<T, 2>> {
+    RoughDielectric::new(GaussianPsd::isotropic(T::lit(0.02), T::lit(1.0)).unwrap(), T::lit(ETA))
+        .unwrap()
+}
+
+fn gold<T: Real>() -> RoughConductor<T, GaussianPsd<T, 2>> {
+    let eta = Complex::new(T::lit(0.47), T::lit(2.4));
+    RoughConductor::new(GaussianPsd::isotropic(T::lit(0.015), T::lit(1.5)).unwrap(), eta).unwrap()
+}
+
+fn k_correlated<T: Real>() -> RoughDielectric<T, KCorrelation<T, 2>> {
+    let psd = KCorrelation::new(T::lit(4e-4), T::lit(4.0), T::lit(2.5)).unwrap();
+    RoughDielectric::new(psd, T::lit(ETA)).unwrap()
+}
+
+fn mixture<T: Real>() -> RoughDielectric<T, GaussianMixturePsd<T, 2>> {
+    let mix = GaussianMixturePsd::new(vec![
+        GaussianPsd::isotropic(T::lit(0.01), T::lit(0.7)).unwrap(),
+        GaussianPsd::isotropic(T::lit(0.02), T::lit(3.0)).unwrap(),
+    ])
+    .unwrap();
+    RoughDielectric::new(mix, T::lit(ETA)).unwrap()
+}
+
+fn grating<T: Real>() -> RoughConductor<T, Grating<T, 2>> {
+    let d = Vector2::new(T::lit(0.9), T::lit(0.3));
+    let g = Grating::sinusoidal_height(T::lit(0.03), T::lit(2.0), &d).unwrap();
+    RoughConductor::new(g, Complex::new(T::lit(0.2), T::lit(3.4))).unwrap()
+}
+
+const MATERIALS: [&str; 5] = ["glass", "gold", "K-correlation", "mixture", "grating"];
+
+/// The level names, in the order the tally keeps them (coherence-major).
+const LEVELS: [&str; 9] = [
+    "Intensity/PlaneWave",
+    "OneShape/PlaneWave",
+    "Full/PlaneWave",
+    "Intensity/Partial",
+    "OneShape/Partial",
+    "Full/Partial",
+    "Intensity/Incoherent",
+    "OneShape/Incoherent",
+    "Full/Incoherent",
+];
+
+// ------------------------------------------------------------------ the random case
+
+/// One random interaction, in plain numbers (mapped to `T` by [`Built::new`]).
+#[derive(Debug, Clone)]
+struct Case {
+    material: usize,
+    /// The shading normal `(tx, ty, 1)`.
+    tilt: (f64, f64),
+    /// θ_i (degrees), φ_i (degrees), light from below (dielectrics only).
+    incidence: (f64, f64, bool),
+    /// The packet frame's rotation about its direction.
+    psi: f64,
+    /// `S0`, the degree of polarization, the Poincaré direction (z, azimuth).
+    stokes: (f64, f64, f64, f64),
+    /// Two coherence shapes; each `(width, anisotropy, angle)`; `|μ|/|μ|_max`; `S1/S0`.
+    shapes: (bool, (f64, f64, f64), (f64, f64, f64), f64, f64),
+    /// Transmitted side, near the specular direction, θ_o (degrees), φ_o (degrees), the offset
+    /// from the specular direction in lobe widths.
+    exit: (bool, bool, f64, f64, (f64, f64)),
+    /// Three more Stokes directions `(t, φ, degree)` for the validity checks.
+    probes: [(f64, f64, f64); 3],
+}
+
+/// A degree of polarization: uniform inside the cone, near its surface (`1 − 10^−e`), on it.
+fn degree() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        2 => 0.0..=1.0f64,
+        1 => (2.0..12.0f64).prop_map(|e| 1.0 - 10f64.powf(-e)),
+        1 => Just(1.0),
+    ]
+}
+
+fn shape_draw() -> impl Strategy<Value = (f64, f64, f64)> {
+    (0.0..2.0f64, 1.0..4.0f64, 0.0..std::f64::consts::PI).prop_map(|(lw, a, t)| (10f64.powf(lw), a, t))
+}
+
+fn case() -> impl Strategy<Value = Case> {
+    (
+        0..MATERIALS.len(),
+        (-0.4..0.4f64, -0.4..0.4f64),
+        (0.0..89.99f64, 0.0..360.0f64, any::<bool>()),
+        common::angle(),
+        (
+            (-3.0..3.0f64).prop_map(|e| 10f64.powf(e)),
+            degree(),
+            -1.0..=1.0f64,
+            0.0..std::f64::consts::TAU,
+        ),
+        (
+            any::<bool>(),
+            shape_draw(),
+            shape_draw(),
+            prop_oneof![3 => 0.0..=1.0f64, 1 => Just(1.0)],
+            -0.99..0.99f64,
+        ),
+        (
+            any::<bool>(),
+            any::<bool>(),
+            0.0..89.99f64,
+            0.0..360.0f64,
+            (-3.0..3.0f64, -3.0..3.0f64),
+        ),
+        proptest::array::uniform3((-1.0..=1.0f64, 0.0..std::f64::consts::TAU, degree())),
+    )
+        .prop_map(
+            |(material, tilt, incidence, psi, stokes, shapes, exit, probes)| Case {
+                material,
+                tilt,
+                incidence,
+                psi,
+                stokes,
+                shapes,
+                exit,
+                probes,
+            },
+        )
+}
+
+/// `R(t) diag(w², (w/a)²) R(t)ᵀ`.
+fn shape_matrix((w, a, t): (f64, f64, f64)) -> Matrix2<f64> {
+    let (s, c) = t.sin_cos();
+    let r = Matrix2::new(c, -s, s, c);
+    r * Matrix2::new(w * w, 0.0, 0.0, (w / a) * (w / a)) * r.transpose()
+}
+
+/// `|μ|_max = (√(|Θx||Θy|)/|Θ½|)^{1/2}`, the Bochner bound of two shapes (`crate::packet`).
+fn mu_max(x: &Matrix2<f64>, y: &Matrix2<f64>) -> f64 {
+    ((x.determinant() * y.determinant()).sqrt() / ((x + y) * 0.5).determinant()).sqrt()
+}
+
+/// The Stokes vector `S0 (1, t, 2√((1+t)(1−t)/4) m cos φ, … sin φ)`: `S_x/S_y` from `t`, the
+/// degree of correlation `m e^{iφ}`.
+fn stokes_with_correlation(s0: f64, t: f64, m: f64, phi: f64) -> Vector4<f64> {
+    let c = ((1.0 + t) * (1.0 - t)).sqrt() * m;
+    Vector4::new(1.0, t, c * phi.cos(), c * phi.sin()) * s0
+}
+
+/// A Stokes vector of degree `p`, Poincaré direction `(z, az)`.
+fn stokes_on_sphere(s0: f64, p: f64, z: f64, az: f64) -> Vector4<f64> {
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vector4::new(1.0, p * r * az.cos(), p * r * az.sin(), p * z) * s0
+}
+
+fn to_stokes<T: Real>(v: &Vector4<f64>) -> Stokes<T> {
+    Stokes::new(T::lit(v[0]), T::lit(v[1]), T::lit(v[2]), T::lit(v[3])).unwrap()
+}
+
+/// A direction at polar angle `deg` from `side · n̂`, azimuth `phi_deg`, in frame `f`.
+fn local<T: Real>(f: &Frame<T>, deg: f64, phi_deg: f64, side: f64) -> Vector3<T> {
+    let (t, p) = (deg.to_radians(), phi_deg.to_radians());
+    let lit = T::lit;
+    f.x() * lit(t.sin() * p.cos()) + f.y() * lit(t.sin() * p.sin()) + f.k() * lit(side * t.cos())
+}
+
+/// The inputs of one case in `T`.
+struct Built<T: Real> {
+    packet: WavePacket<T>,
+    geometry: Geometry<T>,
+    /// Valid Stokes vectors (single shape), or vectors the two shapes admit.
+    probes: Vec<Stokes<T>>,
+}
+
+impl<T: Real> Built<T> {
+    fn new(case: &Case, eta: Option<f64>) -> Self {
+        let surface = Frame::<T>::from_normal(Vector3::new(
+            T::lit(case.tilt.0),
+            T::lit(case.tilt.1),
+            T::one(),
+        ))
+        .unwrap();
+        let (ti, pi, below) = case.incidence;
+        let below = below && eta.is_some();
+        let side = if below { -1.0 } else { 1.0 };
+        let s = local(&surface, ti, pi, side);
+        let lambda = if below { LAMBDA / ETA } else { LAMBDA };
+        let frame = Frame::sp(-s, surface.k()).unwrap().rotated(T::lit(case.psi));
+        let (two, dx, dy, mu_frac, t) = case.shapes;
+        let (s0, p, z, az) = case.stokes;
+        let (tx, ty) = (shape_matrix(dx), if two { shape_matrix(dy) } else { shape_matrix(dx) });
+        let bound = mu_max(&tx, &ty);
+        let stokes = if two {
+            stokes_with_correlation(s0, t, mu_frac * bound, az)
+        } else {
+            stokes_on_sphere(s0, p, z, az)
+        };
+        let shape = |m: &Matrix2<f64>| CoherenceShape::new(m.map(T::lit)).unwrap();
+        let packet = WavePacket::new(
+            to_stokes(&stokes),
+            shape(&tx),
+            shape(&ty),
+            frame,
+            T::lit(lambda),
+        )
+        .unwrap();
+        let k = packet.wavenumber();
+        let geometry = |r: Vector3<T>| match eta {
+            Some(e) => Geometry::at_interface(k, &surface, T::lit(e), s, r),
+            None => Geometry::new(k, &surface, s, r),
+        };
+        let (transmit, near, to, po, off) = case.exit;
+        let transmit = transmit && eta.is_some();
+        let n = surface.facing(&s).k();
+        let out_side = if transmit { -n } else { n };
+        let random = local(&surface.facing(&s), to, po, if transmit { -1.0 } else { 1.0 });
+        let mut exit = random;
+        if near {
+            let spec = geometry(out_side).unwrap().specular_direction();
+            if let Some(spec) = spec {
+                // A few lobe widths off: Δu ≈ 1/(k_exit w).
+                let k_exit = geometry(out_side).unwrap().exit_wavenumber().to_f64();
+                let du = 1.0 / (k_exit * dx.0);
+                let f = surface.facing(&s);
+                let r = spec + f.x() * T::lit(off.0 * du) + f.y() * T::lit(off.1 * du);
+                let r = r / r.norm();
+                if (r.dot(&out_side)).to_f64() > 1e-3 {
+                    exit = r;
+                }
+            }
+        }
+        let geometry = geometry(exit).unwrap();
+        let probes = case
+            .probes
+            .iter()
+            .map(|&(t, phi, p)| {
+                let v = if two {
+                    stokes_with_correlation(1.0, t * 0.99, p.min(1.0) * bound, phi)
+                } else {
+                    stokes_on_sphere(1.0, p, t, phi)
+                };
+                to_stokes(&v)
+            })
+            .chain(std::iter::once(packet.stokes()))
+            .collect();
+        Self {
+            packet,
+            geometry,
+            probes,
+        }
+    }
+}
+
+// ------------------------------------------------------------------ matrix form = Stokes form
+
+/// What the property tests saw, per level (the order of [`LEVELS`]) and lobe (specular,
+/// scattered).
+#[derive(Debug, Default)]
+struct Tally {
+    cases: usize,
+    /// Compared with a nonzero result.
+    compared: [[usize; 2]; 9],
+    /// Both forms exactly 0.
+    both_zero: [[usize; 2]; 9],
+    /// The matrix flushed to 0 (its scale below the smallest normal), the Stokes form not.
+    flushed: [[usize; 2]; 9],
+    /// The largest `(|Δ_j| − abs)/reference` per level.
+    worst: [f64; 9],
+    /// The most negative coherency eigenvalue over the trace of a one-shape matrix.
+    worst_cloude: f64,
+    /// The largest `(|S_pol| − S0)/(max|M_ij| S0_in)` of an output.
+    worst_validity: f64,
+    /// Full/Partial scattered lobes of two-shape packets not compared: the blur's weights break
+    /// Cauchy–Schwarz, `K_½ |μ|_max > √(K_x K_y)` (see `two_shape_forms_agree_with_a_quadrature_blur`).
+    capped: usize,
+    /// Nonzero matrices whose entries are all subnormal (validity not checked).
+    subnormal: usize,
+}
+
+impl Tally {
+    fn report(&self, name: &str) {
+        println!("{name}: {} cases", self.cases);
+        for (i, level) in LEVELS.iter().enumerate() {
+            println!(
+                "  {level:<22} compared {:>4}/{:>4}  both 0 {:>4}/{:>4}  flushed {:>3}/{:>3}  max (|Δ| − abs)/ref {:.2e}",
+                self.compared[i][0],
+                self.compared[i][1],
+                self.both_zero[i][0],
+                self.both_zero[i][1],
+                self.flushed[i][0],
+                self.flushed[i][1],
+                self.worst[i]
+            );
+        }
+        println!(
+            "  most negative coherency eigenvalue / tr H {:.2e}; largest (|S_pol| − S0)/(max|M_ij| S0) {:.2e}",
+            self.worst_cloude, self.worst_validity
+        );
+        println!(
+            "  two-shape Full/Partial scattered lobes not compared (blur weights break Cauchy–Schwarz): {}",
+            self.capped
+        );
+        println!(
+            "  nonzero matrices with every entry subnormal (validity not checked): {}",
+            self.subnormal
+        );
+    }
+}
+
+/// The tolerances of one scalar type (module docs).
+#[derive(Debug, Clone, Copy)]
+struct Tolerances {
+    /// Matrix form against Stokes form, relative to the reference.
+    rel: f64,
+    /// `Mueller::is_physically_realizable`'s tolerance.
+    cloude: f64,
+    /// Validity of `M S`: `|S_pol| − S0 ≤ validity · max|M_ij| S0_in`.
+    validity: f64,
+}
+
+fn tolerances<T: Real>() -> Tolerances {
+    let eps = T::EPSILON.to_f64();
+    Tolerances {
+        // Both forms round the same factors in a different order: exponentials of log-space
+        // scales (|ln e| ≤ ln MAX: up to 710 ulps in f64, 89 in f32) and the product of the
+        // pBSDF with the (effective) Stokes vector, ill-conditioned where the pBSDF nearly
+        // extinguishes it (|M| |v| / |M v| ~ 1e3 seen in f32; both forms are then off f64 by
+        // ~1e-4, in different ways). 8192 ε: 1.8e-12 (f64), 9.8e-4 (f32, the kernel's own f32
+        // bound in docs/numerical.md is 1e-3).
+        rel: 8192.0 * eps,
+        // Rank-one coherency of a Jones-derived matrix, to rounding (measured 3e-16, 2e-7).
+        cloude: 64.0 * eps,
+        // Fully polarized outputs (a two-shape lobe with K_x ≫ K_y, the specular lobe at its
+        // cap) sit on the cone, to the rounding of M T D̂: 256 ε (measured over 20 × 2048
+        // cases: 2.6e-14 in f64, 9.8e-6 in f32).
+        validity: 256.0 * eps,
+    }
+}
+
+/// One lobe: `via` (the matrix form applied) against `direct` (the Stokes form); `zero` when
+/// the matrix is 0, `pbsdf` the largest entry of the lobe's pBSDF, `m00` the matrix's largest
+/// entry (`M₀₀` for one shape), `s0` the packet's `S0`.
+#[expect(clippy::too_many_arguments, reason = "one comparison, spelled out")]
+fn compare_lobe<T: Real>(
+    tally: &mut Tally,
+    (level, lobe): (usize, usize),
+    via: Vector4<T>,
+    direct: Vector4<T>,
+    (zero, pbsdf): (bool, T),
+    m00: T,
+    s0: T,
+    rel: f64,
+) -> Result<(), TestCaseError> {
+    let (a, b) = (via.map(T::to_f64), direct.map(T::to_f64));
+    let (m00, s0, tiny) = (m00.to_f64(), s0.to_f64(), T::MIN_POSITIVE.to_f64());
+    let pbsdf = pbsdf.to_f64();
+    let what = format!("{} {}", LEVELS[level], ["specular", "scattered"][lobe]);
+    if zero {
+        prop_assert!(a == Vector4::zeros(), "{what}: a zero matrix gave {a:?}");
+        if b == Vector4::zeros() {
+            tally.both_zero[level][lobe] += 1;
+        } else {
+            // Flushed: the scale per unit S0 was below the smallest normal number, so the Stokes
+            // form is below MIN_POSITIVE S0 times the pBSDF's size (|M_0k v_k| ≤ 8 max|M_pbsdf|:
+            // the effective Stokes vector v of the Full level has entries ≤ 2).
+            prop_assert!(
+                b[0] <= 8.0 * pbsdf * tiny * s0,
+                "{what}: matrix flushed to 0 but the Stokes form is {b:?} (S0 = {s0:e})"
+            );
+            tally.flushed[level][lobe] += 1;
+        }
+        return Ok(());
+    }
+    let reference = a[0].abs().max(b[0].abs()).max(m00.abs() * s0);
+    let abs = 16.0 * tiny * s0;
+    for j in 0..4 {
+        let d = (a[j] - b[j]).abs();
+        prop_assert!(
+            d <= abs + rel * reference,
+            "{what}[{j}]: matrix form {a:?} vs Stokes form {b:?} (|Δ| = {d:e}, reference {reference:e})"
+        );
+        tally.worst[level] = tally.worst[level].max((d - abs).max(0.0) / reference);
+    }
+    if b == Vector4::zeros() {
+        tally.both_zero[level][lobe] += 1;
+    } else {
+        tally.compared[level][lobe] += 1;
+    }
+    Ok(())
+}
+
+/// The largest entries of the specular and scattering pBSDFs at `g`.
+fn pbsdf_sizes<T: Real, P, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
+    material: &RoughSurface<P, Sp, Sc>,
+    g: &Geometry<T>,
+) -> [T; 2] {
+    [
+        material.specular.mueller(g).matrix().amax(),
+        material.scatter.mueller(g).matrix().amax(),
+    ]
+}
+
+/// A Stokes-level kernel (`OneShape`, `Full`): both forms, compared lobe by lobe; returns the
+/// matrix form.
+fn stokes_level<T, P, Sp, Sc, Pol, Coh>(
+    tally: &mut Tally,
+    level: usize,
+    kernel: &Kernel<Pol, Coh>,
+    material: &RoughSurface<P, Sp, Sc>,
+    built: &Built<T>,
+    (rel, skip_scattered): (f64, bool),
+) -> Result<MuellerResponse<T, Mueller<T>>, TestCaseError>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+    Pol: PolarizationModel<Output<T> = Response<T>, Throughput<T> = Mueller<T>>,
+    Coh: CoherenceWeights<T, P>,
+{
+    let (p, g) = (&built.packet, &built.geometry);
+    let direct = kernel.evaluate(material, p, g);
+    let form = kernel.evaluate_mueller(material, p, g);
+    let via = form.apply(&p.stokes());
+    prop_assert_eq!(via.attenuation, direct.attenuation);
+    prop_assert_eq!(via.side, direct.side);
+    let pbsdf = pbsdf_sizes(material, g);
+    for (lobe, (m, v, d)) in [
+        (form.specular, via.specular, direct.specular),
+        (form.scattered, via.scattered, direct.scattered),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        if lobe == 1 && skip_scattered {
+            tally.capped += 1;
+            continue;
+        }
+        let mm = m.matrix();
+        compare_lobe(
+            tally,
+            (level, lobe),
+            v.vector(),
+            d.vector(),
+            (mm == Matrix4::zeros(), pbsdf[lobe]),
+            mm.amax(),
+            p.stokes().s0(),
+            rel,
+        )?;
+    }
+    Ok(form)
+}
+
+/// Validity of one matrix: Cloude-realizable if `cloude`, and `M S` valid for every probe.
+fn check_validity<T: Real>(
+    tally: &mut Tally,
+    what: &str,
+    m: &Mueller<T>,
+    probes: &[Stokes<T>],
+    cloude: bool,
+    tol: Tolerances,
+) -> Result<(), TestCaseError> {
+    let mm = m.matrix().map(T::to_f64);
+    if mm != Matrix4::zeros() && mm.amax() < T::MIN_POSITIVE.to_f64() {
+        // Every entry subnormal: a few digits each (see `subnormal_matrices_are_flushed`).
+        tally.subnormal += 1;
+        return Ok(());
+    }
+    if cloude && mm != Matrix4::zeros() {
+        prop_assert!(
+            m.is_physically_realizable(T::lit(tol.cloude)),
+            "{what}: not realizable: {mm}"
+        );
+        let l = m.coherency_eigenvalues().map(T::to_f64);
+        let trace = l.sum();
+        tally.worst_cloude = tally.worst_cloude.max(-l.min() / trace);
+    }
+    for s in probes {
+        // Normalised first: the squares of entries ~1e-159 would be subnormal.
+        let n = mm.amax();
+        if n == 0.0 {
+            continue;
+        }
+        let out = (mm / n) * s.vector().map(T::to_f64);
+        let pol = Vector3::new(out[1], out[2], out[3]).norm();
+        // The size of the terms of M S (for two shapes |M_ij| ≤ M₀₀ fails; M S can cancel).
+        let scale = s.s0().to_f64();
+        if scale > 0.0 {
+            let excess = (pol - out[0]) / scale;
+            prop_assert!(
+                excess <= tol.validity,
+                "{what}: M S invalid: S = {:?}, M S = {out:?} (excess {excess:e})",
+                s.vector()
+            );
+            tally.worst_validity = tally.worst_validity.max(excess);
+        }
+    }
+    Ok(())
+}
+
+/// The three polarization levels at coherence level `ci` (0 plane wave, 1 partial, 2
+/// incoherent) with the coherence model `coh`; `capped`: the blur's two-shape weights break
+/// Cauchy–Schwarz here (the Full level's scattered lobe is then not compared).
+fn coherence_level<T, P, Sp, Sc, Coh>(
+    tally: &mut Tally,
+    ci: usize,
+    coh: Coh,
+    material: &RoughSurface<P, Sp, Sc>,
+    built: &Built<T>,
+    capped: bool,
+) -> Result<(), TestCaseError>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+    Coh: CoherenceWeights<T, P>,
+{
+    let tol = tolerances::<T>();
+    let (p, g) = (&built.packet, &built.geometry);
+    let s0 = p.stokes().s0();
+    let kernel = Kernel::<Intensity, Coh>::new(coh.clone());
+    let direct = kernel.evaluate(material, p, g);
+    let scalar = kernel.evaluate_mueller(material, p, g);
+    let via = scalar.apply(s0);
+    prop_assert_eq!(via.attenuation, direct.attenuation);
+    let pbsdf = pbsdf_sizes(material, g);
+    for (lobe, (m, v, d)) in [
+        (scalar.specular, via.specular, direct.specular),
+        (scalar.scattered, via.scattered, direct.scattered),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let z = T::zero();
+        compare_lobe(
+            tally,
+            (3 * ci, lobe),
+            Vector4::new(v, z, z, z),
+            Vector4::new(d, z, z, z),
+            (m == z, pbsdf[lobe]),
+            m,
+            s0,
+            tol.rel,
+        )?;
+    }
+    let one = stokes_level(
+        tally,
+        3 * ci + 1,
+        &Kernel::<OneShape, Coh>::new(coh.clone()),
+        material,
+        built,
+        (tol.rel, false),
+    )?;
+    let full = stokes_level(
+        tally,
+        3 * ci + 2,
+        &Kernel::<Full, Coh>::new(coh),
+        material,
+        built,
+        (tol.rel, capped),
+    )?;
+    // The intensity level is the one-shape level's M₀₀ (the rotation T keeps S0).
+    for (a, m) in [
+        (scalar.specular, one.specular),
+        (scalar.scattered, one.scattered),
+    ] {
+        let (a, b) = (a.to_f64(), m.matrix()[(0, 0)].to_f64());
+        prop_assert!(
+            (a - b).abs() <= 8.0 * T::EPSILON.to_f64() * a.abs().max(b.abs()),
+            "{}: intensity {a:e} vs one-shape M₀₀ {b:e}",
+            LEVELS[3 * ci]
+        );
+    }
+    for (lobe, (o, f)) in [
+        (one.specular, full.specular),
+        (one.scattered, full.scattered),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let name = |l: usize| format!("{} lobe {lobe}", LEVELS[3 * ci + l]);
+        check_validity(tally, &name(1), o, &built.probes, true, tol)?;
+        check_validity(tally, &name(2), f, &built.probes, p.has_single_shape(), tol)?;
+    }
+    Ok(())
+}
+
+/// `K_½ |μ|_max / √(K_x K_y)` of the blurred weights `blur` gives the three channels at the
+/// case's geometry (`surface_coherence_term`): ≤ 1 for exact weights (Cauchy–Schwarz over the
+/// positive semidefinite spectral matrix of an admitted packet, `crate::packet`), 0 for one
+/// shape.
+fn cauchy_schwarz_ratio<T, P, Sp, Sc, B>(
+    material: &RoughSurface<P, Sp, Sc>,
+    blur: &B,
+    built: &Built<T>,
+) -> f64
+where
+    T: Real,
+    P: Psd<T, 2>,
+    B: BlurMethod<T, 2, P>,
+{
+    let (p, g) = (&built.packet, &built.geometry);
+    if p.has_single_shape() {
+        return 0.0;
+    }
+    let k = [Channel::X, Channel::Y, Channel::Half]
+        .map(|c| surface_coherence_term(&material.psd, blur, p, c, g.surface(), &g.h_t()).to_f64());
+    let shapes = [Channel::X, Channel::Y].map(|c| p.shape(c).map(T::to_f64));
+    k[2] * mu_max(&shapes[0], &shapes[1]) / (k[0] * k[1]).sqrt()
+}
+
+/// The blur's weights break Cauchy–Schwarz beyond rounding: the matrix form caps `K_½` for
+/// `|μ|_max`, the Stokes form for the packet's `|μ|`, and the two differ by the excess.
+fn breaks_cauchy_schwarz<T, P, Sp, Sc, B>(
+    material: &RoughSurface<P, Sp, Sc>,
+    blur: &B,
+    built: &Built<T>,
+) -> bool
+where
+    T: Real,
+    P: Psd<T, 2>,
+    B: BlurMethod<T, 2, P>,
+{
+    cauchy_schwarz_ratio(material, blur, built) > 1.0 + 1e-6
+}
+
+/// All nine levels for one material.
+fn all_levels<T, P, Sp, Sc, B>(
+    tally: &mut Tally,
+    material: &RoughSurface<P, Sp, Sc>,
+    blur: B,
+    eta: Option<f64>,
+    case: &Case,
+) -> Result<(), TestCaseError>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+    B: BlurMethod<T, 2, P> + Clone + std::fmt::Debug,
+{
+    let built = Built::<T>::new(case, eta);
+    let capped = breaks_cauchy_schwarz(material, &blur, &built);
+    coherence_level(tally, 0, PlaneWave, material, &built, false)?;
+    coherence_level(tally, 1, Partial(blur), material, &built, capped)?;
+    coherence_level(tally, 2, Incoherent, material, &built, false)
+}
+
+fn one_case<T: Real>(tally: &mut Tally, case: &Case) -> Result<(), TestCaseError> {
+    tally.cases += 1;
+    match case.material {
+        0 => all_levels::<T, _, _, _, _>(tally, &glass::<T>(), ClosedForm, Some(ETA), case),
+        1 => all_levels::<T, _, _, _, _>(tally, &gold::<T>(), ClosedForm, None, case),
+        2 => all_levels::<T, _, _, _, _>(
+            tally,
+            &k_correlated::<T>(),
+            GaussHermite::<T>::new(8).unwrap(),
+            Some(ETA),
+            case,
+        ),
+        3 => all_levels::<T, _, _, _, _>(tally, &mixture::<T>(), ClosedForm, Some(ETA), case),
+        _ => all_levels::<T, _, _, _, _>(tally, &grating::<T>(), ClosedForm, None, case),
+    }
+}
+
+/// Runs the property over `cases` cases and checks that most lobes were compared.
+fn matrix_form_equals_stokes_form<T: Real>(name: &str, cases: u32) {
+    let tally = RefCell::new(Tally::default());
+    let mut runner = TestRunner::new(common::proptest_config(cases));
+    runner
+        .run(&case(), |c| one_case::<T>(&mut tally.borrow_mut(), &c))
+        .unwrap();
+    let t = tally.into_inner();
+    t.report(name);
+    for level in 0..9 {
+        let total = |l: usize| t.compared[level][l] + t.both_zero[level][l] + t.flushed[level][l];
+        for lobe in 0..2 {
+            let what = format!("{name} {} lobe {lobe}", LEVELS[level]);
+            // Skipped (flushed to 0 with the Stokes form nonzero): far tails only.
+            assert!(
+                t.flushed[level][lobe] * 10 <= total(lobe),
+                "{what}: {} of {} flushed",
+                t.flushed[level][lobe],
+                total(lobe)
+            );
+            if level < 3 && lobe == 0 {
+                // The plane-wave specular lobe is a Dirac delta: 0 in both forms, always.
+                assert_eq!(t.both_zero[level][0], total(0), "{what}: a delta in eval");
+            } else {
+                // A nonzero result compared (the rest is 0 in both forms: lobes narrower than
+                // the exits' spread, grating orders, the incoherent level's coherence lobe).
+                assert!(
+                    t.compared[level][lobe] * 5 >= total(lobe) * 2,
+                    "{what}: only {} of {} compared nonzero",
+                    t.compared[level][lobe],
+                    total(lobe)
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn matrix_form_equals_stokes_form_f64() {
+    matrix_form_equals_stokes_form::<f64>("f64", 2048);
+}
+
+#[test]
+fn matrix_form_equals_stokes_form_f32() {
+    matrix_form_equals_stokes_form::<f32>("f32", 2048);
+}
