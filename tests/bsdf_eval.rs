@@ -63,13 +63,20 @@ const ETA: f64 = 1.5;
 // ------------------------------------------------------------------ materials
 
 fn glass<T: Real>() -> RoughDielectric<T, GaussianPsd<T, 2>> {
-    RoughDielectric::new(GaussianPsd::isotropic(T::lit(0.02), T::lit(1.0)).unwrap(), T::lit(ETA))
-        .unwrap()
+    RoughDielectric::new(
+        GaussianPsd::isotropic(T::lit(0.02), T::lit(1.0)).unwrap(),
+        T::lit(ETA),
+    )
+    .unwrap()
 }
 
 fn gold<T: Real>() -> RoughConductor<T, GaussianPsd<T, 2>> {
     let eta = Complex::new(T::lit(0.47), T::lit(2.4));
-    RoughConductor::new(GaussianPsd::isotropic(T::lit(0.015), T::lit(1.5)).unwrap(), eta).unwrap()
+    RoughConductor::new(
+        GaussianPsd::isotropic(T::lit(0.015), T::lit(1.5)).unwrap(),
+        eta,
+    )
+    .unwrap()
 }
 
 fn k_correlated<T: Real>() -> RoughDielectric<T, KCorrelation<T, 2>> {
@@ -109,21 +116,24 @@ const LEVELS: [&str; 9] = [
 
 // ------------------------------------------------------------------ the random case
 
+/// A coherence shape drawn as `(width, anisotropy, angle)` ([`shape_matrix`]).
+type ShapeDraw = (f64, f64, f64);
+
 /// One random interaction, in plain numbers (mapped to `T` by [`Built::new`]).
 #[derive(Debug, Clone)]
 struct Case {
     material: usize,
     /// The shading normal `(tx, ty, 1)`.
     tilt: (f64, f64),
-    /// θ_i (degrees), φ_i (degrees), light from below (dielectrics only).
+    /// `θ_i` (degrees), `φ_i` (degrees), light from below (dielectrics only).
     incidence: (f64, f64, bool),
     /// The packet frame's rotation about its direction.
     psi: f64,
     /// `S0`, the degree of polarization, the Poincaré direction (z, azimuth).
     stokes: (f64, f64, f64, f64),
     /// Two coherence shapes; each `(width, anisotropy, angle)`; `|μ|/|μ|_max`; `S1/S0`.
-    shapes: (bool, (f64, f64, f64), (f64, f64, f64), f64, f64),
-    /// Transmitted side, near the specular direction, θ_o (degrees), φ_o (degrees), the offset
+    shapes: (bool, ShapeDraw, ShapeDraw, f64, f64),
+    /// Transmitted side, near the specular direction, `θ_o` (degrees), `φ_o` (degrees), the offset
     /// from the specular direction in lobe widths.
     exit: (bool, bool, f64, f64, (f64, f64)),
     /// Three more Stokes directions `(t, φ, degree)` for the validity checks.
@@ -140,7 +150,8 @@ fn degree() -> impl Strategy<Value = f64> {
 }
 
 fn shape_draw() -> impl Strategy<Value = (f64, f64, f64)> {
-    (0.0..2.0f64, 1.0..4.0f64, 0.0..std::f64::consts::PI).prop_map(|(lw, a, t)| (10f64.powf(lw), a, t))
+    (0.0..2.0f64, 1.0..4.0f64, 0.0..std::f64::consts::PI)
+        .prop_map(|(lw, a, t)| (10f64.powf(lw), a, t))
 }
 
 fn case() -> impl Strategy<Value = Case> {
@@ -242,10 +253,19 @@ impl<T: Real> Built<T> {
         let side = if below { -1.0 } else { 1.0 };
         let s = local(&surface, ti, pi, side);
         let lambda = if below { LAMBDA / ETA } else { LAMBDA };
-        let frame = Frame::sp(-s, surface.k()).unwrap().rotated(T::lit(case.psi));
+        let frame = Frame::sp(-s, surface.k())
+            .unwrap()
+            .rotated(T::lit(case.psi));
         let (two, dx, dy, mu_frac, t) = case.shapes;
         let (s0, p, z, az) = case.stokes;
-        let (tx, ty) = (shape_matrix(dx), if two { shape_matrix(dy) } else { shape_matrix(dx) });
+        let (tx, ty) = (
+            shape_matrix(dx),
+            if two {
+                shape_matrix(dy)
+            } else {
+                shape_matrix(dx)
+            },
+        );
         let bound = mu_max(&tx, &ty);
         let stokes = if two {
             stokes_with_correlation(s0, t, mu_frac * bound, az)
@@ -270,7 +290,12 @@ impl<T: Real> Built<T> {
         let transmit = transmit && eta.is_some();
         let n = surface.facing(&s).k();
         let out_side = if transmit { -n } else { n };
-        let random = local(&surface.facing(&s), to, po, if transmit { -1.0 } else { 1.0 });
+        let random = local(
+            &surface.facing(&s),
+            to,
+            po,
+            if transmit { -1.0 } else { 1.0 },
+        );
         let mut exit = random;
         if near {
             let spec = geometry(out_side).unwrap().specular_direction();
@@ -722,18 +747,27 @@ fn one_case<T: Real>(tally: &mut Tally, case: &Case) -> Result<(), TestCaseError
 }
 
 /// Runs the property over `cases` cases and checks that most lobes were compared.
+/// A runner with the crate's fixed-seed configuration (`tests/common`); failures are reported
+/// with their case (these runners are not `proptest!` blocks, so there is no source file to
+/// persist them next to).
+fn runner(cases: u32) -> TestRunner {
+    let mut config = common::proptest_config(cases);
+    config.failure_persistence = None;
+    TestRunner::new(config)
+}
+
 fn matrix_form_equals_stokes_form<T: Real>(name: &str, cases: u32) {
     let tally = RefCell::new(Tally::default());
-    let mut runner = TestRunner::new(common::proptest_config(cases));
+    let mut runner = runner(cases);
     runner
         .run(&case(), |c| one_case::<T>(&mut tally.borrow_mut(), &c))
         .unwrap();
     let t = tally.into_inner();
     t.report(name);
-    for level in 0..9 {
+    for (level, level_name) in LEVELS.iter().enumerate() {
         let total = |l: usize| t.compared[level][l] + t.both_zero[level][l] + t.flushed[level][l];
         for lobe in 0..2 {
-            let what = format!("{name} {} lobe {lobe}", LEVELS[level]);
+            let what = format!("{name} {level_name} lobe {lobe}");
             // Skipped (flushed to 0 with the Stokes form nonzero): far tails only.
             assert!(
                 t.flushed[level][lobe] * 10 <= total(lobe),
@@ -791,7 +825,13 @@ fn two_shape_forms_agree_with_a_quadrature_blur() {
             0.9809935032190285,
             0.0,
         ),
-        exit: (false, false, 4.838380975832933, 306.18170771808394, (0.0, 0.0)),
+        exit: (
+            false,
+            false,
+            4.838380975832933,
+            306.18170771808394,
+            (0.0, 0.0),
+        ),
         probes: [(0.0, 0.0, 0.0); 3],
     };
     let built = Built::<f64>::new(&case, Some(ETA));
@@ -801,7 +841,10 @@ fn two_shape_forms_agree_with_a_quadrature_blur() {
     println!("K_½ |μ|_max / √(K_x K_y) with GaussHermite(8): {ratio:.4}");
     let kernel = Kernel::<Full, _>::new(Partial(blur));
     let (p, g) = (&built.packet, &built.geometry);
-    let via = kernel.evaluate_mueller(&m, p, g).apply(&p.stokes()).scattered;
+    let via = kernel
+        .evaluate_mueller(&m, p, g)
+        .apply(&p.stokes())
+        .scattered;
     let direct = kernel.evaluate(&m, p, g).scattered;
     println!("matrix form {via:?}\nStokes form {direct:?}");
     common::assert_all_close(
@@ -827,7 +870,13 @@ fn subnormal_matrices_are_flushed() {
         psi: 0.0,
         stokes: (1.0, 0.0, 0.0, 0.0),
         shapes: (false, (1.0, 1.0, 0.0), (1.0, 1.0, 0.0), 0.0, 0.0),
-        exit: (true, false, 87.65290935263941, 68.58219019459501, (0.0, 0.0)),
+        exit: (
+            true,
+            false,
+            87.65290935263941,
+            68.58219019459501,
+            (0.0, 0.0),
+        ),
         probes: [(0.0, 0.0, 0.0); 3],
     };
     let built = Built::<f32>::new(&case, Some(ETA));
@@ -838,7 +887,11 @@ fn subnormal_matrices_are_flushed() {
         &built.geometry,
     );
     let mm = r.scattered.matrix();
-    println!("largest entry {:e} (MIN_POSITIVE {:e})", mm.amax(), f32::MIN_POSITIVE);
+    println!(
+        "largest entry {:e} (MIN_POSITIVE {:e})",
+        mm.amax(),
+        f32::MIN_POSITIVE
+    );
     assert!(
         mm == Matrix4::zeros() || mm.amax() >= f32::MIN_POSITIVE,
         "a nonzero matrix with every entry subnormal: {mm:e}"
@@ -884,14 +937,29 @@ fn two_shape_matrix_is_valid_exactly_on_the_admitted_vectors() {
         assert!(g.h_t().norm() < 1e-12);
         let mm = kernel.evaluate_mueller(&m, &packet, &g).specular.matrix();
         let (at_bound, beyond) = (dop(mm * admitted.vector()), dop(mm * full.vector()));
-        println!("θ_i = {theta}°: DoP of (1, 0, |μ|_max, 0) → {at_bound:.15}, of (1, 0, 1, 0) → {beyond:.6}");
-        common::assert_close("admitted vector at the bound", at_bound, 1.0, Tol::new(1e-13, 0.0));
+        println!(
+            "θ_i = {theta}°: DoP of (1, 0, |μ|_max, 0) → {at_bound:.15}, of (1, 0, 1, 0) → {beyond:.6}"
+        );
+        common::assert_close(
+            "admitted vector at the bound",
+            at_bound,
+            1.0,
+            Tol::new(1e-13, 0.0),
+        );
         if theta == 0.0 {
             let r = 0.25;
             let expected = ((1.0 - r) * (1.0 - r) + 4.0 * r / (mu * mu)).sqrt() / (1.0 + r);
-            common::assert_close("DoP beyond the bound", beyond, expected, Tol::new(1e-12, 0.0));
+            common::assert_close(
+                "DoP beyond the bound",
+                beyond,
+                expected,
+                Tol::new(1e-12, 0.0),
+            );
         } else {
-            assert!(beyond > 1.01, "(1, 0, 1, 0) should leave invalid: DoP {beyond}");
+            assert!(
+                beyond > 1.01,
+                "(1, 0, 1, 0) should leave invalid: DoP {beyond}"
+            );
         }
         // Admitted vectors (|μ| ≤ |μ|_max, any S_x/S_y and phase) near the specular direction.
         let mut rng = common::SplitMix64(7 + theta as u64);
@@ -901,7 +969,12 @@ fn two_shape_matrix_is_valid_exactly_on_the_admitted_vectors() {
             let r = spec + f.x() * (rng.signed() * off) + f.y() * (rng.signed() * off);
             let g = m.geometry_for_packet(&packet, &surface, r).unwrap();
             let mm = kernel.evaluate_mueller(&m, &packet, &g).specular.matrix();
-            let v = stokes_with_correlation(1.0, rng.signed() * 0.99, mu * rng.unit().sqrt(), rng.uniform_in(0.0, 6.3));
+            let v = stokes_with_correlation(
+                1.0,
+                rng.signed() * 0.99,
+                mu * rng.unit().sqrt(),
+                rng.uniform_in(0.0, 6.3),
+            );
             let out = mm * v;
             if out[0] > 0.0 {
                 assert!(dop(out) <= 1.0 + 1e-12, "admitted {v:?} → {out:?}");
@@ -927,19 +1000,44 @@ fn bsdf_matches_kernel<T: Real>() {
     let mut rng = common::SplitMix64(11);
     for i in 0..200 {
         let s_side = if i % 2 == 0 { 1.0 } else { -1.0 };
-        let s = local(&f, rng.uniform_in(0.0, 89.0), rng.uniform_in(0.0, 360.0), s_side);
+        let s = local(
+            &f,
+            rng.uniform_in(0.0, 89.0),
+            rng.uniform_in(0.0, 360.0),
+            s_side,
+        );
         let r_side = if rng.unit() < 0.5 { 1.0 } else { -1.0 };
-        let r = local(&f, rng.uniform_in(0.0, 89.0), rng.uniform_in(0.0, 360.0), r_side);
-        let packet = bg.surface_packet(stokes, s, &c).unwrap().rotated(T::lit(0.7));
+        let r = local(
+            &f,
+            rng.uniform_in(0.0, 89.0),
+            rng.uniform_in(0.0, 360.0),
+            r_side,
+        );
+        let packet = bg
+            .surface_packet(stokes, s, &c)
+            .unwrap()
+            .rotated(T::lit(0.7));
         let inc = bg.prepare(&packet).unwrap();
         let v = bg.eval(&inc, r).unwrap();
-        assert_eq!(v.response, kernel.evaluate_mueller(&glass, &packet, &v.geometry));
-        assert_eq!(bg.eval_stokes(&inc, r).unwrap(), kernel.evaluate(&glass, &packet, &v.geometry));
+        assert_eq!(
+            v.response,
+            kernel.evaluate_mueller(&glass, &packet, &v.geometry)
+        );
+        assert_eq!(
+            bg.eval_stokes(&inc, r).unwrap(),
+            kernel.evaluate(&glass, &packet, &v.geometry)
+        );
         if s_side > 0.0 && r_side > 0.0 {
             let inc = bm.prepare(&packet).unwrap();
             let v = bm.eval(&inc, r).unwrap();
-            assert_eq!(v.response, kernel.evaluate_mueller(&gold, &packet, &v.geometry));
-            assert_eq!(bm.eval_stokes(&inc, r).unwrap(), kernel.evaluate(&gold, &packet, &v.geometry));
+            assert_eq!(
+                v.response,
+                kernel.evaluate_mueller(&gold, &packet, &v.geometry)
+            );
+            assert_eq!(
+                bm.eval_stokes(&inc, r).unwrap(),
+                kernel.evaluate(&gold, &packet, &v.geometry)
+            );
         }
     }
 }
@@ -966,7 +1064,7 @@ fn prepare_rejects_a_packet_at_the_wrong_wavelength() {
     for (s, lambda, ok) in [
         (above, LAMBDA, true),
         (below, LAMBDA / ETA, true),
-        (below, LAMBDA, false),      // the vacuum wavelength inside the glass
+        (below, LAMBDA, false),       // the vacuum wavelength inside the glass
         (above, LAMBDA / ETA, false), // the glass wavelength in the air
         (above, 0.6, false),
         (below, 0.6 / ETA, false),
@@ -977,7 +1075,10 @@ fn prepare_rejects_a_packet_at_the_wrong_wavelength() {
         if ok {
             assert!(r.is_ok(), "λ = {lambda} from {s:?}");
         } else {
-            assert!(matches!(r, Err(Error::OutOfRange { .. })), "λ = {lambda} from {s:?} accepted");
+            assert!(
+                matches!(r, Err(Error::OutOfRange { .. })),
+                "λ = {lambda} from {s:?} accepted"
+            );
         }
     }
     // An opaque surface is lit from above only.
@@ -1001,19 +1102,36 @@ fn try_evaluate_rejects_a_foreign_geometry() {
     let r = local(&f, 10.0, 150.0, 1.0);
     let k = packet.wavenumber();
     let geometry = |k: f64, s: Vector3<f64>| glass.geometry(k, &f, s, r).unwrap();
-    assert!(kernel.try_evaluate(&glass, &packet, &geometry(k, s)).is_ok());
+    assert!(
+        kernel
+            .try_evaluate(&glass, &packet, &geometry(k, s))
+            .is_ok()
+    );
     let nudged = s + Vector3::new(1e-15, -1e-15, 0.0);
-    assert!(kernel.try_evaluate(&glass, &packet, &geometry(k, nudged)).is_ok());
+    assert!(
+        kernel
+            .try_evaluate(&glass, &packet, &geometry(k, nudged))
+            .is_ok()
+    );
     let tau = std::f64::consts::TAU;
     for (what, g) in [
         ("vacuum wavenumber", geometry(tau / LAMBDA, s)),
         ("another wavelength", geometry(tau / 0.6 * ETA, s)),
         ("k (1 + 1e-12)", geometry(k * (1.0 + 1e-12), s)),
-        ("another direction", geometry(k, local(&f, 31.0, 20.0, -1.0))),
-        ("the mirrored direction", geometry(k, local(&f, 30.0, 200.0, -1.0))),
+        (
+            "another direction",
+            geometry(k, local(&f, 31.0, 20.0, -1.0)),
+        ),
+        (
+            "the mirrored direction",
+            geometry(k, local(&f, 30.0, 200.0, -1.0)),
+        ),
     ] {
         assert!(
-            matches!(kernel.try_evaluate(&glass, &packet, &g), Err(Error::OutOfRange { .. })),
+            matches!(
+                kernel.try_evaluate(&glass, &packet, &g),
+                Err(Error::OutOfRange { .. })
+            ),
             "{what} accepted"
         );
     }
@@ -1035,7 +1153,15 @@ fn nothing_panics<T: Real>() {
     let below = local(&f, 20.0, 30.0, -1.0);
     let above = local(&f, 40.0, 10.0, 1.0);
     let nan = Vector3::new(T::lit(f64::NAN), T::one(), T::one());
-    let directions = [zero, tangent, below, above, nan, f.k() * lit(1e30), f.k() * lit(1e-30)];
+    let directions = [
+        zero,
+        tangent,
+        below,
+        above,
+        nan,
+        f.k() * lit(1e30),
+        f.k() * lit(1e-30),
+    ];
     for lambda in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         assert!(Bsdf::new(&glass, Kernel::<Full, Partial>::default(), f, lit(lambda)).is_err());
     }
@@ -1047,7 +1173,16 @@ fn nothing_panics<T: Real>() {
         assert!(SurfaceCoherence::new(lit(w)).is_err(), "width {w}");
     }
     assert!(Frame::<T>::from_normal(zero).is_err() && Frame::<T>::from_normal(nan).is_err());
-    let uniforms = [0.0, 1.0, -1.0, 2.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.999_999_9];
+    let uniforms = [
+        0.0,
+        1.0,
+        -1.0,
+        2.0,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        0.999_999_9,
+    ];
     let finite = |m: &Matrix4<T>| m.iter().all(|x| x.is_finite());
     macro_rules! exercise {
         ($b:expr) => {{
@@ -1064,8 +1199,12 @@ fn nothing_panics<T: Real>() {
                 }
             }
             for s in [above, below] {
-                let Ok(packet) = b.surface_packet(u, s, &c) else { continue };
-                let Ok(inc) = b.prepare(&packet) else { continue };
+                let Ok(packet) = b.surface_packet(u, s, &c) else {
+                    continue;
+                };
+                let Ok(inc) = b.prepare(&packet) else {
+                    continue;
+                };
                 for e in directions {
                     if let Ok(v) = b.eval(&inc, e) {
                         assert!(finite(&v.response.total().matrix()), "eval along {e:?}");
@@ -1076,7 +1215,10 @@ fn nothing_panics<T: Real>() {
                 for &x in &uniforms {
                     let x = lit(x);
                     if let Ok(Some(s)) = b.sample_exit(&inc, x, [x, x]) {
-                        assert!(finite(&s.weight.matrix()) && s.sample.pdf.is_finite(), "{s:?}");
+                        assert!(
+                            finite(&s.weight.matrix()) && s.sample.pdf.is_finite(),
+                            "{s:?}"
+                        );
                     }
                     if let Some(mut s) = sampler.sample(x, [x, x]) {
                         let _ = b.exit_weight(&inc, &s);
@@ -1098,9 +1240,25 @@ fn nothing_panics<T: Real>() {
         }};
     }
     exercise!(Bsdf::new(&glass, Kernel::<Full, Partial>::default(), f, lit(LAMBDA)).unwrap());
-    exercise!(Bsdf::new(&glass, Kernel::<OneShape, PlaneWave>::default(), f, lit(LAMBDA)).unwrap());
+    exercise!(
+        Bsdf::new(
+            &glass,
+            Kernel::<OneShape, PlaneWave>::default(),
+            f,
+            lit(LAMBDA)
+        )
+        .unwrap()
+    );
     exercise!(Bsdf::new(&gold, Kernel::<Full, Incoherent>::default(), f, lit(LAMBDA)).unwrap());
-    exercise!(Bsdf::new(&smooth, Kernel::<Full, PlaneWave>::default(), f, lit(LAMBDA)).unwrap());
+    exercise!(
+        Bsdf::new(
+            &smooth,
+            Kernel::<Full, PlaneWave>::default(),
+            f,
+            lit(LAMBDA)
+        )
+        .unwrap()
+    );
     // Below an opaque surface: every call that needs a direction there is an error.
     let b = Bsdf::new(&gold, Kernel::<Full, Partial>::default(), f, lit(LAMBDA)).unwrap();
     assert!(b.wavenumber(&below).is_err() && b.incident_sampler(below, &c).is_err());
@@ -1115,7 +1273,13 @@ fn nothing_panics<T: Real>() {
     let inc = b.prepare(&b.surface_packet(u, above, &c).unwrap()).unwrap();
     assert!(b.eval(&inc, in_plane).is_err() && b.surface_packet(u, in_plane, &c).is_err());
     assert!(b.incident_sampler(in_plane, &c).is_err() && b.wavenumber(&in_plane).is_err());
-    let b = Bsdf::new(&glass, Kernel::<Full, Partial>::default(), flat, lit(LAMBDA)).unwrap();
+    let b = Bsdf::new(
+        &glass,
+        Kernel::<Full, Partial>::default(),
+        flat,
+        lit(LAMBDA),
+    )
+    .unwrap();
     let inc = b.prepare(&b.surface_packet(u, above, &c).unwrap()).unwrap();
     assert!(b.eval(&inc, in_plane).is_err() && b.incident_sampler(in_plane, &c).is_err());
 }
@@ -1183,18 +1347,34 @@ const WIDTHS: [f64; 3] = [50.0, 200.0, 1000.0];
 /// the deviation falls at least as fast as `1/w`, is below `tol` at 1000 µm, and that the
 /// extrapolation is the delta to 1e-10 (measured ≤ 8e-14; the deviations fall as `1/w²`).
 fn compare_with_limit(name: &str, delta: &Matrix4<f64>, integrals: &[Matrix4<f64>; 3], tol: f64) {
-    let dev: Vec<f64> = integrals.iter().map(|i| (i - delta).amax() / delta.amax()).collect();
+    let dev: Vec<f64> = integrals
+        .iter()
+        .map(|i| (i - delta).amax() / delta.amax())
+        .collect();
     let (a, b) = (integrals[1], integrals[2]);
     let r = (b * (WIDTHS[2] / WIDTHS[1]).powi(2) - a) / ((WIDTHS[2] / WIDTHS[1]).powi(2) - 1.0);
     let extrapolated = (r - delta).amax() / delta.amax();
     println!(
         "{name}: |I(w) − A|/|A| at w = 50, 200, 1000 µm: {:.2e} {:.2e} {:.2e}; extrapolated {extrapolated:.2e}; A₀₀ = {:.6e}",
-        dev[0], dev[1], dev[2], delta[(0, 0)]
+        dev[0],
+        dev[1],
+        dev[2],
+        delta[(0, 0)]
     );
-    assert!(dev[2] <= tol, "{name}: lobe integral at 1000 µm off the delta by {:e}", dev[2]);
+    assert!(
+        dev[2] <= tol,
+        "{name}: lobe integral at 1000 µm off the delta by {:e}",
+        dev[2]
+    );
     // The lobe's integral is A (1 + c/w² + O(1/w⁴)): the extrapolation removes c/w².
-    assert!(extrapolated <= 1e-10, "{name}: extrapolated limit off the delta by {extrapolated:e}");
-    assert!(dev[1] <= dev[0] * WIDTHS[0] / WIDTHS[1] + 1e-12, "{name}: no convergence: {dev:?}");
+    assert!(
+        extrapolated <= 1e-10,
+        "{name}: extrapolated limit off the delta by {extrapolated:e}"
+    );
+    assert!(
+        dev[1] <= dev[0] * WIDTHS[0] / WIDTHS[1] + 1e-12,
+        "{name}: no convergence: {dev:?}"
+    );
 }
 
 type Glass = RoughDielectric<f64, GaussianPsd<f64, 2>>;
@@ -1235,7 +1415,10 @@ fn forward_delta<P, Sp, Sc>(
     let delta = weight.matrix() * sample.pdf;
     let centre = g.h_t(); // 0, or the grating order ζ_m (the oriented frame is f from above)
     let partial = Bsdf::new(material, Kernel::<Full, Partial>::default(), f, LAMBDA).unwrap();
-    let (k_a, side) = (plane.wavenumber(&s).unwrap(), sample.direction.dot(&f.k()).signum());
+    let (k_a, side) = (
+        plane.wavenumber(&s).unwrap(),
+        sample.direction.dot(&f.k()).signum(),
+    );
     let k_b = plane.wavenumber(&sample.direction).unwrap();
     let integrals = WIDTHS.map(|w| {
         let c = SurfaceCoherence::new(w).unwrap();
@@ -1245,7 +1428,11 @@ fn forward_delta<P, Sp, Sc>(
         lobe_integral(centre, w, &|h| {
             let r = direction_of(&f, (s, k_a), (side, k_b), h)?;
             let v = partial.eval(&inc, r).ok()?;
-            let m = if part % 2 == 0 { v.response.specular } else { v.response.scattered };
+            let m = if part.is_multiple_of(2) {
+                v.response.specular
+            } else {
+                v.response.scattered
+            };
             Some(m.matrix() / (v.geometry.cos_i() * k_b * k_b))
         })
     });
@@ -1304,16 +1491,38 @@ fn delta_throughputs_are_the_limits_of_the_coherent_lobes() {
     let glass = glass::<f64>();
     let s = local(&f, 35.0, 30.0, 1.0);
     forward_delta("glass reflection, forward", &glass, (s, 0.4), 0, 1e-6);
-    forward_delta("glass transmission air → glass, forward", &glass, (s, 0.4), 2, 1e-6);
+    forward_delta(
+        "glass transmission air → glass, forward",
+        &glass,
+        (s, 0.4),
+        2,
+        1e-6,
+    );
     let up = local(&f, 25.0, 200.0, -1.0);
-    forward_delta("glass transmission glass → air, forward", &glass, (up, 0.4), 2, 1e-6);
+    forward_delta(
+        "glass transmission glass → air, forward",
+        &glass,
+        (up, 0.4),
+        2,
+        1e-6,
+    );
     let metal = grating::<f64>();
     let to_grating = (local(&f, 20.0, 0.0, 1.0), 0.4);
     forward_delta("grating order, forward", &metal, to_grating, 1, 1e-5);
     // Backward, for light leaving along the Snell direction of `s` inside the glass.
     let plane = Bsdf::new(&glass, Kernel::<Full, PlaneWave>::default(), f, LAMBDA).unwrap();
-    let r = plane.geometry(s, -f.k()).unwrap().specular_direction().unwrap();
-    backward_delta("glass transmission air → glass, backward", &glass, r, 2, 1e-6);
+    let r = plane
+        .geometry(s, -f.k())
+        .unwrap()
+        .specular_direction()
+        .unwrap();
+    backward_delta(
+        "glass transmission air → glass, backward",
+        &glass,
+        r,
+        2,
+        1e-6,
+    );
     // backward = η² forward for the same pair (forward with an unturned packet: T = I, as the
     // backward weight's incident s/p frame), in both transmissions and both reflections.
     let c = SurfaceCoherence::new(50.0).unwrap();
@@ -1321,7 +1530,10 @@ fn delta_throughputs_are_the_limits_of_the_coherent_lobes() {
     let draw = |sampler: gmueller::bsdf::LobeSampler<'_, f64>, part: usize| {
         let mut probs = [0.0; 4];
         probs[part] = 1.0;
-        let d = sampler.with_part_probabilities(probs).sample(0.25, [0.5, 0.5]).unwrap();
+        let d = sampler
+            .with_part_probabilities(probs)
+            .sample(0.25, [0.5, 0.5])
+            .unwrap();
         assert!(d.lobe.delta);
         d
     };
@@ -1333,16 +1545,311 @@ fn delta_throughputs_are_the_limits_of_the_coherent_lobes() {
     ] {
         let back = draw(plane.incident_sampler(r, &c).unwrap(), part);
         let b = plane.incident_weight(r, &c, &back).unwrap().0.matrix() * back.pdf;
-        let inc = plane.prepare(&plane.surface_packet(u, back.direction, &c).unwrap()).unwrap();
+        let inc = plane
+            .prepare(&plane.surface_packet(u, back.direction, &c).unwrap())
+            .unwrap();
         let fwd = draw(plane.exit_sampler(&inc).unwrap(), part);
-        assert!((fwd.direction - r).norm() < 1e-12, "{name}: forward delta {:?} ≠ r̂", fwd.direction);
+        assert!(
+            (fwd.direction - r).norm() < 1e-12,
+            "{name}: forward delta {:?} ≠ r̂",
+            fwd.direction
+        );
         let a = plane.exit_weight(&inc, &fwd).unwrap().0.matrix() * fwd.pdf;
-        println!("{name}: backward B₀₀ = {:.6e}, forward A₀₀ = {:.6e}, B₀₀/A₀₀ = {:.12}", b[(0, 0)], a[(0, 0)], b[(0, 0)] / a[(0, 0)]);
+        println!(
+            "{name}: backward B₀₀ = {:.6e}, forward A₀₀ = {:.6e}, B₀₀/A₀₀ = {:.12}",
+            b[(0, 0)],
+            a[(0, 0)],
+            b[(0, 0)] / a[(0, 0)]
+        );
         common::assert_all_close(
             &format!("backward = η² × forward ({name})"),
             common::entries4(&b),
             common::entries4(&(a * (eta * eta))),
             Tol::new(1e-14 * b.amax(), 1e-12),
         );
+    }
+}
+
+// ------------------------------------------------------------------ sources, frames, gratings
+
+/// `Ξ` of a packet in the basis `(ŝ_perp, n̂ × ŝ_perp)` of the surface tangents (`ŝ_perp` the
+/// incident beam's s vector, which lies in the surface), from `surface_inverse_coherence`.
+fn section_in_sp_basis<T: Real>(p: &WavePacket<T>, surface: &Frame<T>) -> Matrix2<f64> {
+    let facing = surface.facing(&-p.direction());
+    let xi = surface_inverse_coherence(p, Channel::Half, &facing).unwrap();
+    let xi = xi.covariance().map(T::to_f64);
+    let n = facing.k().map(T::to_f64);
+    let es = Frame::sp(-p.direction(), facing.k())
+        .unwrap()
+        .x()
+        .map(T::to_f64);
+    let ep = n.cross(&es);
+    let (t1, t2) = (facing.x().map(T::to_f64), facing.y().map(T::to_f64));
+    let b = Matrix2::new(es.dot(&t1), ep.dot(&t1), es.dot(&t2), ep.dot(&t2));
+    b.transpose() * xi * b
+}
+
+/// `SurfaceCoherence::packet` for random directions from both sides of a tilted surface has
+/// the section `Ξ = I/σ²`; the beam-isotropic `σ² I` (the trap of `bsdf::sources`) has
+/// `diag(1/σ², cos²θ_i/σ²)` in the (s, in-plane tangent) basis instead.
+fn surface_coherence_section<T: Real>(seed_tol: f64) {
+    let mut runner = runner(256);
+    let strategy = (
+        (-0.5..0.5f64, -0.5..0.5f64),
+        0.0..89.9f64,
+        0.0..360.0f64,
+        any::<bool>(),
+        -1.0..2.0f64,
+    );
+    runner
+        .run(&strategy, |((tx, ty), theta, phi, below, lw)| {
+            let n = Vector3::new(T::lit(tx), T::lit(ty), T::one());
+            let surface = Frame::<T>::from_normal(n).unwrap();
+            let s = local(&surface, theta, phi, if below { -1.0 } else { 1.0 });
+            let sigma = 10f64.powf(lw);
+            let c = SurfaceCoherence::new(T::lit(sigma)).unwrap();
+            let u = Stokes::unpolarized(T::one()).unwrap();
+            let p = c.packet(u, s, &surface, T::lit(LAMBDA)).unwrap();
+            let xi = section_in_sp_basis(&p, &surface) * (sigma * sigma);
+            let tol = Tol::new(seed_tol, seed_tol);
+            for (got, want) in common::entries4(&embed(&xi))
+                .iter()
+                .zip(common::entries4(&embed(&Matrix2::identity())))
+            {
+                prop_assert!(
+                    tol.accepts(*got, want),
+                    "σ²Ξ = {xi} (θ {theta}°, below {below})"
+                );
+            }
+            let frame = Frame::sp(-s, surface.k()).unwrap();
+            let trap = WavePacket::from_stokes(
+                u,
+                CoherenceShape::isotropic(T::lit(sigma)).unwrap(),
+                frame,
+                T::lit(LAMBDA),
+            )
+            .unwrap();
+            let xi = section_in_sp_basis(&trap, &surface) * (sigma * sigma);
+            let cos2 = theta.to_radians().cos().powi(2);
+            let want = Matrix2::new(1.0, 0.0, 0.0, cos2);
+            for (got, want) in common::entries4(&embed(&xi))
+                .iter()
+                .zip(common::entries4(&embed(&want)))
+            {
+                prop_assert!(
+                    tol.accepts(*got, want),
+                    "trap: σ²Ξ = {xi}, expected diag(1, {cos2})"
+                );
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// A 2×2 matrix in the top-left corner of a 4×4 one (for `common::entries4`).
+fn embed(m: &Matrix2<f64>) -> Matrix4<f64> {
+    Matrix4::from_fn(|i, j| if i < 2 && j < 2 { m[(i, j)] } else { 0.0 })
+}
+
+#[test]
+fn surface_coherence_packet_has_section_identity_over_sigma_squared() {
+    surface_coherence_section::<f64>(1e-12);
+    surface_coherence_section::<f32>(2e-5);
+}
+
+/// `Frame::from_normal`: unit, mutually orthogonal, right-handed (`x̂ × ŷ = k̂`), `k̂ = n/|n|`, for
+/// random normals including near and at `±ẑ` (the branch of Duff's basis) and magnitudes from
+/// tiny to huge.
+fn from_normal_is_orthonormal<T: Real>(magnitudes: [f64; 5], tol: f64) {
+    let mut runner = runner(512);
+    let direction = prop_oneof![
+        common::unit_vector3(),
+        (-1e-6..1e-6f64, -1e-6..1e-6f64, any::<bool>()).prop_map(|(x, y, up)| Vector3::new(
+            x,
+            y,
+            if up { 1.0 } else { -1.0 }
+        )),
+        Just(Vector3::z()),
+        Just(-Vector3::z()),
+        (-1e-30..1e-30f64).prop_map(|x| Vector3::new(x, 0.0, -1.0)),
+    ];
+    runner
+        .run(
+            &(direction, proptest::sample::select(magnitudes.to_vec())),
+            |(d, m)| {
+                let n = (d * m).map(T::lit);
+                let f = Frame::<T>::from_normal(n).unwrap();
+                let (x, y, k) = (
+                    f.x().map(T::to_f64),
+                    f.y().map(T::to_f64),
+                    f.k().map(T::to_f64),
+                );
+                let expected = n.map(T::to_f64) / n.map(T::to_f64).amax();
+                let expected = expected / expected.norm();
+                let t = Tol::new(tol, 0.0);
+                for (what, a, b) in [
+                    ("|x|", x.norm(), 1.0),
+                    ("|y|", y.norm(), 1.0),
+                    ("|k|", k.norm(), 1.0),
+                    ("x·y", x.dot(&y), 0.0),
+                    ("x·k", x.dot(&k), 0.0),
+                    ("y·k", y.dot(&k), 0.0),
+                    ("|x × y − k|", (x.cross(&y) - k).norm(), 0.0),
+                    ("|k − n̂|", (k - expected).norm(), 0.0),
+                ] {
+                    prop_assert!(t.accepts(a, b), "{what} = {a:e} for n = {n:?}");
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+}
+
+#[test]
+fn from_normal_is_a_right_handed_orthonormal_frame() {
+    from_normal_is_orthonormal::<f64>([1e-300, 1e-30, 1.0, 1e30, 1e300], 4e-15);
+    from_normal_is_orthonormal::<f32>([1e-30, 1e-10, 1.0, 1e10, 1e30], 4e-7);
+}
+
+/// `Grating::sinusoidal_height(a, Λ, d)`: the two orders `±(2π/Λ) d̂` of efficiency `a²/4` and
+/// nothing else, variance `a²/2`, for any length of `d`. These are the orders
+/// `validation/src/kernel_side.rs::height_grating` builds along x̂ from public constructors (a
+/// phase grating of depth `j₀,₁` crossed with a zeroth-order grating of efficiency
+/// `a²/(4 J₁(j₀,₁)²)`, its ±1 orders of efficiency `a²/4` to bisection precision, variance
+/// `a²/2` to 1e-9): the expected values here are the formula's, not that construction's. (Run
+/// once against it from the validation crate, for (a, Λ) = (0.03, 2), (0.01, 5), (0.2, 1.3):
+/// the same order positions bit for bit, efficiencies within 1.2e-14.)
+#[test]
+fn sinusoidal_height_grating_orders() {
+    let mut runner = runner(256);
+    let strategy = (
+        1e-3..1.0f64,
+        -1.0..2.0f64,
+        0.0..std::f64::consts::TAU,
+        -3.0..3.0f64,
+    );
+    runner
+        .run(&strategy, |(a, lp, angle, ld)| {
+            let period = 10f64.powf(lp);
+            let d = Vector2::new(angle.cos(), angle.sin()) * 10f64.powf(ld);
+            let g = Grating::<f64, 2>::sinusoidal_height(a, period, &d).unwrap();
+            let z1 = Vector2::new(angle.cos(), angle.sin()) * (std::f64::consts::TAU / period);
+            let orders = g.orders();
+            prop_assert_eq!(orders.len(), 2);
+            let t = Tol::new(1e-15, 1e-13);
+            let mut signs = Vec::new();
+            for (z, eta) in orders {
+                let sign = if z.dot(&z1) > 0.0 { 1.0 } else { -1.0 };
+                signs.push(sign);
+                let want = z1 * sign;
+                prop_assert!(
+                    t.accepts(z.x, want.x) && t.accepts(z.y, want.y),
+                    "order {z:?} vs {want:?}"
+                );
+                prop_assert!(
+                    t.accepts(*eta, a * a / 4.0),
+                    "efficiency {eta} vs {}",
+                    a * a / 4.0
+                );
+            }
+            prop_assert!(signs[0] != signs[1], "both orders on one side: {orders:?}");
+            prop_assert!(t.accepts(Psd::<f64, 2>::variance(&g), a * a / 2.0));
+            prop_assert!(g.dropped_efficiency().abs() <= 1e-15);
+            Ok(())
+        })
+        .unwrap();
+    // The validation harness's case (along x̂): a = 0.03 µm, Λ = 2 µm.
+    let g = Grating::<f64, 2>::sinusoidal_height(0.03, 2.0, &Vector2::x()).unwrap();
+    let zeta = std::f64::consts::TAU / 2.0;
+    let mut xs: Vec<f64> = g.orders().iter().map(|(z, _)| z.x).collect();
+    xs.sort_by(f64::total_cmp);
+    assert_eq!(xs, vec![-zeta, zeta]);
+    assert!(
+        g.orders()
+            .iter()
+            .all(|(z, e)| z.y == 0.0 && (e - 2.25e-4).abs() < 1e-18)
+    );
+}
+
+// ------------------------------------------------------------------ lobe flags
+
+/// `Bsdf::flags` for each material at each of the nine levels: REFLECTION always, TRANSMISSION
+/// exactly for dielectrics, DELTA exactly at the plane-wave level (the specular lobe; a grating's
+/// orders too), `COHERENT_SPECULAR` exactly otherwise, SCATTERED for rough surfaces except a
+/// grating of plane waves (its orders are deltas), never for smooth ones.
+#[test]
+fn lobe_flags_of_each_material_and_level() {
+    let f = Frame::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap();
+    let (glass, gold, kc, mix, grat) = (glass(), gold(), k_correlated(), mixture(), grating());
+    let smooth_glass = SmoothDielectric::<f64>::smooth(ETA).unwrap();
+    let mirror = SmoothConductor::<f64>::smooth(Complex::new(0.2, 3.4)).unwrap();
+    // (name, dielectric, rough, grating, flags at [PlaneWave, Partial, Incoherent] × 3 polarizations)
+    macro_rules! flags_of {
+        ($m:expr) => {{
+            let m = $m;
+            let blur = Partial(GaussHermite::new(8).unwrap());
+            let l = LAMBDA;
+            [
+                Bsdf::new(m, Kernel::<Intensity, PlaneWave>::default(), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<OneShape, PlaneWave>::default(), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<Full, PlaneWave>::default(), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<Intensity, _>::new(blur.clone()), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<OneShape, _>::new(blur.clone()), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<Full, _>::new(blur), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<Intensity, Incoherent>::default(), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<OneShape, Incoherent>::default(), f, l)
+                    .unwrap()
+                    .flags(),
+                Bsdf::new(m, Kernel::<Full, Incoherent>::default(), f, l)
+                    .unwrap()
+                    .flags(),
+            ]
+        }};
+    }
+    for (name, dielectric, rough, orders, flags) in [
+        ("rough glass", true, true, false, flags_of!(&glass)),
+        ("rough gold", false, true, false, flags_of!(&gold)),
+        ("K-correlation glass", true, true, false, flags_of!(&kc)),
+        ("mixture glass", true, true, false, flags_of!(&mix)),
+        ("grating", false, true, true, flags_of!(&grat)),
+        ("smooth glass", true, false, false, flags_of!(&smooth_glass)),
+        ("smooth mirror", false, false, false, flags_of!(&mirror)),
+    ] {
+        for (i, got) in flags.iter().enumerate() {
+            let plane = i < 3;
+            let mut want = LobeFlags::REFLECTION;
+            if dielectric {
+                want = want | LobeFlags::TRANSMISSION;
+            }
+            want = want
+                | if plane {
+                    LobeFlags::DELTA
+                } else {
+                    LobeFlags::COHERENT_SPECULAR
+                };
+            if rough && !(orders && plane) {
+                want = want | LobeFlags::SCATTERED;
+            }
+            assert_eq!(*got, want, "{name} at {}: {got:?}", LEVELS[i]);
+            assert_eq!(
+                got.contains(LobeFlags::DELTA),
+                plane,
+                "{name}: DELTA ⇔ plane wave"
+            );
+        }
     }
 }
