@@ -415,7 +415,6 @@ fn tangential(f: &Frame<f64>, d: &Vector3<f64>) -> Vector2<f64> {
 /// Swapped: the reciprocal BSDF times the light's cosine, `f(r̂ → ŝ) (n_r/n_s)² cos θ_s =
 /// M(r̂ → ŝ) (cos θ_s/cos θ_r) (n_r/n_s)²` — equal to `M(ŝ → r̂)` for plane waves.
 fn backward<P, Sp, Sc, Coh>(
-    name: &str,
     b: &Bsdf<'_, f64, P, Sp, Sc, Full, Coh>,
     r: Vector3<f64>,
     c: &SurfaceCoherence<f64>,
@@ -485,17 +484,12 @@ where
             }
         }
     }
-    let (mc, mc_swapped) = (Estimate::of(&mc), Estimate::of(&mc_swapped));
-    println!(
-        "{name}: quadrature {physical:.6}, Monte Carlo {:.6} ± {:.1e} ({:.1} s.e.); swapped: quadrature {swapped:.6}, Monte Carlo {:.6} ± {:.1e} ({:.1} s.e. from the physical quadrature)",
-        mc.mean,
-        mc.se,
-        mc.z(physical),
-        mc_swapped.mean,
-        mc_swapped.se,
-        mc_swapped.z(physical)
-    );
-    (physical, swapped, mc, mc_swapped)
+    (
+        physical,
+        swapped,
+        Estimate::of(&mc),
+        Estimate::of(&mc_swapped),
+    )
 }
 
 /// Backward Monte Carlo (`Bsdf::sample_incident`, 100 000 seeded draws per case) against the
@@ -517,38 +511,40 @@ fn backward_monte_carlo_needs_the_physical_direction() {
     let bm = Bsdf::new(&gold, partial, f, LAMBDA).unwrap();
     let pg = Bsdf::new(&glass, plane, f, LAMBDA).unwrap();
     let pm = Bsdf::new(&gold, plane, f, LAMBDA).unwrap();
-    for (name, (quad, swap_quad, mc, swapped), plane_wave) in [
+    let cases = [
         (
             "glass, exit above, Partial",
-            backward("glass, exit above, Partial", &bg, up, &c, 1),
+            backward(&bg, up, &c, 1),
             false,
         ),
         (
             "glass, exit inside, Partial",
-            backward("glass, exit inside, Partial", &bg, down, &c, 2),
+            backward(&bg, down, &c, 2),
             false,
         ),
-        (
-            "gold, Partial",
-            backward("gold, Partial", &bm, up, &c, 3),
-            false,
-        ),
+        ("gold, Partial", backward(&bm, up, &c, 3), false),
         (
             "glass, exit above, PlaneWave",
-            backward("glass, exit above, PlaneWave", &pg, up, &c, 4),
+            backward(&pg, up, &c, 4),
             true,
         ),
         (
             "glass, exit inside, PlaneWave",
-            backward("glass, exit inside, PlaneWave", &pg, down, &c, 5),
+            backward(&pg, down, &c, 5),
             true,
         ),
-        (
-            "gold, PlaneWave",
-            backward("gold, PlaneWave", &pm, up, &c, 6),
-            true,
-        ),
-    ] {
+        ("gold, PlaneWave", backward(&pm, up, &c, 6), true),
+    ];
+    for (name, (quad, swap_quad, mc, swapped), plane_wave) in cases {
+        println!(
+            "{name}: quadrature {quad:.6}, Monte Carlo {:.6} ± {:.1e} ({:.1} s.e.); swapped: quadrature {swap_quad:.6}, Monte Carlo {:.6} ± {:.1e} ({:.1} s.e. from the physical quadrature)",
+            mc.mean,
+            mc.se,
+            mc.z(quad),
+            swapped.mean,
+            swapped.se,
+            swapped.z(quad)
+        );
         assert!(
             mc.z(quad) <= 4.0,
             "{name}: Monte Carlo {mc:?} vs quadrature {quad}"
