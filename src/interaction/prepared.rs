@@ -175,18 +175,23 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     /// The `Full` level's effective Stokes vector `T v̂` (normalised) and the logarithm of
     /// its scale, from the channel weights `ln K_x`, `ln K_y`, `ln K_½`:
     /// ```text
-    /// a_x = ln(K_x S_x/S0),  a_y = ln(K_y S_y/S0),  a_½ = min(ln(K_½ |S2+iS3|/(2S0)), ½(a_x + a_y))
+    /// a_x = ln(K_x S_x/S0),  a_y = ln(K_y S_y/S0)
+    /// a_½ = min(min(ln K_½, ½(ln K_x + ln K_y) − ln|μ|_max) + ln(|S2+iS3|/(2S0)), ½(a_x + a_y))
     /// m = max(a_x, a_y),     r_α = e^{a_α − m}
     /// v̂ = (r_x + r_y, r_x − r_y, 2 r_½ cos arg μ, 2 r_½ sin arg μ),     v = S0 e^{m} v̂
     /// ```
-    /// The `min` is the Cauchy–Schwarz inequality of the weights, `K_½² |μ|² ≤ K_x K_y`, which
-    /// the exact S2.20 satisfies for every realizable packet (module docs of
+    /// The `min`s are the Cauchy–Schwarz inequality of the weights, `K_½² |μ|² ≤ K_x K_y`, which
+    /// the exact S2.20 satisfies for every realizable packet, and so for the largest `|μ|` the
+    /// shapes admit, `K_½ |μ|_max ≤ √(K_x K_y)` (module docs of
     /// [`crate::packet`]: at every spatial frequency the spectral matrix is positive
     /// semidefinite, and K is its average against `p ≥ 0`); it makes `v̂` a valid Stokes vector
     /// by construction, `(r_x − r_y)² + 4 r_½² ≤ (r_x + r_y)²`. Where the computed weights
     /// break the inequality — rounding of nearly proportional shapes in `f32`, or per-channel
     /// quadrature errors of [`crate::psd::GaussHermite`] — it lowers `K_½` by no more than their
-    /// own error: the exact weights satisfy it.
+    /// own error: the exact weights satisfy it. The `|μ|_max` form is the one the BSDF form
+    /// ([`Self::channel_matrix`]) must use (a matrix does not know `|μ|`), so both forms agree
+    /// where a quadrature blur breaks the inequality (`tests/bsdf_eval.rs`); the second `min`
+    /// keeps validity for a packet at the realizability slack.
     #[inline]
     #[expect(
         clippy::neg_cmp_op_on_partial_ord,
@@ -195,7 +200,8 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     pub(crate) fn channel_mix(&self, lx: T, ly: T, lh: T) -> (Vector4<T>, T) {
         let ax = lx + self.ln_sx;
         let ay = ly + self.ln_sy;
-        let ah = (lh + self.ln_c).min((ax + ay) * T::lit(0.5));
+        let half = T::lit(0.5);
+        let ah = (lh.min((lx + ly) * half - self.ln_mu_max) + self.ln_c).min((ax + ay) * half);
         let m = ax.max(ay);
         if !(m > neg_infinity()) {
             return (Vector4::zeros(), neg_infinity());

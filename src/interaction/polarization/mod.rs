@@ -150,7 +150,12 @@ pub(crate) fn onto_cone<T: Real>(u: Vector4<T>) -> Vector4<T> {
     let u0 = u[0];
     if u0 > T::zero() {
         let inv = u0.recip();
-        let (a, b, c) = (u[1] * inv, u[2] * inv, u[3] * inv);
+        // 1/u₀ overflows for the smallest subnormal u₀: divide instead (|u_k/u₀| ≲ 1).
+        let (a, b, c) = if inv <= T::MAX {
+            (u[1] * inv, u[2] * inv, u[3] * inv)
+        } else {
+            (u[1] / u0, u[2] / u0, u[3] / u0)
+        };
         let r2 = a * a + b * b + c * c;
         if r2 > T::one() {
             let f = r2.sqrt().recip();
