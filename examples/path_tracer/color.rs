@@ -1,0 +1,125 @@
+//! Spectral to sRGB, and the three images: S0 in sRGB, degree of polarization (grey), angle of
+//! polarization (hue = angle, brightness = degree).
+
+use std::path::Path;
+
+/// One lobe of the Wyman–Sloan–Shirley (2013) fit to the CIE 1931 2° matching functions.
+fn g(l: f32, mu: f32, s1: f32, s2: f32) -> f32 {
+    let t = (l - mu) / if l < mu { s1 } else { s2 };
+    (-0.5 * t * t).exp()
+}
+
+/// `(x̄, ȳ, z̄)` at `lambda` (µm): the multi-lobe fit of Wyman, Sloan & Shirley, "Simple
+/// Analytic Approximations to the CIE XYZ Color Matching Functions", JCGT 2(2), 2013.
+pub(crate) fn cmf(lambda: f32) -> [f32; 3] {
+    let l = lambda * 1000.0;
+    [
+        1.056 * g(l, 599.8, 37.9, 31.0) + 0.362 * g(l, 442.0, 16.0, 26.7)
+            - 0.065 * g(l, 501.1, 20.4, 26.2),
+        0.821 * g(l, 568.8, 46.9, 40.5) + 0.286 * g(l, 530.9, 16.3, 31.1),
+        1.217 * g(l, 437.0, 11.8, 36.0) + 0.681 * g(l, 459.0, 26.0, 13.8),
+    ]
+}
+
+/// `∫ (x̄, ȳ, z̄) dλ` over `[lo, hi]` (µm), by the midpoint rule: the white of an equal-energy
+/// spectrum, for white balance.
+pub(crate) fn cmf_integral(lo: f32, hi: f32) -> [f32; 3] {
+    let n = 3000;
+    let h = (hi - lo) / n as f32;
+    let mut s = [0.0; 3];
+    for i in 0..n {
+        let c = cmf(lo + (i as f32 + 0.5) * h);
+        for j in 0..3 {
+            s[j] += c[j] * h;
+        }
+    }
+    s
+}
+
+/// Linear sRGB (D65) from XYZ already balanced so that the equal-energy white is `(1, 1, 1)`:
+/// the white is mapped to D65's `(0.9505, 1, 1.089)` first.
+pub(crate) fn xyz_to_linear_srgb(xyz: [f32; 3]) -> [f32; 3] {
+    let [x, y, z] = [xyz[0] * 0.9505, xyz[1], xyz[2] * 1.089];
+    [
+        3.2406 * x - 1.5372 * y - 0.4986 * z,
+        -0.9689 * x + 1.8758 * y + 0.0415 * z,
+        0.0557 * x - 0.2040 * y + 1.0570 * z,
+    ]
+}
+
+fn gamma(c: f32) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let v = if c <= 0.0031308 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (v * 255.0 + 0.5) as u8
+}
+
+/// Per pixel: balanced XYZ, and the ȳ-weighted Stokes vector in the camera frame.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Pixel {
+    pub(crate) xyz: [f32; 3],
+    pub(crate) stokes: [f32; 4],
+}
+
+/// Writes `s0.png`, `dop.png` and `aop.png` of `pixels` (`width × height`, rows top down) into
+/// `dir`; the S0 exposure maps the 99th percentile of luminance to 0.9.
+pub(crate) fn write_images(
+    dir: &Path,
+    width: usize,
+    height: usize,
+    pixels: &[Pixel],
+) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let mut lum: Vec<f32> = pixels.iter().map(|p| p.xyz[1].max(0.0)).collect();
+    lum.sort_by(f32::total_cmp);
+    let p99 = lum[(lum.len() * 99 / 100).min(lum.len() - 1)].max(1e-12);
+    let exposure = 0.9 / p99;
+    let mut s0 = Vec::with_capacity(pixels.len() * 3);
+    let mut dop = Vec::with_capacity(pixels.len() * 3);
+    let mut aop = Vec::with_capacity(pixels.len() * 3);
+    for p in pixels {
+        for c in xyz_to_linear_srgb(p.xyz) {
+            s0.push(gamma(c * exposure));
+        }
+        let [i, q, u, v] = p.stokes;
+        let d = if i > 0.0 {
+            ((q * q + u * u + v * v).sqrt() / i).min(1.0)
+        } else {
+            0.0
+        };
+        let grey = (d * 255.0 + 0.5) as u8;
+        dop.extend([grey; 3]);
+        let angle = 0.5 * u.atan2(q); // −π/2 .. π/2 from the image's horizontal
+        aop.extend(hsv(
+            angle.rem_euclid(std::f32::consts::PI) / std::f32::consts::PI,
+            d,
+        ));
+    }
+    for (name, data) in [("s0.png", s0), ("dop.png", dop), ("aop.png", aop)] {
+        let file = std::io::BufWriter::new(std::fs::File::create(dir.join(name))?);
+        let mut enc = png::Encoder::new(file, width as u32, height as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.write_header()?.write_image_data(&data)?;
+    }
+    Ok(())
+}
+
+/// Full-saturation colour of hue `h` ∈ [0, 1) and value `v`.
+fn hsv(h: f32, v: f32) -> [u8; 3] {
+    let h6 = h * 6.0;
+    let f = h6 - h6.floor();
+    let (r, g, b) = match h6 as u32 % 6 {
+        0 => (1.0, f, 0.0),
+        1 => (1.0 - f, 1.0, 0.0),
+        2 => (0.0, 1.0, f),
+        3 => (0.0, 1.0 - f, 1.0),
+        4 => (f, 0.0, 1.0),
+        _ => (1.0, 0.0, 1.0 - f),
+    };
+    let to = |c: f32| (c * v * 255.0 + 0.5) as u8;
+    [to(r), to(g), to(b)]
+}

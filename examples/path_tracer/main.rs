@@ -1,0 +1,537 @@
+//! A polarized spectral path tracer written only against `gmueller::bsdf` (the renderer
+//! layer): rough glass in reflection and transmission, gold, an aluminium height grating, a
+//! polished black-glass ground, the sun and a polarized sky; `f32`, the `Full · Partial` kernel.
+//!
+//! ```sh
+//! cargo run --release --example path_tracer                 # 320×200, 4 spp, 32 λ → target/path_tracer/
+//! cargo run --release --example path_tracer -- --help       # options
+//! cargo run --release --example path_tracer -- --tradeoff   # the coherence-per-sample measurements
+//! ```
+//!
+//! **Integrator.** Backward (camera) paths, one wavelength each. Each pixel traces `spp`
+//! camera samples of `wavelengths/spp` wavelengths each, stratified over 32 bins of
+//! 0.40–0.70 µm (every pixel sees every bin, jittered inside it). At each vertex:
+//! 1. `Bsdf::new(&material, Kernel::<Full, Partial>, frame, λ)`;
+//! 2. next-event estimation of the sun: `bsdf.distant_packet` (one packet along the disk's
+//!    centre with the whole disk's coherence: the coherent specular lobe is the sun's blurred
+//!    mirror image), `prepare`, `eval` toward the previous vertex, and a shadow ray;
+//! 3. the direction the light comes from: `bsdf.incident_sampler(r̂, &sky_coherence)`,
+//!    `sample`, `bsdf.incident_weight` (`M/p`, evaluated in the physical direction). A ray that
+//!    leaves the scene picks up the sky. The sun is reached only by step 2 (it is not in the
+//!    sky's radiance), so no MIS is needed.
+//!
+//! The path's throughput is a Mueller matrix `t` from the frame the light arrives in at the
+//! last vertex to the camera frame (`x̂` = the image's right, `k̂` toward the camera), chained
+//! with `frame_change_mueller(exit_sp, previous incident_sp)` — the same ray in two frames.
+//! Pixels hold S0 as CIE XYZ (Wyman–Sloan–Shirley fit) and the ȳ-weighted Stokes vector.
+//!
+//! `--uniform` replaces step 3 by uniform sampling of the sphere (dielectrics) or hemisphere
+//! (metals) with the same coherence: the brute-force reference of the example's test.
+
+mod color;
+mod scene;
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
+use gmueller::frame::{Frame, frame_change_mueller};
+use gmueller::interaction::{
+    CoherenceWeights, Full, Kernel, Partial, Pbsdf, RoughSurface, Throughput,
+};
+use gmueller::mueller::Mueller;
+use gmueller::stokes::Stokes;
+use nalgebra::Vector4;
+
+use color::Pixel;
+use scene::{Material, Materials, Metals, SUN_SOLID_ANGLE, Scene, V3};
+
+const LAMBDA_MIN: f32 = 0.40;
+const LAMBDA_MAX: f32 = 0.70;
+
+/// How step 3 draws the direction the light comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Sampling {
+    /// `Bsdf::incident_sampler` and `incident_weight`.
+    Lobes,
+    /// Uniform on the sphere or hemisphere, weighted by `eval / p` (brute force).
+    Uniform,
+}
+
+/// Render settings.
+#[derive(Clone, Debug)]
+pub(crate) struct Options {
+    pub(crate) width: usize,
+    pub(crate) height: usize,
+    pub(crate) spp: usize,
+    pub(crate) wavelengths: usize,
+    pub(crate) max_depth: usize,
+    /// Surface coherence width (µm) assumed for sky and indirect light.
+    pub(crate) sky_coherence: f32,
+    /// The sun's disk is split into this many packets per vertex (1: one packet along the
+    /// centre with the whole disk's coherence).
+    pub(crate) sun_split: usize,
+    pub(crate) sampling: Sampling,
+    pub(crate) threads: usize,
+    pub(crate) seed: u64,
+    pub(crate) progress: bool,
+    /// A factor on every BSDF-sampling weight: 1 for a correct render (the test's negative
+    /// control sets another).
+    pub(crate) weight_scale: f32,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            width: 320,
+            height: 200,
+            spp: 4,
+            wavelengths: 32,
+            max_depth: 5,
+            sky_coherence: 20.0,
+            sun_split: 1,
+            sampling: Sampling::Lobes,
+            threads: std::thread::available_parallelism().map_or(2, |n| n.get()),
+            seed: 1,
+            progress: true,
+            weight_scale: 1.0,
+        }
+    }
+}
+
+/// Per pixel: sums over its paths of `(X, Y, Z, ȳS0, ȳS1, ȳS2, ȳS3)` and of their squares.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct PixelSums {
+    pub(crate) n: u32,
+    pub(crate) sum: [f64; 7],
+    pub(crate) sum_sq: [f64; 7],
+}
+
+impl PixelSums {
+    pub(crate) fn mean(&self, c: usize) -> f64 {
+        self.sum[c] / f64::from(self.n.max(1))
+    }
+    /// The standard error of the mean of channel `c`.
+    pub(crate) fn std_error(&self, c: usize) -> f64 {
+        let n = f64::from(self.n.max(2));
+        let m = self.sum[c] / n;
+        ((self.sum_sq[c] / n - m * m).max(0.0) / (n - 1.0)).sqrt()
+    }
+    fn pixel(&self) -> Pixel {
+        let m = |c| self.mean(c) as f32;
+        Pixel {
+            xyz: [m(0), m(1), m(2)],
+            stokes: [m(3), m(4), m(5), m(6)],
+        }
+    }
+}
+
+/// What a render returns.
+pub(crate) struct Render {
+    pub(crate) pixels: Vec<PixelSums>,
+    /// Contributions that were not finite or not a valid Stokes vector (S0 ≥ |S|, 1e-4 slack).
+    pub(crate) invalid: usize,
+    /// Paths that left the renderer layer with an error (a direction in a surface's plane).
+    pub(crate) errors: usize,
+    pub(crate) seconds: f64,
+}
+
+/// `SplitMix64`: a small seeded generator for reproducible pixels.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64, a: u64, b: u64) -> Self {
+        let mut r = Rng(seed
+            ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ b.wrapping_mul(0xC2B2_AE3D_27D4_EB4F));
+        r.next();
+        r
+    }
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn f(&mut self) -> f32 {
+        (self.next() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+}
+
+/// The per-path state: radiance so far (camera frame) and the throughput `t` from `frame`
+/// (where the light arrives at the last vertex) to the camera frame.
+struct Path {
+    radiance: Vector4<f32>,
+    t: Mueller<f32>,
+    frame: Frame<f32>,
+    invalid: usize,
+}
+
+impl Path {
+    /// Adds light `s` given in frame `from`, arriving after the last vertex's throughput.
+    fn add(&mut self, through: &Mueller<f32>, from: &Frame<f32>, s: &Stokes<f32>) {
+        let c = (self.t * frame_change_mueller(from, &self.frame) * *through * *s).vector();
+        // Below 1e-30 (near f32's subnormals, where the rounding of four products cannot keep
+        // |S| ≤ S0) a contribution is 30 orders under the image: dropped, not counted.
+        if c[0].abs() < 1e-30 && c.iter().all(|x| x.abs() < 1e-30) {
+            return;
+        }
+        // In f64: the squares of f32 values near 1e-22 are subnormal in f32.
+        let w = c.map(f64::from);
+        let pol = (w[1] * w[1] + w[2] * w[2] + w[3] * w[3]).sqrt();
+        if c.iter().all(|x| x.is_finite()) && pol <= w[0] * (1.0 + 1e-4) {
+            self.radiance += c;
+        } else {
+            self.invalid += 1;
+        }
+    }
+}
+
+/// One vertex on `material`: sun NEE into `path`, then the next direction (or `None`).
+#[allow(clippy::too_many_arguments)]
+fn vertex<P, Sp, Sc>(
+    material: &RoughSurface<P, Sp, Sc>,
+    scene: &Scene,
+    hit: &scene::Hit,
+    lambda: f32,
+    r: V3,
+    opts: &Options,
+    coherence: &SurfaceCoherence<f32>,
+    path: &mut Path,
+    rng: &mut Rng,
+) -> Result<Option<V3>, gmueller::Error>
+where
+    P: SamplingPsd<f32>,
+    Sp: Interface<f32>,
+    Sc: Pbsdf<f32>,
+    Partial: CoherenceWeights<f32, P>,
+{
+    let frame = scene.shading_frame(hit);
+    let bsdf = Bsdf::new(material, Kernel::<Full, Partial>::default(), frame, lambda)?;
+    let opaque = matches!(hit.material, Material::Gold | Material::Grating);
+    let n = hit.normal;
+
+    // 2. The sun.
+    let lit = !(opaque && scene.sun.dot(&n) <= 0.0) && scene.sees_sun(&hit.point, &n);
+    if lit {
+        let k = opts.sun_split.max(1);
+        let irradiance = Stokes::unpolarized(1.0 / k as f32)?;
+        for _ in 0..k {
+            let (dir, omega) = if k == 1 {
+                (scene.sun, SUN_SOLID_ANGLE)
+            } else {
+                (sun_point(scene.sun, rng), SUN_SOLID_ANGLE / k as f32)
+            };
+            let packet = bsdf.distant_packet(irradiance, omega, dir)?;
+            let v = bsdf.eval(&bsdf.prepare(&packet)?, r)?;
+            path.add(&v.response.total(), v.geometry.exit_sp(), &packet.stokes());
+        }
+    }
+
+    // 3. The direction the light comes from.
+    let (weight, g, s) = match opts.sampling {
+        Sampling::Lobes => {
+            let mut sampler = bsdf.incident_sampler(r, coherence)?;
+            if hit.material == Material::Ground {
+                // Light from inside the black ground is absorbed there: draw reflection only.
+                let p = sampler.part_probabilities();
+                sampler = sampler.with_part_probabilities([p[0], p[1], 0.0, 0.0]);
+            }
+            let Some(s) = sampler.sample(rng.f(), [rng.f(), rng.f()]) else {
+                return Ok(None);
+            };
+            let (w, g) = bsdf.incident_weight(r, coherence, &s)?;
+            (w, g, s.direction)
+        }
+        Sampling::Uniform => {
+            let (u1, u2) = (rng.f(), rng.f());
+            let (z, pdf) = if opaque {
+                (u1, 1.0 / std::f32::consts::TAU)
+            } else {
+                (1.0 - 2.0 * u1, 0.25 / std::f32::consts::PI)
+            };
+            let rho = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * u2;
+            let s = frame.x() * (rho * phi.cos()) + frame.y() * (rho * phi.sin()) + n * z;
+            if z.abs() < 1e-6 {
+                return Ok(None);
+            }
+            let light = bsdf.surface_packet(Stokes::unpolarized(1.0)?, s, coherence)?;
+            let v = bsdf.eval(&bsdf.prepare(&light)?, r)?;
+            (v.response.total().scaled(1.0 / pdf), v.geometry, s)
+        }
+    };
+    // Light from inside the black ground is absorbed there.
+    if hit.material == Material::Ground && s.dot(&n) < 0.0 {
+        return Ok(None);
+    }
+    let weight = weight.scaled(opts.weight_scale);
+    path.t = path.t * frame_change_mueller(g.exit_sp(), &path.frame) * weight;
+    path.frame = *g.incident_sp();
+    Ok(Some(s))
+}
+
+/// A direction uniformly inside the sun's disk (a cone of solid angle Ω about `sun`).
+fn sun_point(sun: V3, rng: &mut Rng) -> V3 {
+    let cos_max = 1.0 - SUN_SOLID_ANGLE / std::f32::consts::TAU;
+    let z = 1.0 - rng.f() * (1.0 - cos_max);
+    let rho = (1.0 - z * z).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * rng.f();
+    let f = Frame::from_normal(sun).expect("sun frame");
+    f.x() * (rho * phi.cos()) + f.y() * (rho * phi.sin()) + sun * z
+}
+
+/// The Stokes radiance (camera frame) of one path at `lambda` through image point `(x, y)`.
+fn trace(
+    scene: &Scene,
+    mats: &Materials,
+    lambda: f32,
+    (x, y): (f32, f32),
+    opts: &Options,
+    rng: &mut Rng,
+) -> (Vector4<f32>, usize, usize) {
+    let cam = &scene.camera;
+    let mut d = cam.direction(x, y, opts.width as f32 / opts.height as f32);
+    let mut o = cam.origin;
+    let coherence = SurfaceCoherence::new(opts.sky_coherence).expect("coherence width");
+    let mut path = Path {
+        radiance: Vector4::zeros(),
+        t: Mueller::identity(),
+        frame: cam.frame(&d),
+        invalid: 0,
+    };
+    let mut errors = 0;
+    for _ in 0..opts.max_depth {
+        let Some(hit) = scene.intersect(&o, &d) else {
+            let (s, f) = scene.sky(&d, lambda);
+            path.add(&Mueller::identity(), &f, &s);
+            break;
+        };
+        let r = -d;
+        let step = match hit.material {
+            Material::Ground => vertex(
+                &mats.ground,
+                scene,
+                &hit,
+                lambda,
+                r,
+                opts,
+                &coherence,
+                &mut path,
+                rng,
+            ),
+            Material::Glass => vertex(
+                &mats.glass,
+                scene,
+                &hit,
+                lambda,
+                r,
+                opts,
+                &coherence,
+                &mut path,
+                rng,
+            ),
+            Material::Gold => vertex(
+                &mats.gold, scene, &hit, lambda, r, opts, &coherence, &mut path, rng,
+            ),
+            Material::Grating => vertex(
+                &mats.grating,
+                scene,
+                &hit,
+                lambda,
+                r,
+                opts,
+                &coherence,
+                &mut path,
+                rng,
+            ),
+        };
+        match step {
+            Ok(Some(s)) => {
+                d = s;
+                o = hit.point + hit.normal * (1e-4 * s.dot(&hit.normal).signum());
+            }
+            Ok(None) => break,
+            Err(_) => {
+                errors += 1;
+                break;
+            }
+        }
+        // Russian roulette on the throughput's M00 (unbiased; it also keeps f32 throughputs
+        // out of the subnormal range).
+        let m00 = path.t.matrix()[(0, 0)];
+        let survive = (m00 / 0.05).min(1.0);
+        if survive.is_nan() || survive <= 0.0 || rng.f() >= survive {
+            break;
+        }
+        path.t = path.t.scaled(1.0 / survive);
+    }
+    (path.radiance, path.invalid, errors)
+}
+
+/// Renders the scene.
+pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
+    let start = Instant::now();
+    let metals = Metals::load();
+    let bins = opts.wavelengths.max(1);
+    let width_bin = (LAMBDA_MAX - LAMBDA_MIN) / bins as f32;
+    let mats: Vec<Materials> = (0..bins)
+        .map(|b| Materials::at(LAMBDA_MIN + (b as f32 + 0.5) * width_bin, &metals))
+        .collect();
+    let white = color::cmf_integral(LAMBDA_MIN, LAMBDA_MAX);
+    let per_sample = (bins / opts.spp.max(1)).max(1);
+    let bar = if opts.progress {
+        let b = indicatif::ProgressBar::new(opts.height as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows  {elapsed_precise}")
+                .expect("template"),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let next = AtomicUsize::new(0);
+    let rows: Vec<(usize, Vec<PixelSums>, usize, usize)> = std::thread::scope(|sc| {
+        let workers: Vec<_> = (0..opts.threads.max(1))
+            .map(|_| {
+                sc.spawn(|| {
+                    let mut out = Vec::new();
+                    loop {
+                        let j = next.fetch_add(1, Ordering::Relaxed);
+                        if j >= opts.height {
+                            break out;
+                        }
+                        let (mut invalid, mut errors) = (0, 0);
+                        let row = (0..opts.width)
+                            .map(|i| {
+                                let mut px = PixelSums::default();
+                                for s in 0..opts.spp {
+                                    let mut rng =
+                                        Rng::new(opts.seed, (j * opts.width + i) as u64, s as u64);
+                                    let (jx, jy) = (rng.f(), rng.f());
+                                    let xy = (
+                                        (i as f32 + jx) / opts.width as f32,
+                                        (j as f32 + jy) / opts.height as f32,
+                                    );
+                                    for w in 0..per_sample {
+                                        let bin = (s * per_sample + w) % bins;
+                                        let lambda =
+                                            LAMBDA_MIN + (bin as f32 + rng.f()) * width_bin;
+                                        let (l, bad, err) =
+                                            trace(scene, &mats[bin], lambda, xy, opts, &mut rng);
+                                        invalid += bad;
+                                        errors += err;
+                                        let c = color::cmf(lambda);
+                                        let span = LAMBDA_MAX - LAMBDA_MIN;
+                                        let v = [
+                                            l[0] * c[0] * span / white[0],
+                                            l[0] * c[1] * span / white[1],
+                                            l[0] * c[2] * span / white[2],
+                                            l[0] * c[1] * span / white[1],
+                                            l[1] * c[1] * span / white[1],
+                                            l[2] * c[1] * span / white[1],
+                                            l[3] * c[1] * span / white[1],
+                                        ];
+                                        px.n += 1;
+                                        for (k, x) in v.iter().enumerate() {
+                                            let x = f64::from(*x);
+                                            px.sum[k] += x;
+                                            px.sum_sq[k] += x * x;
+                                        }
+                                    }
+                                }
+                                px
+                            })
+                            .collect();
+                        out.push((j, row, invalid, errors));
+                        bar.inc(1);
+                    }
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().expect("worker"))
+            .collect()
+    });
+    bar.finish_and_clear();
+    let mut pixels = vec![PixelSums::default(); opts.width * opts.height];
+    let (mut invalid, mut errors) = (0, 0);
+    for (j, row, bad, err) in rows {
+        pixels[j * opts.width..(j + 1) * opts.width].copy_from_slice(&row);
+        invalid += bad;
+        errors += err;
+    }
+    Render {
+        pixels,
+        invalid,
+        errors,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+fn usage() -> ! {
+    eprintln!(
+        "path_tracer [--width N] [--height N] [--spp N] [--wavelengths N] [--depth N]\n\
+         \x20           [--sky-coherence µm] [--sun-split N] [--uniform] [--threads N] [--seed N] [--out DIR]\n\
+         path_tracer --tradeoff [--out DIR]"
+    );
+    std::process::exit(2)
+}
+
+fn main() {
+    let mut opts = Options::default();
+    let mut out = PathBuf::from("target/path_tracer");
+    let mut tradeoff = false;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        let mut value = || args.next().unwrap_or_else(|| usage());
+        let mut num = || value().parse::<usize>().unwrap_or_else(|_| usage());
+        match a.as_str() {
+            "--width" => opts.width = num(),
+            "--height" => opts.height = num(),
+            "--spp" => opts.spp = num(),
+            "--wavelengths" => opts.wavelengths = num(),
+            "--depth" => opts.max_depth = num(),
+            "--sun-split" => opts.sun_split = num(),
+            "--threads" => opts.threads = num(),
+            "--seed" => opts.seed = num() as u64,
+            "--sky-coherence" => {
+                opts.sky_coherence = value().parse().unwrap_or_else(|_| usage());
+            }
+            "--uniform" => opts.sampling = Sampling::Uniform,
+            "--tradeoff" => tradeoff = true,
+            "--out" => out = PathBuf::from(value()),
+            _ => usage(),
+        }
+    }
+    let scene = Scene::new();
+    if tradeoff {
+        tradeoff::run(&scene, &out);
+        return;
+    }
+    let r = render(&scene, &opts);
+    let pixels: Vec<Pixel> = r.pixels.iter().map(PixelSums::pixel).collect();
+    color::write_images(&out, opts.width, opts.height, &pixels).expect("write images");
+    println!(
+        "{}×{}, {} spp, {} wavelengths, f32 Full·Partial, {} threads: {:.2} s; \
+         invalid contributions {}, errors {}; images in {}/{{s0,dop,aop}}.png",
+        opts.width,
+        opts.height,
+        opts.spp,
+        opts.wavelengths,
+        opts.threads,
+        r.seconds,
+        r.invalid,
+        r.errors,
+        out.display()
+    );
+}
+
+mod tradeoff;
+
+#[cfg(test)]
+mod tests;

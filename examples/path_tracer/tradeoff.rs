@@ -1,0 +1,133 @@
+//! `--tradeoff`: what the coherence one sample of light carries trades, measured on this scene
+//! (160×100, 8 spp, 16 wavelengths). Two rules of `gmueller::bsdf::sources`:
+//! - **the sun** (a distant disk; the same rule as an area light sampled by pieces): one packet
+//!   along the centre with the whole disk's coherence, or the disk split into `N` random
+//!   packets of `Ω/N` each (wider coherence, sharper lobes, random positions);
+//! - **sky and indirect light**: the surface coherence width `w` of every BSDF-sampled
+//!   direction (`SurfaceCoherence`); `w → ∞` is the plane-wave limit of an incoherent source.
+//!
+//! For each setting: the time, the noise (Σ standard errors of the pixels' Y / Σ Y), and the
+//! difference from the reference setting rendered with another seed (`Σ |Y − Y_ref| / Σ Y_ref`,
+//! noise of both included), over the whole image and over the glints (the 2 % brightest pixels
+//! of the reference).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::{Options, Render, render};
+use crate::scene::Scene;
+
+struct Row {
+    label: String,
+    seconds: f64,
+    noise: [f64; 2],
+    diff: [f64; 2],
+}
+
+fn measure(label: String, r: &Render, reference: &Render, glints: &[bool]) -> Row {
+    let mut noise = [0.0; 4];
+    let mut diff = [0.0; 4];
+    for ((p, q), &g) in r.pixels.iter().zip(&reference.pixels).zip(glints) {
+        for (k, on) in [true, g].into_iter().enumerate() {
+            if on {
+                noise[k] += p.std_error(1);
+                noise[k + 2] += p.mean(1);
+                diff[k] += (p.mean(1) - q.mean(1)).abs();
+                diff[k + 2] += q.mean(1);
+            }
+        }
+    }
+    Row {
+        label,
+        seconds: r.seconds,
+        noise: [noise[0] / noise[2], noise[1] / noise[3]],
+        diff: [diff[0] / diff[2], diff[1] / diff[3]],
+    }
+}
+
+fn table(title: &str, rows: &[Row]) -> String {
+    let mut s = format!(
+        "\n{title}\n\n| setting | time (s) | noise, image | noise, glints | difference, image | difference, glints |\n|---|---|---|---|---|---|\n"
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            r.label, r.seconds, r.noise[0], r.noise[1], r.diff[0], r.diff[1]
+        );
+    }
+    s
+}
+
+fn glint_mask(reference: &Render) -> Vec<bool> {
+    let mut y: Vec<f64> = reference.pixels.iter().map(|p| p.mean(1)).collect();
+    y.sort_by(f64::total_cmp);
+    let cut = y[y.len() * 98 / 100];
+    reference.pixels.iter().map(|p| p.mean(1) >= cut).collect()
+}
+
+pub(crate) fn run(scene: &Scene, out: &Path) {
+    let base = Options {
+        width: 160,
+        height: 100,
+        spp: 8,
+        wavelengths: 16,
+        progress: false,
+        ..Options::default()
+    };
+    let reseed = |o: &Options| Options {
+        seed: 7,
+        ..o.clone()
+    };
+    let mut report = String::from(
+        "Coherence per sample, measured on the path tracer's scene (160×100, 8 spp, 16 λ, f32 Full·Partial).\n",
+    );
+
+    let sun = |n: usize| Options {
+        sun_split: n,
+        ..base.clone()
+    };
+    let reference = render(scene, &reseed(&sun(64)));
+    let glints = glint_mask(&reference);
+    let rows: Vec<Row> = [1, 4, 16, 64]
+        .into_iter()
+        .map(|n| {
+            measure(
+                format!("sun in N = {n}"),
+                &render(scene, &sun(n)),
+                &reference,
+                &glints,
+            )
+        })
+        .collect();
+    report += &table(
+        "Sun: one packet with the disk's coherence, or N packets of Ω/N (reference N = 64, another seed)",
+        &rows,
+    );
+
+    let sky = |w: f32| Options {
+        sky_coherence: w,
+        ..base.clone()
+    };
+    let reference = render(scene, &reseed(&sky(250.0)));
+    let glints = glint_mask(&reference);
+    let rows: Vec<Row> = [2.0, 10.0, 50.0, 250.0]
+        .into_iter()
+        .map(|w| {
+            measure(
+                format!("sky w = {w} µm"),
+                &render(scene, &sky(w)),
+                &reference,
+                &glints,
+            )
+        })
+        .collect();
+    report += &table(
+        "Sky and indirect light: surface coherence width w (reference w = 250 µm, another seed)",
+        &rows,
+    );
+
+    print!("{report}");
+    std::fs::create_dir_all(out).expect("output directory");
+    std::fs::write(out.join("tradeoff.md"), report).expect("write tradeoff.md");
+}
