@@ -72,10 +72,16 @@ pub(crate) struct Options {
     /// The sun's disk is split into this many packets per vertex (1: one packet along the
     /// centre with the whole disk's coherence).
     pub(crate) sun_split: usize,
+    /// The sun's solid angle (sr): 6.8·10⁻⁵ for the sun; larger is a brighter-area, less
+    /// coherent disk of the same irradiance.
+    pub(crate) sun_solid_angle: f32,
     pub(crate) sampling: Sampling,
     pub(crate) threads: usize,
     pub(crate) seed: u64,
     pub(crate) progress: bool,
+    /// One wavelength (µm) for every path instead of the spectrum (the trade-off measurements:
+    /// no spectral noise).
+    pub(crate) lambda: Option<f32>,
     /// A factor on every BSDF-sampling weight: 1 for a correct render (the test's negative
     /// control sets another).
     pub(crate) weight_scale: f32,
@@ -91,11 +97,13 @@ impl Default for Options {
             max_depth: 5,
             sky_coherence: 20.0,
             sun_split: 1,
+            sun_solid_angle: SUN_SOLID_ANGLE,
             sampling: Sampling::Lobes,
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()),
             seed: 1,
             progress: true,
             weight_scale: 1.0,
+            lambda: None,
         }
     }
 }
@@ -221,9 +229,12 @@ where
         let irradiance = Stokes::unpolarized(1.0 / k as f32)?;
         for _ in 0..k {
             let (dir, omega) = if k == 1 {
-                (scene.sun, SUN_SOLID_ANGLE)
+                (scene.sun, opts.sun_solid_angle)
             } else {
-                (sun_point(scene.sun, rng), SUN_SOLID_ANGLE / k as f32)
+                (
+                    sun_point(scene.sun, opts.sun_solid_angle, rng),
+                    opts.sun_solid_angle / k as f32,
+                )
             };
             let packet = bsdf.distant_packet(irradiance, omega, dir)?;
             let v = bsdf.eval(&bsdf.prepare(&packet)?, r)?;
@@ -275,8 +286,8 @@ where
 }
 
 /// A direction uniformly inside the sun's disk (a cone of solid angle Ω about `sun`).
-fn sun_point(sun: V3, rng: &mut Rng) -> V3 {
-    let cos_max = 1.0 - SUN_SOLID_ANGLE / std::f32::consts::TAU;
+fn sun_point(sun: V3, solid_angle: f32, rng: &mut Rng) -> V3 {
+    let cos_max = 1.0 - solid_angle / std::f32::consts::TAU;
     let z = 1.0 - rng.f() * (1.0 - cos_max);
     let rho = (1.0 - z * z).max(0.0).sqrt();
     let phi = std::f32::consts::TAU * rng.f();
@@ -376,10 +387,17 @@ fn trace(
 pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
     let start = Instant::now();
     let metals = Metals::load();
-    let bins = opts.wavelengths.max(1);
+    let bins = if opts.lambda.is_some() {
+        1
+    } else {
+        opts.wavelengths.max(1)
+    };
     let width_bin = (LAMBDA_MAX - LAMBDA_MIN) / bins as f32;
     let mats: Vec<Materials> = (0..bins)
-        .map(|b| Materials::at(LAMBDA_MIN + (b as f32 + 0.5) * width_bin, &metals))
+        .map(|b| {
+            let centre = LAMBDA_MIN + (b as f32 + 0.5) * width_bin;
+            Materials::at(opts.lambda.unwrap_or(centre), &metals)
+        })
         .collect();
     let white = color::cmf_integral(LAMBDA_MIN, LAMBDA_MAX);
     let per_sample = (bins / opts.spp.max(1)).max(1);
@@ -418,8 +436,9 @@ pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
                                     );
                                     for w in 0..per_sample {
                                         let bin = (s * per_sample + w) % bins;
-                                        let lambda =
+                                        let jitter =
                                             LAMBDA_MIN + (bin as f32 + rng.f()) * width_bin;
+                                        let lambda = opts.lambda.unwrap_or(jitter);
                                         let (l, bad, err) =
                                             trace(scene, &mats[bin], lambda, xy, opts, &mut rng);
                                         invalid += bad;
@@ -476,7 +495,7 @@ pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
 fn usage() -> ! {
     eprintln!(
         "path_tracer [--width N] [--height N] [--spp N] [--wavelengths N] [--depth N]\n\
-         \x20           [--sky-coherence µm] [--sun-split N] [--uniform] [--threads N] [--seed N] [--out DIR]\n\
+         \x20           [--sky-coherence µm] [--sun-split N] [--sun-solid-angle sr] [--uniform] [--threads N] [--seed N] [--out DIR]\n\
          path_tracer --tradeoff [--out DIR]"
     );
     std::process::exit(2)
@@ -499,6 +518,9 @@ fn main() {
             "--sun-split" => opts.sun_split = num(),
             "--threads" => opts.threads = num(),
             "--seed" => opts.seed = num() as u64,
+            "--sun-solid-angle" => {
+                opts.sun_solid_angle = value().parse().unwrap_or_else(|_| usage());
+            }
             "--sky-coherence" => {
                 opts.sky_coherence = value().parse().unwrap_or_else(|_| usage());
             }

@@ -1,5 +1,6 @@
 //! `--tradeoff`: what the coherence one sample of light carries trades, measured on this scene
-//! (160×100, 8 spp, 16 wavelengths). Two rules of `gmueller::bsdf::sources`:
+//! (160×100, 64 spp, one wavelength: 0.55 µm, so that the noise is the sampling's alone; the
+//! references at 128 spp). Two rules of `gmueller::bsdf::sources`:
 //! - **the sun** (a distant disk; the same rule as an area light sampled by pieces): one packet
 //!   along the centre with the whole disk's coherence, or the disk split into `N` random
 //!   packets of `Ω/N` each (wider coherence, sharper lobes, random positions);
@@ -70,17 +71,19 @@ pub(crate) fn run(scene: &Scene, out: &Path) {
     let base = Options {
         width: 160,
         height: 100,
-        spp: 8,
-        wavelengths: 16,
+        spp: 64,
+        wavelengths: 1,
+        lambda: Some(0.55),
         progress: false,
         ..Options::default()
     };
     let reseed = |o: &Options| Options {
         seed: 7,
+        spp: 128,
         ..o.clone()
     };
     let mut report = String::from(
-        "Coherence per sample, measured on the path tracer's scene (160×100, 8 spp, 16 λ, f32 Full·Partial).\n",
+        "Coherence per sample, measured on the path tracer's scene (160×100, 64 spp, λ = 0.55 µm, f32 Full·Partial; references at 128 spp).\n",
     );
 
     let sun = |n: usize| Options {
@@ -101,7 +104,7 @@ pub(crate) fn run(scene: &Scene, out: &Path) {
         })
         .collect();
     report += &table(
-        "Sun: one packet with the disk's coherence, or N packets of Ω/N (reference N = 64, another seed)",
+        "Sun: one packet with the disk's coherence, or N packets of Ω/N (reference N = 64, another seed, 128 spp)",
         &rows,
     );
 
@@ -123,7 +126,7 @@ pub(crate) fn run(scene: &Scene, out: &Path) {
         })
         .collect();
     report += &table(
-        "Sky and indirect light: surface coherence width w (reference w = 250 µm, another seed)",
+        "Sky and indirect light: surface coherence width w (reference w = 250 µm, another seed, 128 spp)",
         &rows,
     );
 

@@ -15,6 +15,22 @@
 //! (the specular lobe of a plane wave, grating orders of a plane wave) are drawn with their
 //! probability and excluded from the density, as pbrt and Mitsuba do.
 //!
+//! # Grazing specular lobes (backward)
+//! As a function of ŝ the kernel's coherent specular lobe goes as `g(h_t) cos θ_o`, while the
+//! projected-disk density above goes as `g(h_t) cos θ_i`: where the lobe reaches the horizon,
+//! `M/p ∝ cos θ_o/cos θ_i` is unbounded and its variance diverges (logarithmically). So when
+//! tracing backward, a specular lobe whose centre lies within 4 of its standard deviations of
+//! the horizon (in the projected disk) is drawn half of the time in the **angle chart**
+//! `x = θ ê` (θ from the normal, ê the tangential direction; `d²x = (θ/sin θ) dω`, bounded
+//! at the horizon) from a Gaussian about the lobe's centre whose widths are the lobe's image
+//! there (radially `(asin(u_c + σ) − asin(u_c − σ))/2`, tangentially `σ θ_c/u_c`) widened by
+//! 1.5:
+//! ```text
+//! p_ω(ŝ) += P_spec · ½ · 𝒩(x(ŝ); x_c, Σ_x) · θ/sin θ        (the h_t term of the part halved)
+//! ```
+//! (measured: at 85° and 20 µm of coherence the largest of 200 000 weights fell from 320× to
+//! 9× the mean, `tests/bsdf_sampling.rs`).
+//!
 //! # Part probabilities
 //! ```text
 //! E = [R α_r,  R (1 − α_r),  T α_t,  T (1 − α_t)]      (reflected/transmitted × specular/scattered)
@@ -48,6 +64,14 @@ const PART_FLOOR: f64 = 1e-3;
 /// The weight of a blurred grating order whose centre lies beyond the propagating directions
 /// (by more than three blur widths), relative to its efficiency.
 const HIDDEN_ORDER_WEIGHT: f64 = 1e-3;
+
+/// Backward specular lobes whose centre lies within this many standard deviations (in the
+/// projected disk) of the horizon are also drawn in the angle chart (module docs).
+const HORIZON_REACH: f64 = 4.0;
+/// The share of the angle chart in such a specular part.
+const HORIZON_SHARE: f64 = 0.5;
+/// The widening of the angle-chart lobe over the linearised image of the specular lobe.
+const HORIZON_WIDEN: f64 = 1.5;
 
 /// Which part of the kernel a sample was drawn from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -131,6 +155,76 @@ impl<T: Real> SideMap<T> {
     }
 }
 
+impl<T: Real> SideMap<T> {
+    /// The direction of the angle-chart point `x = θ ê` (θ the polar angle from this side's
+    /// normal, ê the unit tangential direction), `None` at or beyond the horizon.
+    #[inline]
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "a NaN must fail the test too"
+    )]
+    fn direction_of_angle(&self, x: &Vector2<T>) -> Option<Vector3<T>> {
+        let theta = x.norm();
+        if !(theta < T::frac_pi_2()) {
+            return None;
+        }
+        let (s, c) = theta.sin_cos();
+        let u = if theta > T::zero() {
+            x * (s / theta)
+        } else {
+            Vector2::zeros()
+        };
+        Some(self.t1 * u.x + self.t2 * u.y + self.n * c)
+    }
+
+    /// The angle-chart point of a unit direction `d` in this side's half-space and the density
+    /// factor `θ/sin θ` (`d²x = (θ/sin θ) dω`).
+    #[inline]
+    fn angle_of(&self, d: &Vector3<T>) -> (Vector2<T>, T) {
+        let u = Vector2::new(d.dot(&self.t1), d.dot(&self.t2));
+        let s = u.norm();
+        let theta = s.atan2(d.dot(&self.n));
+        if s > T::zero() {
+            (u * (theta / s), theta / s)
+        } else {
+            (Vector2::zeros(), T::one())
+        }
+    }
+}
+
+/// The angle-chart image of the specular lobes `lobes` (weights, `h_t` lobes centred at 0) on
+/// side `map`, when their centre lies within `HORIZON_REACH` standard deviations of the
+/// horizon (module docs, "Grazing specular lobes"); `None` otherwise.
+fn horizon_lobe<T: Real>(map: &SideMap<T>, lobes: &[(T, GaussLobe<T>)]) -> Option<GaussLobe<T>> {
+    let mut cov = Matrix2::zeros();
+    for (w, l) in lobes {
+        let [a, b, c] = l.l;
+        cov += Matrix2::new(a * a, a * b, a * b, b * b + c * c) * *w;
+    }
+    let cov = cov / (map.k * map.k);
+    let centre = -map.known_h / map.k;
+    let r = centre.norm();
+    if !(r > T::zero() && r.is_finite()) {
+        return None;
+    }
+    let e = centre / r;
+    let ep = Vector2::new(-e.y, e.x);
+    let sr = e.dot(&(cov * e)).max(T::zero()).sqrt();
+    let st = ep.dot(&(cov * ep)).max(T::zero()).sqrt();
+    if T::one() - r >= T::lit(HORIZON_REACH) * sr {
+        return None;
+    }
+    let asin = |x: T| x.max(T::zero()).min(T::one()).asin();
+    let theta = asin(r);
+    let widen = T::lit(HORIZON_WIDEN);
+    let sig_r = (asin(r + sr) - asin(r - sr)) * T::lit(0.5) * widen;
+    let sig_t = st * theta / r.min(T::one()) * widen;
+    let rot = Matrix2::new(e.x, ep.x, e.y, ep.y);
+    let c =
+        rot * Matrix2::new(sig_r * sig_r, T::zero(), T::zero(), sig_t * sig_t) * rot.transpose();
+    GaussLobe::new(e * theta, &c)
+}
+
 /// The specular lobe of a side.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Specular<T: Real> {
@@ -209,6 +303,9 @@ pub struct LobeSampler<'a, T: Real> {
     /// `[reflected specular, reflected scattered, transmitted specular, transmitted scattered]`.
     probs: [T; 4],
     specular: Option<Specular<T>>,
+    /// Tracing backward: grazing specular lobes are also drawn in the angle chart (computed
+    /// where needed, [`LobeSampler::chart`], to keep the sampler small).
+    backward: bool,
     scatter: Scatter<'a, T>,
     transmits: bool,
 }
@@ -408,9 +505,23 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             sides: [reflect, transmit],
             probs,
             specular,
+            backward: !setup.forward,
             scatter,
             transmits,
         })
+    }
+
+    /// Backward, the angle-chart lobe of side `side`'s specular part where it reaches near the
+    /// horizon (module docs, "Grazing specular lobes").
+    #[inline]
+    fn chart(&self, side: usize) -> Option<GaussLobe<T>> {
+        if !self.backward || self.probs[2 * side] <= T::zero() {
+            return None;
+        }
+        match self.specular {
+            Some(Specular::Gauss(lobes, count)) => horizon_lobe(&self.sides[side], &lobes[..count]),
+            _ => None,
+        }
     }
 
     /// The part probabilities `[reflected specular, reflected scattered, transmitted specular,
@@ -476,22 +587,32 @@ impl<'a, T: Real> LobeSampler<'a, T> {
         };
         let map = &self.sides[side_index];
         // `delta`: the Dirac lobe's weight in the PSD and its share among its part's lobes.
-        let (h, delta) = if part % 2 == 0 {
-            match self.specular? {
-                Specular::Delta => (Vector2::zeros(), Some((T::one(), T::one()))),
-                Specular::Gauss(lobes, count) => {
+        let share = T::lit(HORIZON_SHARE);
+        let (direction, delta) = if part % 2 == 0 {
+            match (self.specular?, self.chart(side_index)) {
+                (Specular::Delta, _) => (
+                    map.direction(&Vector2::zeros())?,
+                    Some((T::one(), T::one())),
+                ),
+                (Specular::Gauss(..), Some(chart)) if v < share => {
+                    (map.direction_of_angle(&chart.sample(u))?, None)
+                }
+                (Specular::Gauss(lobes, count), chart) => {
+                    if chart.is_some() {
+                        v = clamp01((v - share) / (T::one() - share));
+                    }
                     let lobe = if count == 2 && v >= lobes[0].0 {
                         &lobes[1].1
                     } else {
                         &lobes[0].1
                     };
-                    (lobe.sample(u), None)
+                    (map.direction(&lobe.sample(u))?, None)
                 }
             }
         } else {
-            self.sample_scatter(side_index, v, u)?
+            let (h, delta) = self.sample_scatter(side_index, v, u)?;
+            (map.direction(&h)?, delta)
         };
-        let direction = map.direction(&h)?;
         let lobe = SampledLobe {
             side,
             part: if part % 2 == 0 {
@@ -587,7 +708,19 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             }
             let map = &self.sides[side];
             if let Some((h, cos)) = map.h_of(&d) {
+                let (h_share, chart) = match self.chart(side) {
+                    Some(chart) => {
+                        let (x, jac) = map.angle_of(&d);
+                        let share = T::lit(HORIZON_SHARE);
+                        (
+                            T::one() - share,
+                            self.probs[2 * side] * share * chart.density(&x) * jac,
+                        )
+                    }
+                    None => (T::one(), T::zero()),
+                };
                 let spec = self.probs[2 * side]
+                    * h_share
                     * match self.specular {
                         Some(Specular::Gauss(lobes, count)) => lobes[..count]
                             .iter()
@@ -599,7 +732,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
                 } else {
                     T::zero()
                 };
-                return (spec + scat) * (map.k * map.k) * cos;
+                return (spec + scat) * (map.k * map.k) * cos + chart;
             }
         }
         T::zero()

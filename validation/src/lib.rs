@@ -2,8 +2,9 @@
 //! dependencies (`rustfft`, `plotters`, `indicatif`, `dejavu`) are not the library's.
 //!
 //! - `cargo run --release -p gmueller-validation --bin wave_tracer`: the reference scalar
-//!   tracer (brute-force Kirchhoff phase-screen scattering against the kernel; `--energy`,
-//!   `--render`; see `src/bin/wave_tracer/main.rs`).
+//!   tracer (brute-force Kirchhoff phase-screen scattering against the kernel; `--energy`;
+//!   see `src/bin/wave_tracer/main.rs`). The polarized path tracer is the library's example
+//!   `examples/path_tracer/`.
 //! - `cargo run --release -p gmueller-validation --bin accuracy`: the speed-versus-accuracy
 //!   harness (see `src/bin/accuracy/main.rs`).
 //! - `tests/tracer.rs`: a reduced, fixed-seed version of the tracer's comparison (part of

@@ -12,9 +12,7 @@
 //! the workspace's `target/wave_tracer/`), `--only NAME` (one configuration), `--raw-beam` (no
 //! beam compensation: shows the finite beam's blur of the lobe tails, see
 //! `validation/src/brute.rs`).
-//! `--render [--width N] [--height N] [--wavelengths N]` instead renders a small spectral scene
-//! with the kernel under the sun and under a low-coherence source, side by side, into
-//! `render.png` in the output folder (see `render.rs`). `--energy` instead measures the total
+//! `--energy` instead measures the total
 //! reflected fraction of the lossless phase screen at `θ_i = 75°` and 85° by brute force, beside
 //! the model's analytic total and the kernel's (see `energy.rs`; about 7 minutes on 2 cores,
 //! `--quick` a quarter of that).
@@ -25,7 +23,6 @@
 
 mod energy;
 mod plot;
-mod render;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -362,12 +359,8 @@ struct Args {
     threads: usize,
     seed: u64,
     only: Option<String>,
-    render: bool,
     energy: bool,
     raw_beam: bool,
-    width: usize,
-    height: usize,
-    wavelengths: usize,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -378,12 +371,8 @@ fn parse_args() -> Result<Args, String> {
         threads: std::thread::available_parallelism().map_or(2, usize::from),
         seed: 20220801,
         only: None,
-        render: false,
         energy: false,
         raw_beam: false,
-        width: 480,
-        height: 300,
-        wavelengths: 48,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -397,18 +386,11 @@ fn parse_args() -> Result<Args, String> {
             "--threads" => a.threads = val("--threads")?.parse().map_err(|e| format!("{e}"))?,
             "--seed" => a.seed = val("--seed")?.parse().map_err(|e| format!("{e}"))?,
             "--only" => a.only = Some(val("--only")?),
-            "--render" => a.render = true,
             "--energy" => a.energy = true,
             "--raw-beam" => a.raw_beam = true,
-            "--width" => a.width = val("--width")?.parse().map_err(|e| format!("{e}"))?,
-            "--height" => a.height = val("--height")?.parse().map_err(|e| format!("{e}"))?,
-            "--wavelengths" => {
-                a.wavelengths = val("--wavelengths")?.parse().map_err(|e| format!("{e}"))?;
-            }
             "-h" | "--help" => {
                 println!(
                     "wave_tracer [--realizations N] [--quick] [--threads N] [--seed S] [--out DIR] [--only NAME] [--raw-beam]\n\
-                     wave_tracer --render [--width N] [--height N] [--wavelengths N] [--threads N] [--out DIR]\n\
                      wave_tracer --energy [--realizations N] [--quick] [--threads N] [--seed S]"
                 );
                 std::process::exit(0);
@@ -427,20 +409,6 @@ fn main() {
             std::process::exit(2);
         }
     };
-    if args.render {
-        let r = render::RenderArgs {
-            width: args.width.max(1),
-            height: args.height.max(1),
-            wavelengths: args.wavelengths.max(1),
-            threads: args.threads.max(1),
-            out: args.out.clone(),
-        };
-        if let Err(e) = render::run(&r) {
-            eprintln!("render failed: {e}");
-            std::process::exit(1);
-        }
-        return;
-    }
     if args.energy {
         energy::run(
             args.realizations,
