@@ -25,6 +25,12 @@
 //! with `frame_change_mueller(exit_sp, previous incident_sp)` — the same ray in two frames.
 //! Pixels hold S0 as CIE XYZ (Wyman–Sloan–Shirley fit) and the ȳ-weighted Stokes vector.
 //!
+//! `--sun-solid-angle 0.1` replaces the sun by an equally bright disk of low coherence (its
+//! lobes widen, the grating's rainbow washes out); `--sky-coherence`, `--sun-split` change
+//! the coherence one sample carries (`--tradeoff` measures both). The black-glass ground draws
+//! reflection only (`with_part_probabilities`): what it transmits is absorbed. Russian
+//! roulette on the throughput's `M₀₀` ends paths; contributions below 1e-30 are dropped.
+//!
 //! `--uniform` replaces step 3 by uniform sampling of the sphere (dielectrics) or hemisphere
 //! (metals) with the same coherence: the brute-force reference of the example's test.
 
