@@ -266,6 +266,25 @@ fn ln_two_pi<T: Real>() -> T {
     T::lit(core::f64::consts::TAU.ln())
 }
 
+impl<T: Real> Gaussian<T, 2> {
+    /// The Gaussian of the mirrored variable `D x`, `D = diag(1, −1)`: covariance `D Σ D`
+    /// (exact: the off-diagonal entries of `Σ` and of its Cholesky factor negated).
+    #[must_use]
+    pub(crate) fn mirrored_y(&self) -> Self {
+        let flip = |m: &SMatrix<T, 2, 2>| {
+            let mut m = *m;
+            m[(0, 1)] = -m[(0, 1)];
+            m[(1, 0)] = -m[(1, 0)];
+            m
+        };
+        Self {
+            cov: flip(&self.cov),
+            chol: flip(&self.chol),
+            log_det: self.log_det,
+        }
+    }
+}
+
 impl<T: Real, const N: usize> Gaussian<T, N> {
     /// Builds `g^Σ` from its covariance (shape) matrix Σ.
     ///

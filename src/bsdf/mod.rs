@@ -445,11 +445,20 @@ where
             specular,
             channels,
             channel_count,
+            // The scattered lobes live in the caller's frame: the section, given in the facing
+            // frame, is mirrored when that frame is reversed (light from below).
             blur: if level == CoherenceLevel::PlaneWave {
                 None
             } else {
-                section
+                section.map(|b| {
+                    if incident.from_below {
+                        Matrix2::new(b[(0, 0)], -b[(0, 1)], -b[(1, 0)], b[(1, 1)])
+                    } else {
+                        b
+                    }
+                })
             },
+            mirror: [incident.from_below; 2],
         })
     }
 
@@ -492,6 +501,8 @@ where
             channels: [(T::one(), xi), (T::zero(), xi)],
             channel_count: usize::from(!plane),
             blur: (!plane).then_some(xi),
+            // Reflection uses the frame facing r̂ (reversed below), transmission its reverse.
+            mirror: [below, !below],
         })
     }
 

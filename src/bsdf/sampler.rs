@@ -121,9 +121,23 @@ struct SideMap<T: Real> {
     known_h: Vector2<T>,
     /// `k_b`.
     k: T,
+    /// This side's tangent frame is the caller's with t̂₂ negated: a PSD (given in the
+    /// caller's frame) sees `h_t` mirrored, `(h₁, −h₂)`.
+    mirror: bool,
 }
 
 impl<T: Real> SideMap<T> {
+    /// `h` between this side's tangent frame and the caller's (where the PSD lives): `(h₁, −h₂)`
+    /// on a mirrored side (its own inverse).
+    #[inline]
+    fn flip(&self, h: &Vector2<T>) -> Vector2<T> {
+        if self.mirror {
+            Vector2::new(h.x, -h.y)
+        } else {
+            *h
+        }
+    }
+
     /// `h_t` of an unknown direction `d` (unit) on this side, `None` if `d` is not in its
     /// half-space.
     #[inline]
@@ -290,8 +304,12 @@ pub(crate) struct Setup<'a, T: Real> {
     /// plane wave).
     pub channels: [(T, Matrix2<T>); 2],
     pub channel_count: usize,
-    /// `Ξ`, the blur of the scattered lobes (`None` for a plane wave).
+    /// `Ξ`, the blur of the scattered lobes (`None` for a plane wave), in the caller's surface
+    /// frame (the PSD's).
     pub blur: Option<Matrix2<T>>,
+    /// Per side (reflected, transmitted), whether its tangent frame is the caller's with t̂₂
+    /// negated (the PSD then sees `h_t` mirrored).
+    pub mirror: [bool; 2],
 }
 
 /// The sampler of one shading point in one tracing direction (see the module docs). Built
@@ -375,6 +393,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             n,
             known_h: ua * ka,
             k: ka,
+            mirror: setup.mirror[0],
         };
         let kb = setup.k_across.unwrap_or(ka);
         // Backward transmission: the kernel's frame faces the (unknown) source below.
@@ -385,6 +404,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             n: -n,
             known_h: Vector2::new(ua.x, if setup.forward { ua.y } else { -ua.y }) * ka,
             k: kb,
+            mirror: setup.mirror[1],
         };
         let transmits = setup.k_across.is_some();
         let sigma2 = setup.variance;
@@ -450,7 +470,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             Scatter::Orders { orders, .. } if sigma2 > T::zero() => {
                 let order_energy = |map: &SideMap<T>, v_of: &dyn Fn(T) -> T| {
                     orders.iter().fold(T::zero(), |acc, (z, e)| {
-                        let u = (z - map.known_h) / map.k;
+                        let u = (map.flip(z) - map.known_h) / map.k;
                         let c2 = T::one() - u.norm_squared();
                         if c2 > T::zero() {
                             let v = v_of(map.k * c2.sqrt());
@@ -610,8 +630,9 @@ impl<'a, T: Real> LobeSampler<'a, T> {
                 }
             }
         } else {
+            // The scattered lobes live in the caller's frame (the PSD's).
             let (h, delta) = self.sample_scatter(side_index, v, u)?;
-            (map.direction(&h)?, delta)
+            (map.direction(&map.flip(&h))?, delta)
         };
         let lobe = SampledLobe {
             side,
@@ -728,7 +749,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
                         _ => T::zero(),
                     };
                 let scat = if self.probs[2 * side + 1] > T::zero() {
-                    self.probs[2 * side + 1] * self.scatter_density(side, &h)
+                    self.probs[2 * side + 1] * self.scatter_density(side, &map.flip(&h))
                 } else {
                     T::zero()
                 };
@@ -781,7 +802,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
 /// order (its tail may still reach) and 0 for a Dirac order (it cannot).
 #[inline]
 fn order_weight<T: Real>(map: &SideMap<T>, z: &Vector2<T>, e: T, reach: T, blurred: bool) -> T {
-    let r = (z - map.known_h).norm();
+    let r = (map.flip(z) - map.known_h).norm();
     if r < map.k + reach {
         e
     } else if blurred {

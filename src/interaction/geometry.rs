@@ -308,6 +308,18 @@ impl<T: Real> Geometry<T> {
         self.h_t
     }
 
+    /// `h_t` in the caller's surface frame, where a height PSD is given: `(h₁, −h₂)` when the
+    /// light comes from below (the oriented frame has t̂₂ negated), `h_t` otherwise.
+    #[inline]
+    #[must_use]
+    pub(crate) fn psd_h(&self) -> Vector2<T> {
+        if self.from_below {
+            Vector2::new(self.h_t.x, -self.h_t.y)
+        } else {
+            self.h_t
+        }
+    }
+
     /// The incident beam's s/p frame ([`Frame::sp`] of the propagation direction −ŝ).
     #[inline]
     #[must_use]

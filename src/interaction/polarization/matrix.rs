@@ -57,11 +57,12 @@ where
     Coh: CoherenceWeights<T, P>,
 {
     let xi = prepared.sections[2].as_ref();
-    let kd = coherence.scatter_weight(psd, xi, &g.h_t);
+    let kd = coherence.scatter_weight(psd, super::psd_xi(g, xi).as_ref(), &g.psd_h());
     match prepared.unit_linear_scale(kd, attenuation, g.eta) {
         Some(e) => flush_subnormal(u() * e),
         None => {
-            let ld = ln_front + coherence.log_scatter_weight(psd, xi, &g.h_t);
+            let ld = ln_front
+                + coherence.log_scatter_weight(psd, super::psd_xi(g, xi).as_ref(), &g.psd_h());
             if is_dark(ld) {
                 nalgebra::SMatrix::zeros()
             } else {
@@ -165,7 +166,7 @@ where
         let xi = prepared.sections[i].as_ref();
         (
             coherence.log_specular_weight(xi, &g.h_t),
-            coherence.log_scatter_weight(psd, xi, &g.h_t),
+            coherence.log_scatter_weight(psd, super::psd_xi(g, xi).as_ref(), &g.psd_h()),
         )
     };
     let ((xs, xd), (ys, yd), (hs, hd)) = (log_weights(0), log_weights(1), log_weights(2));

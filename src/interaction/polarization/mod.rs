@@ -27,6 +27,7 @@ use super::geometry::Geometry;
 use super::material::RoughSurface;
 use super::pbsdf::Pbsdf;
 use super::prepared::{Plan, PreparedPacket};
+use crate::gaussian::Gaussian;
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
 use crate::psd::Psd;
@@ -169,6 +170,18 @@ pub(crate) fn onto_cone<T: Real>(u: Vector4<T>) -> Vector4<T> {
     }
 }
 
+/// The section `Ξ` as a height PSD given in the caller's surface frame sees it: mirrored
+/// (`D Ξ D`, `D = diag(1, −1)`) when the light comes from below, where the geometry's oriented
+/// frame has t̂₂ negated (with [`Geometry::psd_h`]; the specular weight, which involves no
+/// PSD, stays in the oriented frame: it is invariant under mirroring both).
+#[inline]
+pub(crate) fn psd_xi<T: Real>(
+    g: &Geometry<T>,
+    xi: Option<&Gaussian<T, 2>>,
+) -> Option<Gaussian<T, 2>> {
+    xi.map(|x| if g.from_below { x.mirrored_y() } else { *x })
+}
+
 /// The scattered part at the one-weight levels, `u · S0 α K/λ²`: the linear weight (one
 /// exponential) where it and the whole scale are safely normal, the log form otherwise.
 #[inline]
@@ -186,11 +199,12 @@ where
     Coh: CoherenceWeights<T, P>,
 {
     let xi = prepared.sections[2].as_ref();
-    let kd = coherence.scatter_weight(psd, xi, &g.h_t);
+    let kd = coherence.scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h());
     match prepared.linear_scale(kd, attenuation, g.eta) {
         Some(e) => u * e,
         None => {
-            let ld = ln_front + coherence.log_scatter_weight(psd, xi, &g.h_t);
+            let ld =
+                ln_front + coherence.log_scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h());
             if prepared.is_dark(ld) {
                 Vector4::zeros()
             } else {
@@ -419,7 +433,7 @@ impl PolarizationModel for Full {
             let xi = prepared.sections[i].as_ref();
             (
                 coherence.log_specular_weight(xi, &g.h_t),
-                coherence.log_scatter_weight(psd, xi, &g.h_t),
+                coherence.log_scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h()),
             )
         };
         let ((xs, xd), (ys, yd), (hs, hd)) = (log_weights(0), log_weights(1), log_weights(2));
