@@ -788,3 +788,30 @@ impl<T: Real> Gaussian<T, 3> {
         Gaussian::new(l2 * l2.transpose())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Gaussian;
+    use nalgebra::{Matrix2, Vector2};
+
+    /// `mirrored_y` is the law of `D x` (`D = diag(1, −1)`): its density at `D x` is the
+    /// original's at `x`, and it equals the Gaussian built from `D Σ D` directly.
+    #[test]
+    fn mirrored_y_is_the_gaussian_of_the_mirrored_variable() {
+        let g = Gaussian::new(Matrix2::<f64>::new(2.0, 0.7, 0.7, 0.5)).unwrap();
+        let m = g.mirrored_y();
+        let direct = Gaussian::new(Matrix2::<f64>::new(2.0, -0.7, -0.7, 0.5)).unwrap();
+        for x in [
+            Vector2::<f64>::new(0.3, -1.1),
+            Vector2::new(-2.0, 0.4),
+            Vector2::zeros(),
+        ] {
+            let dx = Vector2::new(x.x, -x.y);
+            assert!((m.log_value(&dx) - g.log_value(&x)).abs() < 1e-14);
+            assert!((m.log_value(&x) - direct.log_value(&x)).abs() < 1e-14);
+        }
+        // Not the identity for a correlated Gaussian (the check above can fail).
+        let x = Vector2::<f64>::new(1.0, 1.0);
+        assert!((m.log_value(&x) - g.log_value(&x)).abs() > 0.1);
+    }
+}

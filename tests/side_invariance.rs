@@ -14,10 +14,15 @@
 //! checked the same way: the spread of the Monte Carlo weights, which depends on how well the
 //! lobes match the kernel, must be the same in both descriptions, forward and backward.
 
+mod common;
+
+use common::rng::SplitMix64;
 use gmueller::bsdf::Bsdf;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::{Full, Kernel, Partial, RoughDielectric, Throughput};
+use gmueller::interaction::{
+    FresnelInterface, Full, Kernel, Partial, RayleighRice, RoughDielectric, Throughput,
+};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
@@ -26,31 +31,55 @@ use nalgebra::{Matrix2, Vector3};
 const LAMBDA: f64 = 0.5;
 const ETA: f64 = 1.5;
 
-/// σ² = 1e-4 µm², correlation ellipse of axes 1 and 3 µm rotated by `angle`.
-fn psd(angle: f64) -> GaussianPsd<f64, 2> {
+type Glass = RoughDielectric<f64, GaussianPsd<f64, 2>>;
+type GlassBsdf<'m> =
+    Bsdf<'m, f64, GaussianPsd<f64, 2>, FresnelInterface<f64>, RayleighRice<f64>, Full, Partial>;
+
+/// σ² = 1e-4 µm², correlation ellipse of axes `ℓ` and `3ℓ` rotated by `angle`.
+fn psd(angle: f64, l: f64) -> GaussianPsd<f64, 2> {
     let (s, c) = angle.sin_cos();
     let r = Matrix2::new(c, -s, s, c);
-    let lam = r * Matrix2::new(1.0, 0.0, 0.0, 9.0) * r.transpose();
+    let lam = r * Matrix2::new(l * l, 0.0, 0.0, 9.0 * l * l) * r.transpose();
     GaussianPsd::from_autocorrelation(1e-4, &Gaussian::new(lam).unwrap()).unwrap()
+}
+
+/// The same glass described with the normal up (out of it, η) and down (into it, 1/η, the
+/// ellipse mirrored).
+fn descriptions(angle: f64, l: f64) -> (Glass, Glass) {
+    (
+        RoughDielectric::new(psd(angle, l), ETA).unwrap(),
+        RoughDielectric::new(psd(-angle, l), 1.0 / ETA).unwrap(),
+    )
+}
+
+/// The two BSDFs of [`descriptions`]: frames `(x̂, ŷ, ẑ)` at `λ`, `(x̂, −ŷ, −ẑ)` at `λ/η`.
+fn bsdfs<'m>(up: &'m Glass, down: &'m Glass) -> [GlassBsdf<'m>; 2] {
+    let kernel = Kernel::<Full, Partial>::default();
+    let f_up = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let f_down = Frame::new(Vector3::x(), -Vector3::y(), -Vector3::z()).unwrap();
+    [
+        Bsdf::new(up, kernel, f_up, LAMBDA).unwrap(),
+        Bsdf::new(down, kernel, f_down, LAMBDA / ETA).unwrap(),
+    ]
+}
+
+/// Unpolarized light arriving from inside the glass, coherence width `w`.
+fn packet(w: f64) -> WavePacket<f64> {
+    let s = Vector3::new(0.3, 0.2, -0.93).normalize(); // toward the source, inside the glass
+    WavePacket::from_stokes(
+        Stokes::unpolarized(1.0).unwrap(),
+        CoherenceShape::isotropic(w).unwrap(),
+        Frame::sp(-s, Vector3::z()).unwrap(),
+        LAMBDA / ETA,
+    )
+    .unwrap()
 }
 
 /// The largest relative difference of the two descriptions over four exits near the lobes.
 fn worst_difference(angle: f64) -> f64 {
-    let up = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-    let down = Frame::new(Vector3::x(), -Vector3::y(), -Vector3::z()).unwrap();
-    let m_up = RoughDielectric::new(psd(angle), ETA).unwrap();
-    let m_down = RoughDielectric::new(psd(-angle), 1.0 / ETA).unwrap();
-    let kernel = Kernel::<Full, Partial>::default();
-    let a = Bsdf::new(&m_up, kernel, up, LAMBDA).unwrap();
-    let b = Bsdf::new(&m_down, kernel, down, LAMBDA / ETA).unwrap();
-    let s = Vector3::new(0.3, 0.2, -0.93).normalize(); // toward the source, inside the glass
-    let packet = WavePacket::from_stokes(
-        Stokes::unpolarized(1.0).unwrap(),
-        CoherenceShape::isotropic(3.0).unwrap(),
-        Frame::sp(-s, Vector3::z()).unwrap(),
-        LAMBDA / ETA,
-    )
-    .unwrap();
+    let (m_up, m_down) = descriptions(angle, 1.0);
+    let [a, b] = bsdfs(&m_up, &m_down);
+    let packet = packet(3.0);
     let exits = [
         Vector3::new(-0.26, -0.23, -0.93), // reflection inside, near the mirror direction
         Vector3::new(-0.34, -0.23, -0.93),
@@ -89,16 +118,10 @@ fn an_interface_seen_from_either_side_agrees_for_a_rotated_psd() {
 /// The mean and coefficient of variation of `n` weights (the scattered part only, drawn from
 /// the scattered lobes only).
 fn spread(draw: &mut dyn FnMut(f64, [f64; 2]) -> Option<f64>, n: usize) -> (f64, f64) {
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut u = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = SplitMix64(0x2545_f491_4f6c_dd1d);
     let (mut s1, mut s2) = (0.0, 0.0);
     for _ in 0..n {
-        let (a, b, c) = (u(), u(), u());
+        let (a, b, c) = (rng.unit(), rng.unit(), rng.unit());
         if let Some(w) = draw(a, [b, c]) {
             s1 += w;
             s2 += w * w;
@@ -110,29 +133,10 @@ fn spread(draw: &mut dyn FnMut(f64, [f64; 2]) -> Option<f64>, n: usize) -> (f64,
 
 #[test]
 fn the_samplers_scattered_lobes_follow_the_surface_from_either_side() {
-    let angle = 0.5;
-    let up = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-    let down = Frame::new(Vector3::x(), -Vector3::y(), -Vector3::z()).unwrap();
     // Correlation lengths 3 and 9 µm: lobes narrow enough for their orientation to matter.
-    let psd = |a: f64| {
-        let (s, c) = a.sin_cos();
-        let r = Matrix2::new(c, -s, s, c);
-        let lam = r * Matrix2::new(9.0, 0.0, 0.0, 81.0) * r.transpose();
-        GaussianPsd::from_autocorrelation(1e-4, &Gaussian::new(lam).unwrap()).unwrap()
-    };
-    let m_up = RoughDielectric::new(psd(angle), ETA).unwrap();
-    let m_down = RoughDielectric::new(psd(-angle), 1.0 / ETA).unwrap();
-    let kernel = Kernel::<Full, Partial>::default();
-    let a = Bsdf::new(&m_up, kernel, up, LAMBDA).unwrap();
-    let b = Bsdf::new(&m_down, kernel, down, LAMBDA / ETA).unwrap();
-    let s = Vector3::new(0.3, 0.2, -0.93).normalize();
-    let packet = WavePacket::from_stokes(
-        Stokes::unpolarized(1.0).unwrap(),
-        CoherenceShape::isotropic(30.0).unwrap(),
-        Frame::sp(-s, Vector3::z()).unwrap(),
-        LAMBDA / ETA,
-    )
-    .unwrap();
+    let (m_up, m_down) = descriptions(0.5, 3.0);
+    let [a, b] = bsdfs(&m_up, &m_down);
+    let packet = packet(30.0);
     let n = 20_000;
     let forward = |bs: &Bsdf<'_, f64, _, _, _, Full, Partial>| {
         let inc = bs.prepare(&packet).unwrap();

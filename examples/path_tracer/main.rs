@@ -204,16 +204,21 @@ impl Path {
     }
 }
 
-/// One vertex on `material`: sun NEE into `path`, then the next direction (or `None`).
-#[allow(clippy::too_many_arguments)]
-fn vertex<P, Sp, Sc>(
-    material: &RoughSurface<P, Sp, Sc>,
-    scene: &Scene,
-    hit: &scene::Hit,
+/// What one vertex needs besides its material: the hit, the wavelength, the exit direction r̂
+/// (toward the previous vertex) and the render's settings.
+struct At<'a> {
+    scene: &'a Scene,
+    hit: &'a scene::Hit,
     lambda: f32,
     r: V3,
-    opts: &Options,
-    coherence: &SurfaceCoherence<f32>,
+    opts: &'a Options,
+    coherence: &'a SurfaceCoherence<f32>,
+}
+
+/// One vertex on `material`: sun NEE into `path`, then the next direction (or `None`).
+fn vertex<P, Sp, Sc>(
+    material: &RoughSurface<P, Sp, Sc>,
+    at: &At<'_>,
     path: &mut Path,
     rng: &mut Rng,
 ) -> Result<Option<V3>, gmueller::Error>
@@ -223,6 +228,14 @@ where
     Sc: Pbsdf<f32>,
     Partial: CoherenceWeights<f32, P>,
 {
+    let At {
+        scene,
+        hit,
+        lambda,
+        r,
+        opts,
+        coherence,
+    } = *at;
     let frame = scene.shading_frame(hit);
     let bsdf = Bsdf::new(material, Kernel::<Full, Partial>::default(), frame, lambda)?;
     let opaque = matches!(hit.material, Material::Gold | Material::Grating);
@@ -328,43 +341,19 @@ fn trace(
             break;
         };
         let r = -d;
+        let at = At {
+            scene,
+            hit: &hit,
+            lambda,
+            r,
+            opts,
+            coherence: &coherence,
+        };
         let step = match hit.material {
-            Material::Ground => vertex(
-                &mats.ground,
-                scene,
-                &hit,
-                lambda,
-                r,
-                opts,
-                &coherence,
-                &mut path,
-                rng,
-            ),
-            Material::Glass => vertex(
-                &mats.glass,
-                scene,
-                &hit,
-                lambda,
-                r,
-                opts,
-                &coherence,
-                &mut path,
-                rng,
-            ),
-            Material::Gold => vertex(
-                &mats.gold, scene, &hit, lambda, r, opts, &coherence, &mut path, rng,
-            ),
-            Material::Grating => vertex(
-                &mats.grating,
-                scene,
-                &hit,
-                lambda,
-                r,
-                opts,
-                &coherence,
-                &mut path,
-                rng,
-            ),
+            Material::Ground => vertex(&mats.ground, &at, &mut path, rng),
+            Material::Glass => vertex(&mats.glass, &at, &mut path, rng),
+            Material::Gold => vertex(&mats.gold, &at, &mut path, rng),
+            Material::Grating => vertex(&mats.grating, &at, &mut path, rng),
         };
         match step {
             Ok(Some(s)) => {

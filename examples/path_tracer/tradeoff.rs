@@ -86,48 +86,43 @@ pub(crate) fn run(scene: &Scene, out: &Path) {
         "Coherence per sample, measured on the path tracer's scene (160×100, 64 spp, λ = 0.55 µm, f32 Full·Partial; references at 128 spp).\n",
     );
 
-    let sun = |n: usize| Options {
-        sun_split: n,
-        ..base.clone()
+    // One sweep: each setting against the last one rendered with another seed and 128 spp.
+    let sweep = |title: &str, settings: Vec<(String, Options)>| {
+        let reference = render(scene, &reseed(&settings[settings.len() - 1].1));
+        let glints = glint_mask(&reference);
+        let rows: Vec<Row> = settings
+            .into_iter()
+            .map(|(label, o)| measure(label, &render(scene, &o), &reference, &glints))
+            .collect();
+        table(title, &rows)
     };
-    let reference = render(scene, &reseed(&sun(64)));
-    let glints = glint_mask(&reference);
-    let rows: Vec<Row> = [1, 4, 16, 64]
-        .into_iter()
-        .map(|n| {
-            measure(
-                format!("sun in N = {n}"),
-                &render(scene, &sun(n)),
-                &reference,
-                &glints,
-            )
-        })
-        .collect();
-    report += &table(
+    report += &sweep(
         "Sun: one packet with the disk's coherence, or N packets of Ω/N (reference N = 64, another seed, 128 spp)",
-        &rows,
+        [1, 4, 16, 64]
+            .map(|n| {
+                (
+                    format!("sun in N = {n}"),
+                    Options {
+                        sun_split: n,
+                        ..base.clone()
+                    },
+                )
+            })
+            .into(),
     );
-
-    let sky = |w: f32| Options {
-        sky_coherence: w,
-        ..base.clone()
-    };
-    let reference = render(scene, &reseed(&sky(250.0)));
-    let glints = glint_mask(&reference);
-    let rows: Vec<Row> = [2.0, 10.0, 50.0, 250.0]
-        .into_iter()
-        .map(|w| {
-            measure(
-                format!("sky w = {w} µm"),
-                &render(scene, &sky(w)),
-                &reference,
-                &glints,
-            )
-        })
-        .collect();
-    report += &table(
+    report += &sweep(
         "Sky and indirect light: surface coherence width w (reference w = 250 µm, another seed, 128 spp)",
-        &rows,
+        [2.0f32, 10.0, 50.0, 250.0]
+            .map(|w| {
+                (
+                    format!("sky w = {w} µm"),
+                    Options {
+                        sky_coherence: w,
+                        ..base.clone()
+                    },
+                )
+            })
+            .into(),
     );
 
     print!("{report}");
