@@ -13,11 +13,11 @@ use crate::packet::WavePacket;
 use crate::psd::{GaussianPsd, Psd};
 use crate::real::Real;
 
-/// The per-packet constants of [`super::plane_wave_rayleigh_rice`].
+/// The per-packet constants of the incidence shared by the batch kernels: the surface, ŝ, the
+/// azimuth axes, and the per-packet part of the Rayleigh–Rice factors for a permittivity `ε`
+/// (what the geometry, azimuth, `q_o` and Rayleigh–Rice stages read).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct PlaneWavePrep<T: Real> {
-    /// Whether the SIMD loop reproduces the per-direction kernel for these parameters.
-    pub(crate) vectorizable: bool,
+pub(crate) struct Incidence<T: Real> {
     pub(crate) surface: Frame<T>,
     /// `−k̂` of the packet as given (for the exact error of an ambiguous direction).
     pub(crate) to_source_raw: Vector3<T>,
@@ -41,9 +41,26 @@ pub(crate) struct PlaneWavePrep<T: Real> {
     pub(crate) neg_em1_qi: Complex<T>,
     /// `Im ε = 0`: the modulus in `q_o` is `|Re(ε) − sin²θ_o|`.
     pub(crate) real_eps: bool,
+    /// The scalar `hypot` in `q_o` takes its plain branch for every exit (or `Im ε = 0`): the
+    /// lanes reproduce it.
+    pub(crate) plain_q: bool,
     /// `(Im ε)²` and `(Im ε)/2`.
     pub(crate) eim2: T,
     pub(crate) eim_half: T,
+    /// `√ε` of the type: below it `Frame::sp` falls back to a tangent of n̂.
+    pub(crate) parallel_tol: T,
+    /// The incident s/p frame.
+    pub(crate) incident_sp: Frame<T>,
+}
+
+/// The per-packet constants of [`super::plane_wave_rayleigh_rice`]: the incidence and the
+/// plane-wave PSD weight's constants (reached through `Deref`, so the incidence stages take a
+/// `&PlaneWavePrep` as an `&Incidence`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PlaneWavePrep<T: Real> {
+    pub(crate) inc: Incidence<T>,
+    /// Whether the SIMD loop reproduces the per-direction kernel for these parameters.
+    pub(crate) vectorizable: bool,
     /// `ln(σ²|Λ|^{1/2}) + ln(2π (2k cos θ_i)² / λ²) + ln S0`.
     pub(crate) log_scale: T,
     pub(crate) variance: T,
@@ -53,37 +70,27 @@ pub(crate) struct PlaneWavePrep<T: Real> {
     /// `T S/S0` as `(S0 + S1)/2, (S0 − S1)/2, S2, S3` (the Full level's effective vector,
     /// normalised; `S0` is in `log_scale`).
     pub(crate) stokes: [T; 4],
-    /// `√ε` of the type: below it `Frame::sp` falls back to a tangent of n̂.
-    pub(crate) parallel_tol: T,
 }
 
-impl<T: Real> PlaneWavePrep<T> {
-    /// The per-packet constants. `#[inline]`: out of line, its large `Result` was moved into
-    /// the caller with a `memcpy` on every call (+135 instructions per call in `f64`).
+impl<T: Real> core::ops::Deref for PlaneWavePrep<T> {
+    type Target = Incidence<T>;
+    #[inline(always)]
+    fn deref(&self) -> &Incidence<T> {
+        &self.inc
+    }
+}
+
+impl<T: Real> Incidence<T> {
+    /// The incidence of `packet` on `surface` with the Rayleigh–Rice permittivity `epsilon`.
     #[inline]
     pub(crate) fn new(
-        psd: &GaussianPsd<T, 2>,
         epsilon: Complex<T>,
         packet: &WavePacket<T>,
         surface: &Frame<T>,
     ) -> Result<Self, Error> {
         let s = geometry::unit(-packet.direction(), "direction to the source")?;
         let n = surface.k();
-        // The incident s/p frame, T and the effective Stokes vector exactly as the Full level.
         let (cos_i, incident_sp) = geometry::incidence(&s, surface)?;
-        let t = frame_change_mueller(packet.frame(), &incident_sp).0;
-        // S/S0, with ln S0 folded into the exponent of the weight: the weight alone (K, tiny in
-        // a far tail) underflowed before it was scaled by a bright S0 (f32: 0 for S0 = 1e25
-        // where the answer is 3e-22).
-        let st = packet.stokes().0;
-        let (st, ln_s0) = if st[0] > T::zero() {
-            (st / st[0], st[0].ln())
-        } else {
-            (Vector4::zeros(), T::zero())
-        };
-        let half = T::lit(0.5);
-        let (sx, sy) = ((st[0] + st[1]) * half, (st[0] - st[1]) * half);
-        let ts = t * Vector4::new(sx + sy, sx - sy, st[2], st[3]);
         let u_az = n.cross(&incident_sp.x());
         let v_az = n.cross(&u_az);
         // RayleighRice::factors' per-packet part, with the same operations.
@@ -100,15 +107,7 @@ impl<T: Real> PlaneWavePrep<T> {
         let (lo, hi) = (T::lit(HYPOT_PLAIN.0), T::lit(HYPOT_PLAIN.1));
         let real_eps = e.im == T::zero();
         let plain = e.im.abs() >= lo && e.im.abs() <= hi && e.re.abs() + T::one() <= hi;
-        let k = packet.wavenumber();
-        let lambda = T::two_pi() / k;
-        let jones_scale = T::lit(2.0) * k * cos_i;
-        let log_prefactor = (T::two_pi() * jones_scale * jones_scale / (lambda * lambda)).ln();
-        let log_amplitude = psd.log_value(&Vector2::zeros());
-        let l = psd.spectral_shape().cholesky_factor();
-        let vectorizable = (real_eps || plain) && log_prefactor.is_finite();
         Ok(Self {
-            vectorizable,
             surface: *surface,
             to_source_raw: -packet.direction(),
             s,
@@ -117,7 +116,7 @@ impl<T: Real> PlaneWavePrep<T> {
             t2: surface.y(),
             u_az,
             v_az,
-            k,
+            k: packet.wavenumber(),
             cos_i,
             si2,
             e,
@@ -128,20 +127,11 @@ impl<T: Real> PlaneWavePrep<T> {
             d3,
             neg_em1_qi,
             real_eps,
+            plain_q: real_eps || plain,
             eim2: e.im * e.im,
             eim_half: e.im * T::lit(0.5),
-            log_scale: log_amplitude + log_prefactor + ln_s0,
-            variance: psd.variance(),
-            l00: l[(0, 0)],
-            l10: l[(1, 0)],
-            l11: l[(1, 1)],
-            stokes: [
-                (ts[0] + ts[1]) * T::lit(0.5),
-                (ts[0] - ts[1]) * T::lit(0.5),
-                ts[2],
-                ts[3],
-            ],
             parallel_tol: T::EPSILON.sqrt(),
+            incident_sp,
         })
     }
 
@@ -155,5 +145,55 @@ impl<T: Real> PlaneWavePrep<T> {
     pub(crate) fn azimuth_scalar(&self, r: Vector3<T>) -> (T, T) {
         let s_out = Frame::sp_unit(r, self.n).x();
         (-s_out.dot(&self.v_az), s_out.dot(&self.u_az))
+    }
+}
+
+impl<T: Real> PlaneWavePrep<T> {
+    /// The per-packet constants. `#[inline]`: out of line, its large `Result` was moved into
+    /// the caller with a `memcpy` on every call (+135 instructions per call in `f64`).
+    #[inline]
+    pub(crate) fn new(
+        psd: &GaussianPsd<T, 2>,
+        epsilon: Complex<T>,
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+    ) -> Result<Self, Error> {
+        let inc = Incidence::new(epsilon, packet, surface)?;
+        // The incident s/p frame, T and the effective Stokes vector exactly as the Full level.
+        let t = frame_change_mueller(packet.frame(), &inc.incident_sp).0;
+        // S/S0, with ln S0 folded into the exponent of the weight: the weight alone (K, tiny in
+        // a far tail) underflowed before it was scaled by a bright S0 (f32: 0 for S0 = 1e25
+        // where the answer is 3e-22).
+        let st = packet.stokes().0;
+        let (st, ln_s0) = if st[0] > T::zero() {
+            (st / st[0], st[0].ln())
+        } else {
+            (Vector4::zeros(), T::zero())
+        };
+        let half = T::lit(0.5);
+        let (sx, sy) = ((st[0] + st[1]) * half, (st[0] - st[1]) * half);
+        let ts = t * Vector4::new(sx + sy, sx - sy, st[2], st[3]);
+        let k = inc.k;
+        let lambda = T::two_pi() / k;
+        let jones_scale = T::lit(2.0) * k * inc.cos_i;
+        let log_prefactor = (T::two_pi() * jones_scale * jones_scale / (lambda * lambda)).ln();
+        let log_amplitude = psd.log_value(&Vector2::zeros());
+        let l = psd.spectral_shape().cholesky_factor();
+        let vectorizable = inc.plain_q && log_prefactor.is_finite();
+        Ok(Self {
+            inc,
+            vectorizable,
+            log_scale: log_amplitude + log_prefactor + ln_s0,
+            variance: psd.variance(),
+            l00: l[(0, 0)],
+            l10: l[(1, 0)],
+            l11: l[(1, 1)],
+            stokes: [
+                (ts[0] + ts[1]) * T::lit(0.5),
+                (ts[0] - ts[1]) * T::lit(0.5),
+                ts[2],
+                ts[3],
+            ],
+        })
     }
 }

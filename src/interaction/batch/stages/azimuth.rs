@@ -6,7 +6,7 @@
 use nalgebra::Vector3;
 use pulp::Simd;
 
-use super::super::prep::PlaneWavePrep;
+use super::super::prep::Incidence;
 use super::{div3, dot3, splat3};
 use crate::real::Real;
 
@@ -14,7 +14,7 @@ use crate::real::Real;
 #[inline(always)]
 pub(crate) fn exit_azimuth<S: Simd, F: Real>(
     s: S,
-    p: &PlaneWavePrep<F>,
+    p: &Incidence<F>,
     r: [F::V<S>; 3],
 ) -> (F::V<S>, F::V<S>) {
     let c = |v: F| F::vsplat(s, v);

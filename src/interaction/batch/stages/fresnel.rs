@@ -4,7 +4,7 @@
 
 use pulp::Simd;
 
-use super::super::prep::PlaneWavePrep;
+use super::super::prep::Incidence;
 use crate::real::Real;
 use crate::simd::complex::C;
 
@@ -12,7 +12,7 @@ use crate::simd::complex::C;
 #[inline(always)]
 pub(crate) fn exit_q<S: Simd, F: Real>(
     s: S,
-    p: &PlaneWavePrep<F>,
+    p: &Incidence<F>,
     cos_o: F::V<S>,
 ) -> (F::V<S>, C<F::V<S>>) {
     let c = |v: F| F::vsplat(s, v);

@@ -3,7 +3,7 @@
 
 use pulp::Simd;
 
-use super::super::prep::PlaneWavePrep;
+use super::super::prep::Incidence;
 use super::{div3, dot3, splat3};
 use crate::real::Real;
 
@@ -11,7 +11,7 @@ use crate::real::Real;
 #[inline(always)]
 pub(crate) fn exit_direction<S: Simd, F: Real>(
     s: S,
-    p: &PlaneWavePrep<F>,
+    p: &Incidence<F>,
     x: F::V<S>,
     y: F::V<S>,
     z: F::V<S>,

@@ -4,7 +4,7 @@
 
 use pulp::Simd;
 
-use super::super::prep::PlaneWavePrep;
+use super::super::prep::Incidence;
 use crate::real::Real;
 use crate::simd::complex::{C, Cx};
 
@@ -12,7 +12,7 @@ use crate::simd::complex::{C, Cx};
 #[inline(always)]
 pub(crate) fn factors<S: Simd, F: Real>(
     s: S,
-    p: &PlaneWavePrep<F>,
+    p: &Incidence<F>,
     cos_o: F::V<S>,
     so2: F::V<S>,
     qo: C<F::V<S>>,

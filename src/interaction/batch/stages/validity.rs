@@ -1,11 +1,11 @@
 //! The fast validity test of an exit direction, scalar and in lanes: finite, of moderate size,
 //! and with `r·n̂ > 64 ε max|r_i|`, far enough from 0 that the `cos θ_o` of the normalised
 //! direction is positive whatever the rounding. Directions it does not clear go to the exact
-//! test ([`PlaneWavePrep::check_exact`], i.e. `Geometry::new`).
+//! test ([`Incidence::check_exact`], i.e. `Geometry::new`).
 
 use pulp::Simd;
 
-use super::super::prep::PlaneWavePrep;
+use super::super::prep::Incidence;
 use crate::real::Real;
 
 /// The size range `[MIN_POSITIVE / ε, MAX / 4]` of the fast test (`ε m` stays normal, `3 m`
@@ -17,7 +17,7 @@ fn size_range<F: Real>() -> (F, F) {
 
 /// `true` when `(x, y, z)` is certainly an accepted exit direction.
 #[inline]
-pub(crate) fn clearly_valid<F: Real>(p: &PlaneWavePrep<F>, x: F, y: F, z: F) -> bool {
+pub(crate) fn clearly_valid<F: Real>(p: &Incidence<F>, x: F, y: F, z: F) -> bool {
     let (lo, hi) = size_range::<F>();
     let m = x.abs().max(y.abs()).max(z.abs());
     let d = x * p.n.x + y * p.n.y + z * p.n.z;
@@ -33,7 +33,7 @@ pub(crate) fn clearly_valid<F: Real>(p: &PlaneWavePrep<F>, x: F, y: F, z: F) -> 
 #[inline(always)]
 pub(crate) fn clearly_valid_lanes<S: Simd, F: Real>(
     s: S,
-    p: &PlaneWavePrep<F>,
+    p: &Incidence<F>,
     x: F::V<S>,
     y: F::V<S>,
     z: F::V<S>,
