@@ -25,9 +25,11 @@ use crate::real::Real;
 use crate::simd::driver::{self, LaneMap};
 use crate::simd::{Soa, SoaMut};
 
+mod lobes;
 mod prep;
 mod stages;
 
+pub use lobes::{ExitFramesSoa, LobesSoa};
 pub(crate) use prep::PlaneWavePrep;
 use stages::validity::{clearly_valid, clearly_valid_lanes};
 

@@ -1,0 +1,473 @@
+//! The kernel at any level for a batch of exit directions: both lobes and the exit frames.
+//!
+//! [`Kernel::evaluate_batch`] is the structure-of-arrays form of
+//! [`Kernel::evaluate_prepared`] for every polarization and coherence level, every material
+//! (reflection or, with `interface = Some(η)`, reflection and transmission at a dielectric
+//! interface) and every PSD and blur: the per-packet work once, then one exit direction at a
+//! time (no SIMD yet), with no heap allocation. For several wavelengths, call it once per
+//! wavelength's packet with the same [`DirectionsSoa`].
+
+use super::{DirectionsSoa, StokesSoa};
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::interaction::RoughSurface;
+use crate::interaction::pbsdf::Pbsdf;
+use crate::interaction::polarization::KernelOutput;
+use crate::interaction::{CoherenceModel, CoherenceWeights, Geometry, Kernel, PolarizationModel};
+use crate::packet::WavePacket;
+use crate::psd::Psd;
+use crate::real::Real;
+use nalgebra::Vector3;
+
+/// The two lobes of a batch: Stokes radiances in each direction's exit s/p frame
+/// ([`Geometry::exit_sp`]), in the exit medium.
+#[derive(Debug)]
+pub struct LobesSoa<'a, T> {
+    /// The coherent specular (direct) lobe, attenuation included.
+    pub specular: StokesSoa<'a, T>,
+    /// The scattered part, attenuation included.
+    pub scattered: StokesSoa<'a, T>,
+}
+
+/// The exit s/p frames of a batch, as the unit `ŝ` axis of each ([`Frame::x`] of
+/// [`Geometry::exit_sp`]); the `p̂` axis is `ô × ŝ` with `ô` the unit exit direction.
+#[derive(Debug)]
+pub struct ExitFramesSoa<'a, T> {
+    /// `x, y, z` components of `ŝ` (world coordinates).
+    pub s: [&'a mut [T]; 3],
+}
+
+impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
+    /// Evaluates S2.20 for `packet` leaving along every direction of `exits`, writing both lobes
+    /// into `out` and, when given, the exit s/p frames into `frames`.
+    ///
+    /// Entry `i` equals `kernel.evaluate(material, packet, &g)` with `g` the geometry of exit
+    /// `i`: [`Geometry::for_packet`] when `interface` is `None` (reflection), and
+    /// [`Geometry::for_packet_at_interface`] with relative index `η` when it is `Some(η)`
+    /// (reflection or transmission, by the side of the exit). At the [`super::super::Intensity`]
+    /// level only `S0` (`s[0]`) of each lobe is written: the level does not compute `S1..S3`.
+    ///
+    /// # Errors
+    /// - [`Error::OutOfRange`] when a slice of `out` or `frames` is shorter than `exits` (nothing
+    ///   is written), or when the packet does not travel toward the surface (as
+    ///   [`Kernel::prepare`]).
+    /// - The error of the geometry constructor for the first exit direction it rejects (e.g. a
+    ///   zero or non-finite direction, or, in reflection, one below the surface); the entries
+    ///   before it are written, the others are not.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
+    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughDielectric};
+    /// use gmueller::packet::{CoherenceShape, WavePacket};
+    /// use gmueller::psd::GaussianPsd;
+    /// use gmueller::stokes::Stokes;
+    /// use nalgebra::Vector3;
+    ///
+    /// let glass = RoughDielectric::new(GaussianPsd::<f64, 2>::isotropic(0.01, 2.0)?, 1.5)?;
+    /// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z())?;
+    /// let travel = Vector3::new(0.5, 0.0, -(0.75_f64).sqrt());
+    /// let packet = WavePacket::from_stokes(Stokes::new(1.0, 0.3, -0.2, 0.5)?,
+    ///     CoherenceShape::isotropic(10.0)?, Frame::sp(travel, Vector3::z())?, 0.5)?;
+    /// // One exit above (reflection), one below (transmission).
+    /// let (x, y, z) = ([0.5, 0.3], [0.0, 0.1], [0.87, -0.95]);
+    /// let exits = DirectionsSoa { x: &x, y: &y, z: &z };
+    /// let mut buf = [[0.0; 2]; 8];
+    /// let [a, b, c, d, e, f, g, h] = &mut buf;
+    /// let mut out = LobesSoa {
+    ///     specular: StokesSoa { s: [a, b, c, d] },
+    ///     scattered: StokesSoa { s: [e, f, g, h] },
+    /// };
+    /// let kernel = Kernel::<Full, Partial>::default();
+    /// kernel.evaluate_batch(&glass, &packet, &surface, Some(1.5), exits, &mut out, None)?;
+    /// let g = glass.geometry_for_packet(&packet, &surface, Vector3::new(0.3, 0.1, -0.95))?;
+    /// let one = kernel.evaluate(&glass, &packet, &g).scattered;
+    /// assert_eq!(out.scattered.s[0][1], one.s0());
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the material, the packet, the surface, the interface, the exits and two outputs"
+    )]
+    pub fn evaluate_batch<T, P, Sp, Sc>(
+        &self,
+        material: &RoughSurface<P, Sp, Sc>,
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+        interface: Option<T>,
+        exits: DirectionsSoa<'_, T>,
+        out: &mut LobesSoa<'_, T>,
+        mut frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error>
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        let n = exits.len();
+        let short = |len: usize| len < n;
+        if short(exits.y.len())
+            || short(exits.z.len())
+            || out.specular.s.iter().any(|s| short(s.len()))
+            || out.scattered.s.iter().any(|s| short(s.len()))
+            || frames
+                .as_ref()
+                .is_some_and(|f| f.s.iter().any(|s| short(s.len())))
+        {
+            return Err(Error::OutOfRange {
+                what: "batch slice length",
+                value: n as f64,
+                expected: "every direction, lobe and frame slice at least as long as exits.x",
+            });
+        }
+        let facing = match interface {
+            Some(_) => surface.facing(&-packet.direction()),
+            None => *surface,
+        };
+        let prepared = self.prepare(packet, &facing)?;
+        for i in 0..n {
+            let exit = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
+            let g = match interface {
+                Some(eta) => Geometry::for_packet_at_interface(packet, surface, eta, exit)?,
+                None => Geometry::for_packet(packet, surface, exit)?,
+            };
+            let r = self.evaluate_prepared(material, &prepared, &g);
+            match r.stokes() {
+                Some((sp, sc)) => {
+                    for c in 0..4 {
+                        out.specular.s[c][i] = sp.0[c];
+                        out.scattered.s[c][i] = sc.0[c];
+                    }
+                }
+                None => {
+                    out.specular.s[0][i] = r.specular_intensity();
+                    out.scattered.s[0][i] = r.scattered_intensity();
+                }
+            }
+            if let Some(f) = frames.as_deref_mut() {
+                let s = g.exit_sp().x();
+                for c in 0..3 {
+                    f.s[c][i] = s[c];
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interaction::{
+        Full, Incoherent, Intensity, OneShape, Partial, PlaneWave, RoughConductor, RoughDielectric,
+    };
+    use crate::packet::CoherenceShape;
+    use crate::psd::GaussianPsd;
+    use crate::stokes::Stokes;
+    use num_complex::Complex;
+
+    /// Exits above and below the surface, at normal, oblique, grazing and φ ≠ 0.
+    fn exits<T: Real>(below: bool) -> [Vec<T>; 3] {
+        let mut d: [Vec<T>; 3] = Default::default();
+        for (i, theta) in [0.0_f64, 0.2, 0.7, 1.2, 1.55].iter().enumerate() {
+            for phi in [0.0_f64, 0.4, 2.5, -1.9] {
+                let sign = if below && i % 2 == 1 { -1.0 } else { 1.0 };
+                let v = [
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    sign * theta.cos(),
+                ];
+                for c in 0..3 {
+                    d[c].push(T::lit(v[c]));
+                }
+            }
+        }
+        d
+    }
+
+    fn packet<T: Real>(two_shapes: bool) -> WavePacket<T> {
+        let travel = Vector3::new(T::lit(0.4), T::lit(0.1), -T::lit(0.91)).normalize();
+        let frame = Frame::sp(travel, Vector3::z()).unwrap();
+        let s = Stokes::new(T::one(), T::lit(0.3), -T::lit(0.2), T::lit(0.5)).unwrap();
+        if two_shapes {
+            WavePacket::new(
+                s,
+                CoherenceShape::isotropic(T::lit(6.0)).unwrap(),
+                CoherenceShape::isotropic(T::lit(7.2)).unwrap(),
+                frame,
+                T::lit(0.55),
+            )
+            .unwrap()
+        } else {
+            WavePacket::from_stokes(
+                s,
+                CoherenceShape::isotropic(T::lit(6.0)).unwrap(),
+                frame,
+                T::lit(0.55),
+            )
+            .unwrap()
+        }
+    }
+
+    /// The batch against `Kernel::evaluate` one direction at a time, both lobes, every Stokes
+    /// parameter the level computes, the exit frame, within `tol` of each lobe's `S0`.
+    fn check<T, Pol, Coh, P, Sp, Sc>(
+        kernel: Kernel<Pol, Coh>,
+        material: &RoughSurface<P, Sp, Sc>,
+        interface: Option<T>,
+        two_shapes: bool,
+        tol: f64,
+    ) -> usize
+    where
+        T: Real,
+        Pol: PolarizationModel,
+        Coh: CoherenceModel + CoherenceWeights<T, P>,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let packet = packet::<T>(two_shapes);
+        let d = exits::<T>(interface.is_some());
+        let n = d[0].len();
+        let mut buf = vec![vec![T::lit(-7.0); n]; 11];
+        let [a, b, c, e, f, g, h, i, sx, sy, sz] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, c, e] },
+            scattered: StokesSoa { s: [f, g, h, i] },
+        };
+        let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
+        let dirs = DirectionsSoa {
+            x: &d[0],
+            y: &d[1],
+            z: &d[2],
+        };
+        kernel
+            .evaluate_batch(
+                material,
+                &packet,
+                &surface,
+                interface,
+                dirs,
+                &mut out,
+                Some(&mut frames),
+            )
+            .unwrap();
+        let mut lit = 0;
+        for j in 0..n {
+            let exit = Vector3::new(d[0][j], d[1][j], d[2][j]);
+            let geo = match interface {
+                Some(eta) => Geometry::for_packet_at_interface(&packet, &surface, eta, exit),
+                None => Geometry::for_packet(&packet, &surface, exit),
+            }
+            .unwrap();
+            let r = kernel.evaluate(material, &packet, &geo);
+            let lobes = [
+                (r.specular_intensity(), &out.specular, 0),
+                (r.scattered_intensity(), &out.scattered, 1),
+            ];
+            for (s0, soa, lobe) in lobes {
+                let bound = tol * s0.to_f64().abs() + f64::MIN_POSITIVE;
+                let want: [T; 4] = match r.stokes() {
+                    Some(st) => [st.0, st.1][lobe].0.into(),
+                    None => [s0, T::lit(-7.0), T::lit(-7.0), T::lit(-7.0)],
+                };
+                for c in 0..4 {
+                    let got = soa.s[c][j].to_f64();
+                    assert!(
+                        (got - want[c].to_f64()).abs() <= bound,
+                        "exit {j} lobe {lobe} S{c}: batch {got:e}, one at a time {:e}",
+                        want[c].to_f64()
+                    );
+                }
+                if s0 > T::zero() {
+                    lit += 1;
+                }
+            }
+            for c in 0..3 {
+                assert_eq!(
+                    frames.s[c][j],
+                    geo.exit_sp().x()[c],
+                    "exit {j} frame axis {c}"
+                );
+            }
+        }
+        lit
+    }
+
+    macro_rules! every_level {
+        ($t:ty, $material:expr, $interface:expr, $two:expr, $tol:expr) => {{
+            let m = $material;
+            let mut lit = 0;
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<Intensity, PlaneWave>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<Intensity, Partial>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<Intensity, Incoherent>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<OneShape, PlaneWave>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<OneShape, Partial>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<OneShape, Incoherent>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<Full, PlaneWave>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<Full, Partial>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit += check::<$t, _, _, _, _, _>(
+                Kernel::<Full, Incoherent>::default(),
+                &m,
+                $interface,
+                $two,
+                $tol,
+            );
+            lit
+        }};
+    }
+
+    #[test]
+    fn conductor_batch_equals_one_at_a_time_at_every_level() {
+        for two in [false, true] {
+            let gold = || {
+                RoughConductor::new(
+                    GaussianPsd::<f64, 2>::isotropic(0.02, 1.5).unwrap(),
+                    Complex::new(0.2, 3.4),
+                )
+                .unwrap()
+            };
+            let lit = every_level!(f64, gold(), None, two, 1e-14);
+            assert!(lit > 100, "only {lit} lit lobes checked");
+            let gold32 = RoughConductor::new(
+                GaussianPsd::<f32, 2>::isotropic(0.02, 1.5).unwrap(),
+                Complex::new(0.2, 3.4),
+            )
+            .unwrap();
+            let lit = every_level!(f32, gold32, None, two, 1e-6);
+            assert!(lit > 60, "only {lit} lit lobes checked (f32)");
+        }
+    }
+
+    #[test]
+    fn dielectric_batch_reflects_and_transmits_at_every_level() {
+        for two in [false, true] {
+            let glass =
+                RoughDielectric::new(GaussianPsd::<f64, 2>::isotropic(0.02, 1.5).unwrap(), 1.5)
+                    .unwrap();
+            let lit = every_level!(f64, glass, Some(1.5), two, 1e-14);
+            assert!(lit > 100, "only {lit} lit lobes checked");
+            let glass32 =
+                RoughDielectric::new(GaussianPsd::<f32, 2>::isotropic(0.02, 1.5).unwrap(), 1.5)
+                    .unwrap();
+            let lit = every_level!(f32, glass32, Some(1.5_f32), two, 1e-6);
+            assert!(lit > 60, "only {lit} lit lobes checked (f32)");
+        }
+    }
+
+    #[test]
+    fn short_output_is_rejected_before_anything_is_written() {
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let glass = RoughDielectric::new(GaussianPsd::<f64, 2>::isotropic(0.02, 1.5).unwrap(), 1.5)
+            .unwrap();
+        let packet = packet::<f64>(false);
+        let d = exits::<f64>(false);
+        let n = d[0].len();
+        let mut buf = vec![vec![-7.0; n]; 8];
+        buf[7].pop();
+        let [a, b, c, e, f, g, h, i] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, c, e] },
+            scattered: StokesSoa { s: [f, g, h, i] },
+        };
+        let dirs = DirectionsSoa {
+            x: &d[0],
+            y: &d[1],
+            z: &d[2],
+        };
+        let r = Kernel::<Full, Partial>::default()
+            .evaluate_batch(&glass, &packet, &surface, None, dirs, &mut out, None);
+        assert!(matches!(r, Err(Error::OutOfRange { .. })), "{r:?}");
+        assert!(
+            buf.iter().flatten().all(|&v| v == -7.0),
+            "something was written"
+        );
+    }
+
+    #[test]
+    fn a_rejected_exit_is_reported() {
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let gold = RoughConductor::new(
+            GaussianPsd::<f64, 2>::isotropic(0.02, 1.5).unwrap(),
+            Complex::new(0.2, 3.4),
+        )
+        .unwrap();
+        let packet = packet::<f64>(false);
+        let (x, y, z) = ([0.1, 0.0], [0.0, 0.0], [0.99, 0.0]);
+        let mut buf = [[-7.0; 2]; 8];
+        let [a, b, c, e, f, g, h, i] = &mut buf;
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, c, e] },
+            scattered: StokesSoa { s: [f, g, h, i] },
+        };
+        let dirs = DirectionsSoa {
+            x: &x,
+            y: &y,
+            z: &z,
+        };
+        let r = Kernel::<Full, Partial>::default()
+            .evaluate_batch(&gold, &packet, &surface, None, dirs, &mut out, None);
+        assert!(r.is_err(), "a zero exit direction was accepted");
+        assert!(
+            buf[4][0] > 0.0,
+            "the entry before the rejected one was not written"
+        );
+        assert_eq!(buf[4][1], -7.0);
+    }
+}
