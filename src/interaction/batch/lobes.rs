@@ -277,24 +277,20 @@ mod tests {
                     Some(st) => [st.0, st.1][lobe].0.into(),
                     None => [s0, T::lit(-7.0), T::lit(-7.0), T::lit(-7.0)],
                 };
-                for c in 0..4 {
-                    let got = soa.s[c][j].to_f64();
+                for (c, (col, w)) in soa.s.iter().zip(want).enumerate() {
+                    let got = col[j].to_f64();
                     assert!(
-                        (got - want[c].to_f64()).abs() <= bound,
+                        (got - w.to_f64()).abs() <= bound,
                         "exit {j} lobe {lobe} S{c}: batch {got:e}, one at a time {:e}",
-                        want[c].to_f64()
+                        w.to_f64()
                     );
                 }
                 if s0 > T::zero() {
                     lit += 1;
                 }
             }
-            for c in 0..3 {
-                assert_eq!(
-                    frames.s[c][j],
-                    geo.exit_sp().x()[c],
-                    "exit {j} frame axis {c}"
-                );
+            for (c, col) in frames.s.iter().enumerate() {
+                assert_eq!(col[j], geo.exit_sp().x()[c], "exit {j} frame axis {c}");
             }
         }
         lit
