@@ -10,6 +10,8 @@
 //! (normal incidence, exact specular). `kernel_batch/{f64,f32}`: the SIMD batch path per exit
 //! against the per-direction kernel on the same 1024 exits. `kernel_interface/{f64,f32}`: every
 //! level at a rough glass interface, reflection against transmission, same scenes, same run.
+//! `kernel_batch_partial/{f64,f32}`: `Kernel::<Full, Partial>::evaluate_batch` (both lobes, exit
+//! frames, geometry included) against the per-direction prepared kernel, same 1024 exits.
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -18,7 +20,9 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::fresnel;
-use gmueller::interaction::batch::{DirectionsSoa, StokesSoa, plane_wave_rayleigh_rice};
+use gmueller::interaction::batch::{
+    DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa, plane_wave_rayleigh_rice,
+};
 use gmueller::interaction::{
     CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, Level, LevelVisitor, OneShape,
     Partial, PlaneWave, PolarizationModel, RayleighRice, RoughDielectric, RoughSurface,
@@ -450,6 +454,75 @@ fn batch_for<T: Real>(c: &mut Criterion, prec: &str) {
     g.finish();
 }
 
+/// `Kernel::<Full, Partial>::evaluate_batch` (both lobes and the exit frames, geometry
+/// included) against the per-direction kernel (`prepare` once, `Geometry::for_packet` and
+/// `evaluate_prepared` per exit) on the same 1024 exits around the mirror direction of a
+/// two-shape packet (`Θ_y = 1.44 Θ_x`), Gaussian PSD, Fresnel + Rayleigh–Rice.
+fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
+    const M: usize = 1024;
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let material = glass::<T, _>(psd);
+    let kernel = Kernel::<Full, Partial>::default();
+    let surf = surface::<T>();
+    let theta_i = 30f64.to_radians();
+    let packet = scene::<T>(theta_i, theta_i, 0.0, 0.7, 5.0).packet;
+    let mut rng = Lcg(0xba7c);
+    let exits: Vec<Vector3<T>> = (0..M)
+        .map(|_| {
+            let to = (theta_i + (rng.uniform() - 0.5) * 0.26).abs();
+            let po = (rng.uniform() - 0.5) * 0.52;
+            Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(T::lit)
+        })
+        .collect();
+    let columns = |k: usize| exits.iter().map(|e| e[k]).collect::<Vec<T>>();
+    let (x, y, z) = (columns(0), columns(1), columns(2));
+    let mut buf = vec![vec![T::zero(); M]; 11];
+    let [a, b, cc, d, e, f, gg, h, sx, sy, sz] = &mut buf[..] else {
+        unreachable!()
+    };
+    let mut out = LobesSoa {
+        specular: StokesSoa { s: [a, b, cc, d] },
+        scattered: StokesSoa { s: [e, f, gg, h] },
+    };
+    let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
+    let mut g = c.benchmark_group(format!("kernel_batch_partial/{prec}"));
+    g.throughput(criterion::Throughput::Elements(M as u64));
+    g.bench_function(BenchmarkId::new("evaluate_batch", "lobe-1024"), |bch| {
+        bch.iter(|| {
+            let dirs = DirectionsSoa {
+                x: &x,
+                y: &y,
+                z: &z,
+            };
+            kernel
+                .evaluate_batch(
+                    black_box(&material),
+                    black_box(&packet),
+                    &surf,
+                    None,
+                    dirs,
+                    &mut out,
+                    Some(&mut frames),
+                )
+                .unwrap();
+            black_box(out.scattered.s[0][M - 1])
+        });
+    });
+    g.bench_function(
+        BenchmarkId::new("per-direction-prepared", "lobe-1024"),
+        |bch| {
+            bch.iter(|| {
+                let prepared = kernel.prepare(black_box(&packet), &surf).unwrap();
+                for e in &exits {
+                    let geo = Geometry::for_packet(&packet, &surf, *e).unwrap();
+                    black_box(kernel.evaluate_prepared(black_box(&material), &prepared, &geo));
+                }
+            });
+        },
+    );
+    g.finish();
+}
+
 /// Reflection against transmission at a rough glass interface (`RoughDielectric`, η = 1.5, the
 /// same Gaussian PSD), every level, per exit of a prepared packet, same run: the seeded scenes
 /// of [`scenes`] with the exits either within ~15° of the mirror direction or within ~15° of
@@ -540,6 +613,8 @@ fn benches(c: &mut Criterion) {
     geometry_for::<f32>(c, "f32");
     batch_for::<f64>(c, "f64");
     batch_for::<f32>(c, "f32");
+    batch_partial_for::<f64>(c, "f64");
+    batch_partial_for::<f32>(c, "f32");
 }
 
 criterion_group!(kernel, benches);
