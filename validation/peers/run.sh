@@ -100,6 +100,7 @@ run_py() {
 run_py pypol_jones_mueller.py
 if [ "$SCATMECH_OK" = 1 ]; then run_py pyscatmech_rayleigh_rice.py; fi
 run_py mitsuba_fresnel.py
+run_py mitsuba_rough_conductor.py
 
 # --- C++ closed form --------------------------------------------------------------------------
 for flavour in default native; do
