@@ -26,6 +26,7 @@ use crate::simd::driver::{self, LaneMap};
 use crate::simd::{Soa, SoaMut};
 
 mod lobes;
+mod partial;
 mod prep;
 mod stages;
 

@@ -2,7 +2,7 @@
 //! frame, the rotation `T` and the effective Stokes vector, the per-packet part of the
 //! Rayleigh–Rice factors, the PSD's Cholesky factor and the constant part of the exponent.
 
-use nalgebra::{Vector2, Vector3, Vector4};
+use nalgebra::{Matrix4, Vector2, Vector3, Vector4};
 use num_complex::Complex;
 
 use crate::error::Error;
@@ -195,5 +195,148 @@ impl<T: Real> PlaneWavePrep<T> {
                 ts[3],
             ],
         })
+    }
+}
+
+/// `c − ½ |L⁻¹ h|²`: the logarithm of a Gaussian channel weight in `h_t`, with `L` lower
+/// triangular (`l00`, `l10`, `l11`) and the reciprocals of its diagonal.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LogGaussian<T: Real> {
+    pub(crate) c: T,
+    pub(crate) l10: T,
+    pub(crate) inv_l00: T,
+    pub(crate) inv_l11: T,
+}
+
+impl<T: Real> LogGaussian<T> {
+    /// From the value at `h = 0` and the Cholesky factor `l` of the covariance.
+    fn new(c: T, l: &nalgebra::Matrix2<T>) -> Self {
+        Self {
+            c,
+            l10: l[(1, 0)],
+            inv_l00: l[(0, 0)].recip(),
+            inv_l11: l[(1, 1)].recip(),
+        }
+    }
+
+    /// Every constant finite (else the batch takes the per-direction kernel).
+    fn is_finite(&self) -> bool {
+        self.c.is_finite()
+            && self.l10.is_finite()
+            && self.inv_l00.is_finite()
+            && self.inv_l11.is_finite()
+    }
+}
+
+/// The per-packet constants of the partially coherent lobe batch
+/// ([`super::partial`]): a Gaussian PSD blurred in closed form, Fresnel specular
+/// reflection and Rayleigh–Rice scattering, in reflection, at the `Full` or `OneShape` level.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LobePrep<T: Real> {
+    pub(crate) inc: Incidence<T>,
+    /// The `Full` level with two shapes: three channels mixed per exit (else `Ξ_½` only).
+    pub(crate) three: bool,
+    /// `ln K^spec_α` and `ln K_α` for `α = x, y, ½` (only `½` when not `three`), `ln 2π` in `c`.
+    pub(crate) spec: [LogGaussian<T>; 3],
+    pub(crate) scat: [LogGaussian<T>; 3],
+    /// The channel mix's constants (`PreparedPacket::channel_mix`).
+    pub(crate) ln_sx: T,
+    pub(crate) ln_sy: T,
+    pub(crate) ln_c: T,
+    pub(crate) ln_mu_max: T,
+    pub(crate) phase: (T, T),
+    pub(crate) t: Matrix4<T>,
+    /// `T S/S0` (the one-weight effective vector).
+    pub(crate) t_stokes: Vector4<T>,
+    /// `σ²` of the PSD (Debye–Waller).
+    pub(crate) variance: T,
+    /// `−2 ln λ + ln S0`, and `ln (2k cos θ_i)²` (the Rayleigh–Rice Jones scale) on top for the
+    /// scattered part.
+    pub(crate) ln_spec: T,
+    pub(crate) ln_scat: T,
+    /// `ln` of the smallest subnormal number: a part whose exponent lies below is 0.
+    pub(crate) ln_dark: T,
+    /// The Fresnel Mueller matrix (incident s/p frame to the specular s/p frame).
+    pub(crate) fresnel: Matrix4<T>,
+    /// The specular s/p frame: ŝ, p̂ and the specular direction.
+    pub(crate) spec_frame: Frame<T>,
+    /// `256 ε`: `r̂·r̂_spec` below its negative counts as a flipped frame change.
+    pub(crate) flip_tol: T,
+}
+
+impl<T: Real> core::ops::Deref for LobePrep<T> {
+    type Target = Incidence<T>;
+    #[inline(always)]
+    fn deref(&self) -> &Incidence<T> {
+        &self.inc
+    }
+}
+
+impl<T: Real> LobePrep<T> {
+    /// The constants from the scalar kernel's prepared packet; `None` where the lanes would not
+    /// reproduce the scalar kernel (a section that is not positive definite, a Cholesky factor
+    /// of a sum that fails, an index outside the plain `hypot` range, a non-finite constant).
+    pub(crate) fn new<Pol, Coh>(
+        prepared: &crate::interaction::PreparedPacket<T, Pol, Coh>,
+        psd: &GaussianPsd<T, 2>,
+        fresnel_eta: Complex<T>,
+        epsilon: Complex<T>,
+        packet: &WavePacket<T>,
+        surface: &Frame<T>,
+        full: bool,
+    ) -> Option<Self> {
+        let inc = Incidence::new(epsilon, packet, surface).ok()?;
+        let three = full && !prepared.single_shape;
+        let ln2pi = crate::interaction::coherence::ln_two_pi::<T>();
+        let zero = Vector2::zeros();
+        let channel = |xi: &crate::gaussian::Gaussian<T, 2>| -> Option<_> {
+            let spec = LogGaussian::new(ln2pi - T::lit(0.5) * xi.log_det(), xi.cholesky_factor());
+            let l = crate::gaussian::cholesky_of_sum(psd.spectral_shape(), xi)?;
+            let scat = LogGaussian::new(ln2pi + psd.log_normalized_blur(xi, &zero), &l);
+            Some((spec, scat))
+        };
+        let half = channel(prepared.sections[2].as_ref()?)?;
+        let (x, y) = if three {
+            (
+                channel(prepared.sections[0].as_ref()?)?,
+                channel(prepared.sections[1].as_ref()?)?,
+            )
+        } else {
+            (half, half)
+        };
+        let ln_s0 = prepared.ln_s0;
+        let jones_scale = T::lit(2.0) * inc.k * inc.cos_i;
+        let ln_spec = prepared.two_ln_k_over_2pi + ln_s0;
+        let ln_scat = ln_spec + (jones_scale * jones_scale).ln();
+        let r_spec = inc.n * (inc.cos_i + inc.cos_i) - inc.s;
+        let out = Self {
+            three,
+            spec: [x.0, y.0, half.0],
+            scat: [x.1, y.1, half.1],
+            ln_sx: prepared.ln_sx,
+            ln_sy: prepared.ln_sy,
+            ln_c: prepared.ln_c,
+            ln_mu_max: prepared.ln_mu_max,
+            phase: prepared.phase,
+            t: prepared.t,
+            t_stokes: prepared.t_stokes,
+            variance: psd.variance(),
+            ln_spec,
+            ln_scat,
+            ln_dark: T::lit(crate::interaction::coherence::ln_smallest_subnormal::<T>()),
+            fresnel: crate::mueller::Mueller::from_jones(&crate::fresnel::reflection(
+                inc.cos_i,
+                fresnel_eta,
+            ))
+            .0,
+            spec_frame: Frame::sp_unit(r_spec, inc.n),
+            flip_tol: T::lit(Frame::<T>::TOLERANCE_ULPS) * T::EPSILON,
+            inc,
+        };
+        let finite = out.spec.iter().chain(&out.scat).all(LogGaussian::is_finite)
+            && ln_spec.is_finite()
+            && ln_scat.is_finite()
+            && out.fresnel.iter().all(|v| v.is_finite());
+        (out.inc.plain_q && finite && ln_s0.is_finite()).then_some(out)
     }
 }

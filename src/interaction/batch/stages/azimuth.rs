@@ -10,13 +10,25 @@ use super::super::prep::Incidence;
 use super::{div3, dot3, splat3};
 use crate::real::Real;
 
-/// `(cos φ, sin φ)` of the unit exits `r`.
+/// The exit s vector, `(cos φ, sin φ)` and the lanes within `√ε` of the normal, of the unit
+/// exits `r`, all in lanes: the s vector and azimuth are those of the scalar code except on the
+/// lanes of the mask, where `Frame::sp_unit` falls back to a tangent of n̂ (the caller takes
+/// the scalar code there).
+pub(crate) struct ExitFrame<S: Simd, F: Real> {
+    pub(crate) s_out: [F::V<S>; 3],
+    pub(crate) cos_phi: F::V<S>,
+    pub(crate) sin_phi: F::V<S>,
+    pub(crate) rho: F::V<S>,
+    pub(crate) normal: F::M<S>,
+}
+
+/// [`ExitFrame`] of the unit exits `r`.
 #[inline(always)]
-pub(crate) fn exit_azimuth<S: Simd, F: Real>(
+pub(crate) fn exit_frame<S: Simd, F: Real>(
     s: S,
     p: &Incidence<F>,
     r: [F::V<S>; 3],
-) -> (F::V<S>, F::V<S>) {
+) -> ExitFrame<S, F> {
     let c = |v: F| F::vsplat(s, v);
     let (sub, mul) = (F::vsub::<S>, F::vmul::<S>);
     let zero = c(F::zero());
@@ -36,9 +48,32 @@ pub(crate) fn exit_azimuth<S: Simd, F: Real>(
             s_out[j] = F::vselect(s, near, o[j], s_out[j]);
         }
     }
-    let mut cos_phi = sub(s, zero, dot3::<S, F>(s, s_out, splat3::<S, F>(s, p.v_az)));
-    let mut sin_phi = dot3::<S, F>(s, s_out, splat3::<S, F>(s, p.u_az));
+    let cos_phi = sub(s, zero, dot3::<S, F>(s, s_out, splat3::<S, F>(s, p.v_az)));
+    let sin_phi = dot3::<S, F>(s, s_out, splat3::<S, F>(s, p.u_az));
     let normal = F::vlt(s, rho, c(p.parallel_tol));
+    ExitFrame {
+        s_out,
+        cos_phi,
+        sin_phi,
+        rho,
+        normal,
+    }
+}
+
+/// `(cos φ, sin φ)` of the unit exits `r`.
+#[inline(always)]
+pub(crate) fn exit_azimuth<S: Simd, F: Real>(
+    s: S,
+    p: &Incidence<F>,
+    r: [F::V<S>; 3],
+) -> (F::V<S>, F::V<S>) {
+    let ExitFrame {
+        mut cos_phi,
+        mut sin_phi,
+        rho,
+        normal,
+        ..
+    } = exit_frame::<S, F>(s, p, r);
     if F::vany(s, normal) {
         // Within √ε of the normal: the scalar frame code, lane by lane.
         let lanes = F::width::<S>();

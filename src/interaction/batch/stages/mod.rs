@@ -1,4 +1,4 @@
-//! The stages of the batch plane-wave kernel, one file each, in the order of the scalar
+//! The stages of the batch kernels (plane wave and partially coherent lobes), one file each, in the order of the scalar
 //! functions they re-implement in lanes; each is an `#[inline(always)]` function on one vector
 //! of directions, tested against its scalar twin at every [`pulp`] back-end:
 //!
@@ -10,7 +10,12 @@
 //! - [`rayleigh_rice`]: the four factors `ss, ps, sp, pp` (`RayleighRice::factors`);
 //! - [`psd`]: the weight `cos θ_o · exp(ln prefactor + ln p(h_t) + ln α)`
 //!   (`GaussianPsd::log_value`, the Debye–Waller factor);
-//! - [`stokes`]: `w · M′ (T S)` from the factors (`Mueller::from_jones`).
+//! - [`stokes`]: `w · M′ (T S)` from the factors (`Mueller::from_jones`);
+//! - [`channels`]: the channel weights `ln K`, the `Full` level's channel mix, the projection
+//!   onto the cone and the final scale (`PreparedPacket::channel_mix`, `onto_cone`,
+//!   `PreparedPacket::scaled`), for the partially coherent lobe batch;
+//! - [`specular`]: the Fresnel Mueller matrix and the frame change to each exit's s/p frame
+//!   (`FresnelReflection::mueller`).
 //!
 //! A new stage is one file here plus its test.
 
@@ -19,10 +24,12 @@ use pulp::Simd;
 use crate::real::Real;
 
 pub(crate) mod azimuth;
+pub(crate) mod channels;
 pub(crate) mod fresnel;
 pub(crate) mod geometry;
 pub(crate) mod psd;
 pub(crate) mod rayleigh_rice;
+pub(crate) mod specular;
 pub(crate) mod stokes;
 pub(crate) mod validity;
 

@@ -13,6 +13,25 @@ use crate::simd::complex::{C, im_conj, re_conj};
 pub(crate) fn assemble<S: Simd, F: Real>(
     s: S,
     p: &PlaneWavePrep<F>,
+    factors: [C<F::V<S>>; 4],
+    w: F::V<S>,
+) -> [F::V<S>; 4] {
+    let c = |v: F| F::vsplat(s, v);
+    let st = [
+        c(p.stokes[0]),
+        c(p.stokes[1]),
+        c(p.stokes[2]),
+        c(p.stokes[3]),
+    ];
+    assemble_vector::<S, F>(s, st, factors, w)
+}
+
+/// [`assemble`] for an effective Stokes vector that varies from lane to lane, given as
+/// `[P, Q, S2, S3]` with `P = (S0 + S1)/2`, `Q = (S0 − S1)/2`.
+#[inline(always)]
+pub(crate) fn assemble_vector<S: Simd, F: Real>(
+    s: S,
+    [pw, qw, s2, s3]: [F::V<S>; 4],
     [ja, jb, jc, jd]: [C<F::V<S>>; 4],
     w: F::V<S>,
 ) -> [F::V<S>; 4] {
@@ -20,12 +39,6 @@ pub(crate) fn assemble<S: Simd, F: Real>(
     let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
     let fma = F::vmul_add::<S>;
     let (re, im) = (re_conj::<S, F>, im_conj::<S, F>);
-    let [pw, qw, s2, s3] = [
-        c(p.stokes[0]),
-        c(p.stokes[1]),
-        c(p.stokes[2]),
-        c(p.stokes[3]),
-    ];
     let aa = re(s, ja, ja);
     let bb = re(s, jb, jb);
     let cc = re(s, jc, jc);

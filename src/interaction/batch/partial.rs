@@ -1,0 +1,323 @@
+//! The partially coherent lobe batch in lanes: `Kernel::evaluate_batch` for a Gaussian PSD
+//! blurred in closed form ([`Partial`]`<`[`ClosedForm`]`>`), [`FresnelReflection`] specular
+//! reflection and [`RayleighRice`] scattering, in reflection, at the [`Full`] and [`OneShape`]
+//! levels — both lobes and the exit frames, 4 (`f64`) or 8 (`f32`) exits per instruction.
+//!
+//! Per vector of exits, the stages in order: r̂ and `cos θ_o` ([`stages::geometry`]), the exit
+//! s vector and azimuth ([`stages::azimuth`]), `q_o` ([`stages::fresnel`]), the Rayleigh–Rice
+//! factors ([`stages::rayleigh_rice`]), `h_t` and the Debye–Waller exponent, the channel
+//! weights and their mix ([`stages::channels`]), the scattered Stokes vector
+//! ([`stages::stokes`]), the specular one ([`stages::specular`]), the projection onto the cone
+//! and the final scale. The lanes the stages cannot reproduce — within `√ε` of the normal
+//! (where `Frame::sp_unit` takes a tangent), and a lit part whose scale leaves the normal range
+//! (where the scalar kernel folds `|u|` into the exponent) — are redone by the per-direction
+//! kernel, lane by lane.
+//!
+//! [`Partial`]: crate::interaction::Partial
+//! [`ClosedForm`]: crate::psd::ClosedForm
+//! [`FresnelReflection`]: crate::interaction::FresnelReflection
+//! [`RayleighRice`]: crate::interaction::RayleighRice
+//! [`Full`]: crate::interaction::Full
+//! [`OneShape`]: crate::interaction::OneShape
+
+use core::any::Any;
+
+use nalgebra::Vector3;
+use pulp::{Simd, WithSimd};
+
+use super::DirectionsSoa;
+use super::lobes::{ExitFramesSoa, LobesSoa};
+use super::prep::{LobePrep, LogGaussian};
+use super::stages;
+use super::stages::validity::{clearly_valid, clearly_valid_lanes};
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::interaction::pbsdf::Pbsdf;
+use crate::interaction::polarization::{KernelOutput, PolarizationLevel};
+use crate::interaction::{
+    CoherenceWeights, Geometry, Kernel, Partial, PolarizationModel, PreparedPacket, RoughConductor,
+    RoughSurface,
+};
+use crate::packet::WavePacket;
+use crate::psd::{ClosedForm, GaussianPsd, Psd};
+use crate::real::Real;
+
+/// One exit evaluated by the per-direction kernel: the specular and scattered Stokes vectors
+/// and the exit s vector.
+pub(crate) type ScalarExit<F> = ([F; 4], [F; 4], [F; 3]);
+
+/// The lanes of one vector of exits.
+struct LobeLanes<S: Simd, F: Real> {
+    specular: [F::V<S>; 4],
+    scattered: [F::V<S>; 4],
+    s_out: [F::V<S>; 3],
+    /// The lanes the per-direction kernel must redo.
+    redo: F::M<S>,
+}
+
+/// `a ∨ b` of two masks.
+#[inline(always)]
+fn or<S: Simd, F: Real>(s: S, a: F::M<S>, b: F::M<S>) -> F::M<S> {
+    F::vnot(s, F::vand(s, F::vnot(s, a), F::vnot(s, b)))
+}
+
+/// The kernel on one vector of (validated) exits `(x, y, z)`.
+#[inline(always)]
+fn lobe_lanes<S: Simd, F: Real>(
+    s: S,
+    p: &LobePrep<F>,
+    x: F::V<S>,
+    y: F::V<S>,
+    z: F::V<S>,
+) -> LobeLanes<S, F> {
+    let c = |v: F| F::vsplat(s, v);
+    let (add, mul) = (F::vadd::<S>, F::vmul::<S>);
+    let inc = &p.inc;
+    let (r, cos_o) = stages::geometry::exit_direction::<S, F>(s, inc, x, y, z);
+    let frame = stages::azimuth::exit_frame::<S, F>(s, inc, r);
+    let (so2, qo) = stages::fresnel::exit_q::<S, F>(s, inc, cos_o);
+    let factors = stages::rayleigh_rice::factors::<S, F>(
+        s,
+        inc,
+        cos_o,
+        so2,
+        qo,
+        (frame.cos_phi, frame.sin_phi),
+    );
+    // h_t = k (r̂ + ŝ) in the surface frame (Geometry::h_t), and ln α = −(k (cos θ_i + cos θ_o))² σ².
+    let (sv, kk) = (stages::splat3::<S, F>(s, inc.s), c(inc.k));
+    let h = [
+        mul(s, add(s, r[0], sv[0]), kk),
+        mul(s, add(s, r[1], sv[1]), kk),
+        mul(s, add(s, r[2], sv[2]), kk),
+    ];
+    let h0 = stages::dot3::<S, F>(s, h, stages::splat3::<S, F>(s, inc.t1));
+    let h1 = stages::dot3::<S, F>(s, h, stages::splat3::<S, F>(s, inc.t2));
+    let v = mul(s, kk, add(s, c(inc.cos_i), cos_o));
+    let ln_alpha = F::vneg_mul_add(s, mul(s, v, v), c(p.variance), c(F::zero()));
+    let weight = |g: &LogGaussian<F>| stages::channels::log_gaussian::<S, F>(s, g, h0, h1);
+    let ((v_spec, m_spec), (v_scat, m_scat)) = if p.three {
+        let mix = |g: &[LogGaussian<F>; 3]| {
+            stages::channels::channel_mix::<S, F>(s, p, weight(&g[0]), weight(&g[1]), weight(&g[2]))
+        };
+        (mix(&p.spec), mix(&p.scat))
+    } else {
+        let t = p.t_stokes;
+        let tv = [c(t[0]), c(t[1]), c(t[2]), c(t[3])];
+        ((tv, weight(&p.spec[2])), (tv, weight(&p.scat[2])))
+    };
+    let scaled_by_cos = |v: [F::V<S>; 4]| v.map(|x| mul(s, x, cos_o));
+    let u_scat = stages::channels::onto_cone::<S, F>(
+        s,
+        stages::stokes::assemble_vector::<S, F>(
+            s,
+            stages::channels::halves::<S, F>(s, v_scat),
+            factors,
+            cos_o,
+        ),
+    );
+    let ln_scat = add(s, add(s, ln_alpha, m_scat), c(p.ln_scat));
+    let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
+    let ln_spec = add(s, add(s, ln_alpha, m_spec), c(p.ln_spec));
+    let zero = c(F::zero());
+    let (specular, redo_spec) = if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) {
+        let u =
+            stages::specular::fresnel_stokes::<S, F>(s, p, r, frame.s_out, scaled_by_cos(v_spec));
+        stages::channels::scaled::<S, F>(s, p, stages::channels::onto_cone::<S, F>(s, u), ln_spec)
+    } else {
+        ([zero; 4], F::vlt(s, zero, zero))
+    };
+    LobeLanes {
+        specular,
+        scattered,
+        s_out: frame.s_out,
+        redo: or::<S, F>(s, frame.normal, or::<S, F>(s, redo_scat, redo_spec)),
+    }
+}
+
+/// The SIMD loop over a batch of exits, instantiated by [`pulp::Arch::dispatch`] once per
+/// instruction set; `scalar(i)` evaluates exit `i` with the per-direction kernel.
+pub(crate) struct PartialLobes<'r, 'e, 'o, 'f, F: Real, G> {
+    pub(crate) prep: &'r LobePrep<F>,
+    pub(crate) exits: DirectionsSoa<'e, F>,
+    pub(crate) out: &'r mut LobesSoa<'o, F>,
+    pub(crate) frames: Option<&'r mut ExitFramesSoa<'f, F>>,
+    pub(crate) scalar: G,
+}
+
+/// At most this many lanes in a vector (`f32` under AVX-512).
+const MAX_LANES: usize = 16;
+
+impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
+    for PartialLobes<'_, '_, '_, '_, F, G>
+{
+    type Output = Result<(), Error>;
+
+    // `inline(always)`: the body must be compiled inside pulp's `#[target_feature]` function.
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, s: S) -> Result<(), Error> {
+        let Self {
+            prep,
+            exits,
+            out,
+            mut frames,
+            mut scalar,
+        } = self;
+        let n = exits.len();
+        let (xs, ys, zs) = (&exits.x[..n], &exits.y[..n], &exits.z[..n]);
+        let lanes = F::width::<S>();
+        let exit = |i: usize| Vector3::new(xs[i], ys[i], zs[i]);
+        // Validate everything before writing anything.
+        let nv = n / lanes;
+        {
+            let (hx, hy, hz) = (
+                F::vsplit::<S>(xs).0,
+                F::vsplit::<S>(ys).0,
+                F::vsplit::<S>(zs).0,
+            );
+            for i in 0..nv {
+                let ok = clearly_valid_lanes::<S, F>(s, prep, hx[i], hy[i], hz[i]);
+                if F::vany(s, F::vnot(s, ok)) {
+                    for j in i * lanes..(i + 1) * lanes {
+                        prep.check_exact(exit(j))?;
+                    }
+                }
+            }
+            for j in nv * lanes..n {
+                if !clearly_valid(prep, xs[j], ys[j], zs[j]) {
+                    prep.check_exact(exit(j))?;
+                }
+            }
+        }
+        if n == 0 {
+            return Ok(());
+        }
+        // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` exits (overlapping
+        // the vector before it), or, for a batch shorter than one vector, padded with exit 0.
+        let chunks = n.div_ceil(lanes);
+        let mut buf = [[F::zero(); MAX_LANES]; 3];
+        for chunk in 0..chunks {
+            let (start, count) = if n >= lanes {
+                ((chunk * lanes).min(n - lanes), lanes)
+            } else {
+                (0, n)
+            };
+            let load = |v: &[F], b: &mut [F; MAX_LANES]| {
+                if count == lanes {
+                    F::vsplit::<S>(&v[start..start + lanes]).0[0]
+                } else {
+                    b[..lanes].fill(v[0]);
+                    b[..count].copy_from_slice(&v[..count]);
+                    F::vsplit::<S>(&b[..lanes]).0[0]
+                }
+            };
+            let [bx, by, bz] = &mut buf;
+            let (x, y, z) = (load(xs, bx), load(ys, by), load(zs, bz));
+            let l = lobe_lanes::<S, F>(s, prep, x, y, z);
+            let store = |o: &mut [F], v: F::V<S>| {
+                let t = &mut o[start..start + count];
+                if count == lanes {
+                    F::vsplit_mut::<S>(t).0[0] = v;
+                } else {
+                    F::store_partial(s, t, v);
+                }
+            };
+            for k in 0..4 {
+                store(out.specular.s[k], l.specular[k]);
+                store(out.scattered.s[k], l.scattered[k]);
+            }
+            if let Some(f) = frames.as_deref_mut() {
+                for k in 0..3 {
+                    store(f.s[k], l.s_out[k]);
+                }
+            }
+            if F::vany(s, l.redo) {
+                let mut flags = [F::zero(); MAX_LANES];
+                let redo = F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
+                F::store_partial(s, &mut flags[..lanes], redo);
+                for (j, flag) in flags[..count].iter().enumerate() {
+                    if *flag != F::zero() {
+                        let i = start + j;
+                        let (sp, sc, so) = scalar(i)?;
+                        for k in 0..4 {
+                            out.specular.s[k][i] = sp[k];
+                            out.scattered.s[k][i] = sc[k];
+                        }
+                        if let Some(f) = frames.as_deref_mut() {
+                            for (col, v) in f.s.iter_mut().zip(so) {
+                                col[i] = v;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The lane path of [`Kernel::evaluate_batch`] in reflection, when the kernel and the material
+/// are those of the module docs; `None` when they are not (or the per-packet constants are
+/// outside what the lanes reproduce: see [`LobePrep::new`]), and the caller goes exit by exit.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "evaluate_batch's arguments and its prepared packet"
+)]
+pub(crate) fn try_evaluate<T, P, Sp, Sc, Pol, Coh>(
+    kernel: &Kernel<Pol, Coh>,
+    material: &RoughSurface<P, Sp, Sc>,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    packet: &WavePacket<T>,
+    surface: &Frame<T>,
+    exits: DirectionsSoa<'_, T>,
+    out: &mut LobesSoa<'_, T>,
+    frames: Option<&mut ExitFramesSoa<'_, T>>,
+) -> Option<Result<(), Error>>
+where
+    T: Real,
+    P: Psd<T, 2> + 'static,
+    Sp: Pbsdf<T> + 'static,
+    Sc: Pbsdf<T> + 'static,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, P> + 'static,
+{
+    let full = match Pol::LEVEL {
+        PolarizationLevel::Full => true,
+        PolarizationLevel::OneShape => false,
+        PolarizationLevel::Intensity => return None,
+    };
+    let coherence: &dyn Any = kernel.coherence();
+    coherence.downcast_ref::<Partial<ClosedForm>>()?;
+    let any: &dyn Any = material;
+    let m = any.downcast_ref::<RoughConductor<T, GaussianPsd<T, 2>>>()?;
+    let prep = LobePrep::new(
+        prepared,
+        &m.psd,
+        m.specular.index(),
+        m.scatter.permittivity(),
+        packet,
+        surface,
+        full,
+    )?;
+    let scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
+        let exit = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
+        let g = Geometry::for_packet(packet, surface, exit)?;
+        let r = kernel.evaluate_prepared(material, prepared, &g);
+        let z = T::zero();
+        let (sp, sc) = match r.stokes() {
+            Some((sp, sc)) => (sp.0.into(), sc.0.into()),
+            None => (
+                [r.specular_intensity(), z, z, z],
+                [r.scattered_intensity(), z, z, z],
+            ),
+        };
+        Ok((sp, sc, g.exit_sp().x().into()))
+    };
+    Some(crate::simd::dispatch(PartialLobes {
+        prep: &prep,
+        exits,
+        out,
+        frames,
+        scalar,
+    }))
+}

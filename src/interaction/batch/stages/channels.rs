@@ -1,0 +1,146 @@
+//! The channel weights and their mix in lanes: `ln K = c − ½ |L⁻¹ h_t|²` for a Gaussian
+//! weight (the smooth-surface lobe `ln 2π + ln g^Ξ(h_t) − ½ ln|Ξ|`, and the closed-form blur of a
+//! Gaussian PSD `ln 2π + ln ∫ p 𝒩_Ξ(h_t − ·)`), the `Full` level's channel mix
+//! (`PreparedPacket::channel_mix`), the projection onto the cone of valid Stokes vectors
+//! (`onto_cone`) and the final scale.
+
+use pulp::Simd;
+
+use super::super::prep::{LobePrep, LogGaussian};
+use crate::real::Real;
+use crate::simd::exp::vexp;
+
+/// `c − ½ |L⁻¹ h|²` at `h = (h0, h1)` (forward substitution, the divisions by the diagonal as
+/// products with its reciprocals).
+#[inline(always)]
+pub(crate) fn log_gaussian<S: Simd, F: Real>(
+    s: S,
+    g: &LogGaussian<F>,
+    h0: F::V<S>,
+    h1: F::V<S>,
+) -> F::V<S> {
+    let c = |v: F| F::vsplat(s, v);
+    let y0 = F::vmul(s, h0, c(g.inv_l00));
+    let y1 = F::vmul(s, F::vneg_mul_add(s, c(g.l10), y0, h1), c(g.inv_l11));
+    let m = F::vmul_add(s, y0, y0, F::vmul(s, y1, y1));
+    F::vneg_mul_add(s, c(F::lit(0.5)), m, c(g.c))
+}
+
+/// The `Full` level's channel mix of the weights `ln K_x`, `ln K_y`, `ln K_½`: the effective
+/// vector `T v̂` and the logarithm `m` of its scale
+/// (see `PreparedPacket::channel_mix`; `m = −∞` gives an unspecified vector, which the caller's
+/// dark test discards).
+#[inline(always)]
+pub(crate) fn channel_mix<S: Simd, F: Real>(
+    s: S,
+    p: &LobePrep<F>,
+    lx: F::V<S>,
+    ly: F::V<S>,
+    lh: F::V<S>,
+) -> ([F::V<S>; 4], F::V<S>) {
+    let c = |v: F| F::vsplat(s, v);
+    let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
+    let half = c(F::lit(0.5));
+    let ax = add(s, lx, c(p.ln_sx));
+    let ay = add(s, ly, c(p.ln_sy));
+    let cap = sub(s, mul(s, add(s, lx, ly), half), c(p.ln_mu_max));
+    let ah = F::vmin(
+        s,
+        add(s, F::vmin(s, lh, cap), c(p.ln_c)),
+        mul(s, add(s, ax, ay), half),
+    );
+    let m = F::vmax(s, ax, ay);
+    let rx = vexp::<S, F>(s, sub(s, ax, m));
+    let ry = vexp::<S, F>(s, sub(s, ay, m));
+    let rh = vexp::<S, F>(s, sub(s, ah, m));
+    let two_rh = add(s, rh, rh);
+    let v = [
+        add(s, rx, ry),
+        sub(s, rx, ry),
+        mul(s, two_rh, c(p.phase.0)),
+        mul(s, two_rh, c(p.phase.1)),
+    ];
+    (mat_vec::<S, F>(s, &p.t, v), m)
+}
+
+/// `[P, Q, S2, S3]` of a Stokes vector, `P, Q = (S0 ± S1)/2` (the input of
+/// `stokes::assemble_vector`).
+#[inline(always)]
+pub(crate) fn halves<S: Simd, F: Real>(s: S, v: [F::V<S>; 4]) -> [F::V<S>; 4] {
+    let half = F::vsplat(s, F::lit(0.5));
+    [
+        F::vmul(s, F::vadd(s, v[0], v[1]), half),
+        F::vmul(s, F::vsub(s, v[0], v[1]), half),
+        v[2],
+        v[3],
+    ]
+}
+
+/// `M v` for a per-packet 4×4 matrix `M`.
+#[inline(always)]
+pub(crate) fn mat_vec<S: Simd, F: Real>(
+    s: S,
+    m: &nalgebra::Matrix4<F>,
+    v: [F::V<S>; 4],
+) -> [F::V<S>; 4] {
+    let c = |x: F| F::vsplat(s, x);
+    let row = |i: usize| {
+        F::vmul_add(
+            s,
+            c(m[(i, 0)]),
+            v[0],
+            F::vmul_add(
+                s,
+                c(m[(i, 1)]),
+                v[1],
+                F::vmul_add(s, c(m[(i, 2)]), v[2], F::vmul(s, c(m[(i, 3)]), v[3])),
+            ),
+        )
+    };
+    [row(0), row(1), row(2), row(3)]
+}
+
+/// `u` onto the cone of valid Stokes vectors (`onto_cone`): the polarized part scaled down to
+/// `u₀` where it is longer, 0 where `u₀ ≤ 0`.
+#[inline(always)]
+pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4] {
+    let c = |x: F| F::vsplat(s, x);
+    let zero = c(F::zero());
+    let pol2 = F::vmul_add(
+        s,
+        u[1],
+        u[1],
+        F::vmul_add(s, u[2], u[2], F::vmul(s, u[3], u[3])),
+    );
+    let over = F::vlt(s, F::vmul(s, u[0], u[0]), pol2);
+    let f = F::vselect(s, over, F::vdiv(s, u[0], F::vsqrt(s, pol2)), c(F::one()));
+    let pos = F::vlt(s, zero, u[0]);
+    let keep = |x: F::V<S>| F::vselect(s, pos, x, zero);
+    [
+        keep(u[0]),
+        keep(F::vmul(s, u[1], f)),
+        keep(F::vmul(s, u[2], f)),
+        keep(F::vmul(s, u[3], f)),
+    ]
+}
+
+/// `u · e^{ln_e}` with the lanes where the part is dark (`ln_e` below the smallest subnormal
+/// number, or NaN) set to 0, and the mask of the lanes the scalar kernel must redo: not dark
+/// and `e^{ln_e}` outside the normal range (where the scalar kernel folds `|u|` into the
+/// exponent instead).
+#[inline(always)]
+pub(crate) fn scaled<S: Simd, F: Real>(
+    s: S,
+    p: &LobePrep<F>,
+    u: [F::V<S>; 4],
+    ln_e: F::V<S>,
+) -> ([F::V<S>; 4], F::M<S>) {
+    let c = |x: F| F::vsplat(s, x);
+    let zero = c(F::zero());
+    let lit = F::vle(s, c(p.ln_dark), ln_e);
+    let e = vexp::<S, F>(s, ln_e);
+    let normal = F::vand(s, F::vle(s, c(F::MIN_POSITIVE), e), F::vle(s, e, c(F::MAX)));
+    let redo = F::vand(s, lit, F::vnot(s, normal));
+    let out = |x: F::V<S>| F::vselect(s, lit, F::vmul(s, x, e), zero);
+    ([out(u[0]), out(u[1]), out(u[2]), out(u[3])], redo)
+}
