@@ -27,7 +27,7 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::lobes::{ExitFramesSoa, LobesSoa};
-use super::prep::{LobePrep, LogGaussian};
+use super::prep::LobePrep;
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
@@ -95,18 +95,30 @@ fn lobe_lanes<S: Simd, F: Real>(
     let h1 = stages::dot3::<S, F>(s, h, stages::splat3::<S, F>(s, inc.t2));
     let v = mul(s, kk, add(s, c(inc.cos_i), cos_o));
     let ln_alpha = F::vneg_mul_add(s, mul(s, v, v), c(p.variance), c(F::zero()));
-    let weight = |g: &LogGaussian<F>| stages::channels::log_gaussian::<S, F>(s, g, h0, h1);
+    let lg = stages::channels::log_gaussian::<S, F>;
     let ((v_spec, m_spec), (v_scat, m_scat)) = if p.three {
-        let mix = |g: &[LogGaussian<F>; 3]| {
-            stages::channels::channel_mix::<S, F>(s, p, weight(&g[0]), weight(&g[1]), weight(&g[2]))
-        };
-        (mix(&p.spec), mix(&p.scat))
+        let (sx, sy, sh) = (
+            lg(s, &p.spec[0], h0, h1),
+            lg(s, &p.spec[1], h0, h1),
+            lg(s, &p.spec[2], h0, h1),
+        );
+        let (dx, dy, dh) = (
+            lg(s, &p.scat[0], h0, h1),
+            lg(s, &p.scat[1], h0, h1),
+            lg(s, &p.scat[2], h0, h1),
+        );
+        (
+            stages::channels::channel_mix::<S, F>(s, p, sx, sy, sh),
+            stages::channels::channel_mix::<S, F>(s, p, dx, dy, dh),
+        )
     } else {
         let t = p.t_stokes;
         let tv = [c(t[0]), c(t[1]), c(t[2]), c(t[3])];
-        ((tv, weight(&p.spec[2])), (tv, weight(&p.scat[2])))
+        (
+            (tv, lg(s, &p.spec[2], h0, h1)),
+            (tv, lg(s, &p.scat[2], h0, h1)),
+        )
     };
-    let scaled_by_cos = |v: [F::V<S>; 4]| v.map(|x| mul(s, x, cos_o));
     let u_scat = stages::channels::onto_cone::<S, F>(
         s,
         stages::stokes::assemble_vector::<S, F>(
@@ -121,8 +133,18 @@ fn lobe_lanes<S: Simd, F: Real>(
     let ln_spec = add(s, add(s, ln_alpha, m_spec), c(p.ln_spec));
     let zero = c(F::zero());
     let (specular, redo_spec) = if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) {
-        let u =
-            stages::specular::fresnel_stokes::<S, F>(s, p, r, frame.s_out, scaled_by_cos(v_spec));
+        let u = stages::specular::fresnel_stokes::<S, F>(
+            s,
+            p,
+            r,
+            frame.s_out,
+            [
+                mul(s, v_spec[0], cos_o),
+                mul(s, v_spec[1], cos_o),
+                mul(s, v_spec[2], cos_o),
+                mul(s, v_spec[3], cos_o),
+            ],
+        );
         stages::channels::scaled::<S, F>(s, p, stages::channels::onto_cone::<S, F>(s, u), ln_spec)
     } else {
         ([zero; 4], F::vlt(s, zero, zero))
@@ -143,6 +165,31 @@ pub(crate) struct PartialLobes<'r, 'e, 'o, 'f, F: Real, G> {
     pub(crate) out: &'r mut LobesSoa<'o, F>,
     pub(crate) frames: Option<&'r mut ExitFramesSoa<'f, F>>,
     pub(crate) scalar: G,
+}
+
+/// The exits `start..start + count` of `v` as one vector: a whole vector when `count` is the
+/// width, else padded with `v[0]` (through `b`).
+#[inline(always)]
+fn load<S: Simd, F: Real>(v: &[F], b: &mut [F; MAX_LANES], start: usize, count: usize) -> F::V<S> {
+    let lanes = F::width::<S>();
+    if count == lanes {
+        F::vsplit::<S>(&v[start..start + lanes]).0[0]
+    } else {
+        b[..lanes].fill(v[0]);
+        b[..count].copy_from_slice(&v[..count]);
+        F::vsplit::<S>(&b[..lanes]).0[0]
+    }
+}
+
+/// The first `count` lanes of `v` into `o[start..start + count]`.
+#[inline(always)]
+fn store<S: Simd, F: Real>(s: S, o: &mut [F], v: F::V<S>, start: usize, count: usize) {
+    let t = &mut o[start..start + count];
+    if count == F::width::<S>() {
+        F::vsplit_mut::<S>(t).0[0] = v;
+    } else {
+        F::store_partial(s, t, v);
+    }
 }
 
 /// At most this many lanes in a vector (`f32` under AVX-512).
@@ -202,33 +249,18 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
             } else {
                 (0, n)
             };
-            let load = |v: &[F], b: &mut [F; MAX_LANES]| {
-                if count == lanes {
-                    F::vsplit::<S>(&v[start..start + lanes]).0[0]
-                } else {
-                    b[..lanes].fill(v[0]);
-                    b[..count].copy_from_slice(&v[..count]);
-                    F::vsplit::<S>(&b[..lanes]).0[0]
-                }
-            };
             let [bx, by, bz] = &mut buf;
-            let (x, y, z) = (load(xs, bx), load(ys, by), load(zs, bz));
+            let x = load::<S, F>(xs, bx, start, count);
+            let y = load::<S, F>(ys, by, start, count);
+            let z = load::<S, F>(zs, bz, start, count);
             let l = lobe_lanes::<S, F>(s, prep, x, y, z);
-            let store = |o: &mut [F], v: F::V<S>| {
-                let t = &mut o[start..start + count];
-                if count == lanes {
-                    F::vsplit_mut::<S>(t).0[0] = v;
-                } else {
-                    F::store_partial(s, t, v);
-                }
-            };
             for k in 0..4 {
-                store(out.specular.s[k], l.specular[k]);
-                store(out.scattered.s[k], l.scattered[k]);
+                store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
+                store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
             }
             if let Some(f) = frames.as_deref_mut() {
                 for k in 0..3 {
-                    store(f.s[k], l.s_out[k]);
+                    store::<S, F>(s, f.s[k], l.s_out[k], start, count);
                 }
             }
             if F::vany(s, l.redo) {
@@ -320,4 +352,71 @@ where
         frames,
         scalar,
     }))
+}
+#[cfg(test)]
+mod scratch {
+    use super::*;
+    use crate::interaction::{FresnelReflection, Full, RayleighRice};
+    use crate::packet::CoherenceShape;
+    use crate::stokes::Stokes;
+    use num_complex::Complex;
+    #[test]
+    fn count_redo() {
+        let theta_i = 30f64.to_radians();
+        let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos());
+        let frame = Frame::sp(travel, Vector3::z()).unwrap().rotated(0.7);
+        let sx = CoherenceShape::isotropic(5.0).unwrap();
+        let sy = CoherenceShape::isotropic(6.0).unwrap();
+        let stokes = Stokes::new(1.0, 0.3, 0.2, -0.3).unwrap();
+        let packet = WavePacket::new(stokes, sx, sy, frame, 0.5).unwrap();
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let eta = Complex::new(1.5, 0.0);
+        let m = RoughSurface {
+            psd: GaussianPsd::<f64, 2>::isotropic(0.02, 2.0).unwrap(),
+            specular: FresnelReflection::new(eta).unwrap(),
+            scatter: RayleighRice::new(eta).unwrap(),
+        };
+        let kernel = Kernel::<Full, Partial>::default();
+        let prepared = kernel.prepare(&packet, &surface).unwrap();
+        let prep = LobePrep::new(&prepared, &m.psd, eta, eta * eta, &packet, &surface, true);
+        eprintln!("prep some: {}", prep.is_some());
+        let prep = prep.unwrap();
+        let mut x = vec![];
+        let mut y = vec![];
+        let mut z = vec![];
+        for i in 0..64 {
+            let to = theta_i + (i as f64 / 64.0 - 0.5) * 0.26;
+            let po = ((i * 7 % 64) as f64 / 64.0 - 0.5) * 0.52;
+            x.push(to.sin() * po.cos());
+            y.push(to.sin() * po.sin());
+            z.push(to.cos());
+        }
+        let mut buf = vec![vec![0.0; 64]; 8];
+        let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: super::super::StokesSoa { s: [a, b, c, d] },
+            scattered: super::super::StokesSoa { s: [e, f, g, h] },
+        };
+        let mut calls = 0;
+        let r = crate::simd::dispatch(PartialLobes {
+            prep: &prep,
+            exits: DirectionsSoa {
+                x: &x,
+                y: &y,
+                z: &z,
+            },
+            out: &mut out,
+            frames: None,
+            scalar: |_i| {
+                calls += 1;
+                Ok(([0.0; 4], [0.0; 4], [0.0; 3]))
+            },
+        });
+        eprintln!(
+            "{r:?} calls {calls} of 64; spec {:?}",
+            &out.specular.s[0][..8]
+        );
+    }
 }

@@ -83,21 +83,29 @@ pub(crate) fn mat_vec<S: Simd, F: Real>(
     m: &nalgebra::Matrix4<F>,
     v: [F::V<S>; 4],
 ) -> [F::V<S>; 4] {
+    [
+        row::<S, F>(s, m, 0, v),
+        row::<S, F>(s, m, 1, v),
+        row::<S, F>(s, m, 2, v),
+        row::<S, F>(s, m, 3, v),
+    ]
+}
+
+/// Row `i` of `M v`.
+#[inline(always)]
+fn row<S: Simd, F: Real>(s: S, m: &nalgebra::Matrix4<F>, i: usize, v: [F::V<S>; 4]) -> F::V<S> {
     let c = |x: F| F::vsplat(s, x);
-    let row = |i: usize| {
+    F::vmul_add(
+        s,
+        c(m[(i, 0)]),
+        v[0],
         F::vmul_add(
             s,
-            c(m[(i, 0)]),
-            v[0],
-            F::vmul_add(
-                s,
-                c(m[(i, 1)]),
-                v[1],
-                F::vmul_add(s, c(m[(i, 2)]), v[2], F::vmul(s, c(m[(i, 3)]), v[3])),
-            ),
-        )
-    };
-    [row(0), row(1), row(2), row(3)]
+            c(m[(i, 1)]),
+            v[1],
+            F::vmul_add(s, c(m[(i, 2)]), v[2], F::vmul(s, c(m[(i, 3)]), v[3])),
+        ),
+    )
 }
 
 /// `u` onto the cone of valid Stokes vectors (`onto_cone`): the polarized part scaled down to
@@ -115,12 +123,11 @@ pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4]
     let over = F::vlt(s, F::vmul(s, u[0], u[0]), pol2);
     let f = F::vselect(s, over, F::vdiv(s, u[0], F::vsqrt(s, pol2)), c(F::one()));
     let pos = F::vlt(s, zero, u[0]);
-    let keep = |x: F::V<S>| F::vselect(s, pos, x, zero);
     [
-        keep(u[0]),
-        keep(F::vmul(s, u[1], f)),
-        keep(F::vmul(s, u[2], f)),
-        keep(F::vmul(s, u[3], f)),
+        F::vselect(s, pos, u[0], zero),
+        F::vselect(s, pos, F::vmul(s, u[1], f), zero),
+        F::vselect(s, pos, F::vmul(s, u[2], f), zero),
+        F::vselect(s, pos, F::vmul(s, u[3], f), zero),
     ]
 }
 
@@ -141,6 +148,13 @@ pub(crate) fn scaled<S: Simd, F: Real>(
     let e = vexp::<S, F>(s, ln_e);
     let normal = F::vand(s, F::vle(s, c(F::MIN_POSITIVE), e), F::vle(s, e, c(F::MAX)));
     let redo = F::vand(s, lit, F::vnot(s, normal));
-    let out = |x: F::V<S>| F::vselect(s, lit, F::vmul(s, x, e), zero);
-    ([out(u[0]), out(u[1]), out(u[2]), out(u[3])], redo)
+    (
+        [
+            F::vselect(s, lit, F::vmul(s, u[0], e), zero),
+            F::vselect(s, lit, F::vmul(s, u[1], e), zero),
+            F::vselect(s, lit, F::vmul(s, u[2], e), zero),
+            F::vselect(s, lit, F::vmul(s, u[3], e), zero),
+        ],
+        redo,
+    )
 }
