@@ -33,6 +33,9 @@ pub(crate) mod specular;
 pub(crate) mod stokes;
 pub(crate) mod validity;
 
+#[cfg(test)]
+mod lobe_tests;
+
 /// `(a · b + c · d) + e · f` without fusing (nalgebra's 3-vector dot product order).
 #[inline(always)]
 pub(crate) fn dot3<S: Simd, F: Real>(s: S, a: [F::V<S>; 3], b: [F::V<S>; 3]) -> F::V<S> {
