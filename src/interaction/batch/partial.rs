@@ -354,44 +354,48 @@ where
     }))
 }
 #[cfg(test)]
-mod scratch {
+mod tests {
     use super::*;
-    use crate::interaction::{FresnelReflection, Full, RayleighRice};
+    use crate::interaction::Full;
     use crate::packet::CoherenceShape;
     use crate::stokes::Stokes;
     use num_complex::Complex;
-    #[test]
-    fn count_redo() {
+
+    /// The scene of the `kernel_batch_partial` bench (30° incidence, two shapes, exits within
+    /// ±7.5° of the mirror direction) takes the lane path with every constant prepared, and no
+    /// lane needs the per-direction kernel.
+    fn in_lanes<T: Real>() {
         let theta_i = 30f64.to_radians();
-        let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos());
-        let frame = Frame::sp(travel, Vector3::z()).unwrap().rotated(0.7);
-        let sx = CoherenceShape::isotropic(5.0).unwrap();
-        let sy = CoherenceShape::isotropic(6.0).unwrap();
-        let stokes = Stokes::new(1.0, 0.3, 0.2, -0.3).unwrap();
-        let packet = WavePacket::new(stokes, sx, sy, frame, 0.5).unwrap();
+        let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos()).map(T::lit);
+        let frame = Frame::sp(travel, Vector3::z())
+            .unwrap()
+            .rotated(T::lit(0.7));
+        let packet = WavePacket::new(
+            Stokes::new(T::one(), T::lit(0.3), T::lit(0.2), -T::lit(0.3)).unwrap(),
+            CoherenceShape::isotropic(T::lit(5.0)).unwrap(),
+            CoherenceShape::isotropic(T::lit(6.0)).unwrap(),
+            frame,
+            T::lit(0.5),
+        )
+        .unwrap();
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-        let eta = Complex::new(1.5, 0.0);
-        let m = RoughSurface {
-            psd: GaussianPsd::<f64, 2>::isotropic(0.02, 2.0).unwrap(),
-            specular: FresnelReflection::new(eta).unwrap(),
-            scatter: RayleighRice::new(eta).unwrap(),
-        };
+        let eta = Complex::new(T::lit(1.5), T::zero());
+        let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
         let kernel = Kernel::<Full, Partial>::default();
         let prepared = kernel.prepare(&packet, &surface).unwrap();
-        let prep = LobePrep::new(&prepared, &m.psd, eta, eta * eta, &packet, &surface, true);
-        eprintln!("prep some: {}", prep.is_some());
-        let prep = prep.unwrap();
-        let mut x = vec![];
-        let mut y = vec![];
-        let mut z = vec![];
-        for i in 0..64 {
-            let to = theta_i + (i as f64 / 64.0 - 0.5) * 0.26;
-            let po = ((i * 7 % 64) as f64 / 64.0 - 0.5) * 0.52;
-            x.push(to.sin() * po.cos());
-            y.push(to.sin() * po.sin());
-            z.push(to.cos());
+        let prep = LobePrep::new(&prepared, &psd, eta, eta * eta, &packet, &surface, true)
+            .expect("the lane constants");
+        assert!(prep.three);
+        let n = 64;
+        let (mut x, mut y, mut z) = (vec![], vec![], vec![]);
+        for i in 0..n {
+            let to = theta_i + (i as f64 / n as f64 - 0.5) * 0.26;
+            let po = ((i * 7 % n) as f64 / n as f64 - 0.5) * 0.52;
+            x.push(T::lit(to.sin() * po.cos()));
+            y.push(T::lit(to.sin() * po.sin()));
+            z.push(T::lit(to.cos()));
         }
-        let mut buf = vec![vec![0.0; 64]; 8];
+        let mut buf = vec![vec![T::zero(); n]; 8];
         let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
             unreachable!()
         };
@@ -400,7 +404,7 @@ mod scratch {
             scattered: super::super::StokesSoa { s: [e, f, g, h] },
         };
         let mut calls = 0;
-        let r = crate::simd::dispatch(PartialLobes {
+        crate::simd::dispatch(PartialLobes {
             prep: &prep,
             exits: DirectionsSoa {
                 x: &x,
@@ -409,14 +413,20 @@ mod scratch {
             },
             out: &mut out,
             frames: None,
-            scalar: |_i| {
+            scalar: |_| {
                 calls += 1;
-                Ok(([0.0; 4], [0.0; 4], [0.0; 3]))
+                Ok(([T::zero(); 4], [T::zero(); 4], [T::zero(); 3]))
             },
-        });
-        eprintln!(
-            "{r:?} calls {calls} of 64; spec {:?}",
-            &out.specular.s[0][..8]
-        );
+        })
+        .unwrap();
+        assert_eq!(calls, 0, "lanes redone by the per-direction kernel");
+        assert!(out.scattered.s[0].iter().all(|v| *v > T::zero()));
+        assert!(out.specular.s[0].iter().filter(|v| **v > T::zero()).count() > n / 2);
+    }
+
+    #[test]
+    fn the_bench_scene_runs_in_lanes() {
+        in_lanes::<f64>();
+        in_lanes::<f32>();
     }
 }
