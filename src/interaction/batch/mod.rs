@@ -10,6 +10,11 @@
 //! instruction under AVX2 + FMA through [`pulp`] (run-time detection, no `unsafe`, no
 //! `RUSTFLAGS`), with a vector exponential and a branch-free principal complex square root.
 //! Lay a batch out with [`crate::mueller::batch::padded_stride`].
+//!
+//! [`Kernel::evaluate_batch`] is the batch form of the partially coherent kernel at every level
+//! (both lobes and the exit frames, into [`LobesSoa`] and [`ExitFramesSoa`]); for `Full` and
+//! `OneShape` · `Partial` on a Gaussian-PSD [`super::RoughConductor`] in reflection it runs the
+//! same stages in lanes (`partial.rs`), elsewhere the per-direction kernel per exit.
 
 use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
