@@ -4,8 +4,8 @@
 //! [`Kernel::evaluate_prepared`] for every polarization and coherence level, every material
 //! (reflection or, with `interface = Some(η)`, reflection and transmission at a dielectric
 //! interface) and every PSD and blur: the per-packet work once, then the exits — 4 (`f64`) or
-//! 8 (`f32`) per instruction for the partially coherent Gaussian-PSD rough conductor in
-//! reflection at the `Full` and `OneShape` levels (`super::partial`), one at a time otherwise —
+//! 8 (`f32`) per instruction for the partially coherent (closed-form blur) and incoherent
+//! Gaussian-PSD rough conductor in reflection at the `Full` and `OneShape` levels (`super::partial`), one at a time otherwise —
 //! with no heap allocation. For several wavelengths, call it once per wavelength's packet with
 //! the same [`DirectionsSoa`].
 
@@ -51,7 +51,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     ///
     /// # Lanes
     /// With `interface = None`, the [`super::super::Full`] or [`super::super::OneShape`] level,
-    /// [`super::super::Partial`]`<`[`crate::psd::ClosedForm`]`>` coherence and a
+    /// [`super::super::Partial`]`<`[`crate::psd::ClosedForm`]`>` or
+    /// [`super::super::Incoherent`] coherence and a
     /// [`super::super::RoughConductor`] with a [`crate::psd::GaussianPsd`] (Fresnel specular
     /// reflection and Rayleigh–Rice scattering, `Complex` index), the exits run through the
     /// SIMD stages of `interaction::batch::stages`, 4 (`f64`) or 8 (`f32`) per instruction
@@ -364,7 +365,7 @@ mod tests {
         let coh: &dyn core::any::Any = kernel.coherence();
         interface.is_none()
             && matches!(Pol::LEVEL, L::Full | L::OneShape)
-            && coh.is::<Partial>()
+            && (coh.is::<Partial>() || coh.is::<Incoherent>())
             && any.is::<RoughConductor<T, GaussianPsd<T, 2>>>()
     }
 
@@ -545,7 +546,7 @@ mod lane_tests {
     //! The lane path (`super::super::partial`) on batches of every length and at extreme
     //! scales of the packet.
     use super::*;
-    use crate::interaction::{Full, OneShape, Partial, RoughConductor};
+    use crate::interaction::{Full, Incoherent, OneShape, Partial, RoughConductor};
     use crate::packet::CoherenceShape;
     use crate::psd::GaussianPsd;
     use crate::stokes::Stokes;
@@ -598,7 +599,14 @@ mod lane_tests {
 
     /// The first `n` exits through `evaluate_batch`: `[specular S0..S3, scattered S0..S3,
     /// frame x, y, z]`, each `n` long.
-    fn batch<T: Real, Pol: PolarizationModel>(packet: &WavePacket<T>, n: usize) -> Vec<Vec<T>> {
+    fn batch<
+        T: Real,
+        Pol: PolarizationModel,
+        Coh: CoherenceWeights<T, GaussianPsd<T, 2>> + Default + 'static,
+    >(
+        packet: &WavePacket<T>,
+        n: usize,
+    ) -> Vec<Vec<T>> {
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
         let d = exits::<T>();
         let mut buf = vec![vec![T::lit(-7.0); n]; 11];
@@ -615,7 +623,7 @@ mod lane_tests {
             y: &d[1][..n],
             z: &d[2][..n],
         };
-        Kernel::<Pol, Partial>::default()
+        Kernel::<Pol, Coh>::default()
             .evaluate_batch(
                 &gold::<T>(),
                 packet,
@@ -634,10 +642,10 @@ mod lane_tests {
     /// one vector padded).
     fn prefixes<T: Real, Pol: PolarizationModel>() {
         let p = packet::<T>(1.0);
-        let all = batch::<T, Pol>(&p, 41);
+        let all = batch::<T, Pol, Partial>(&p, 41);
         let mut lit = 0;
         for n in 0..=41 {
-            let part = batch::<T, Pol>(&p, n);
+            let part = batch::<T, Pol, Partial>(&p, n);
             for (k, (a, b)) in part.iter().zip(&all).enumerate() {
                 for j in 0..n {
                     assert_eq!(
@@ -669,14 +677,17 @@ mod lane_tests {
     /// plus `MIN_POSITIVE` (`L` a lobe's `S0`; the exponent summed before the one exponential
     /// holds `ln S0` of the packet and the weight's logarithm, `ln L` minus `ln S0` and bounded
     /// terms), and valid Stokes vectors.
-    fn scales<T: Real, Pol: PolarizationModel>(exps: &[f64]) {
+    fn scales<T: Real, Pol: PolarizationModel, Coh>(exps: &[f64])
+    where
+        Coh: CoherenceWeights<T, GaussianPsd<T, 2>> + Default + 'static,
+    {
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
         let d = exits::<T>();
-        let kernel = Kernel::<Pol, Partial>::default();
+        let kernel = Kernel::<Pol, Coh>::default();
         let mut lit = 0;
         for &e in exps {
             let p = packet::<T>(10f64.powf(e));
-            let got = batch::<T, Pol>(&p, 41);
+            let got = batch::<T, Pol, Coh>(&p, 41);
             for j in 0..41 {
                 let exit = Vector3::new(d[0][j], d[1][j], d[2][j]);
                 let g = Geometry::for_packet(&p, &surface, exit).unwrap();
@@ -717,9 +728,13 @@ mod lane_tests {
 
     #[test]
     fn the_lane_path_holds_its_bound_at_extreme_scales() {
-        scales::<f64, Full>(&[-300.0, -150.0, 0.0, 150.0, 300.0]);
-        scales::<f64, OneShape>(&[-300.0, 0.0, 300.0]);
-        scales::<f32, Full>(&[-36.0, -20.0, 0.0, 20.0, 36.0]);
-        scales::<f32, OneShape>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Full, Partial>(&[-300.0, -150.0, 0.0, 150.0, 300.0]);
+        scales::<f64, OneShape, Partial>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Full, Partial>(&[-36.0, -20.0, 0.0, 20.0, 36.0]);
+        scales::<f32, OneShape, Partial>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Full, Incoherent>(&[-300.0, 0.0, 300.0]);
+        scales::<f64, OneShape, Incoherent>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Full, Incoherent>(&[-36.0, 0.0, 36.0]);
+        scales::<f32, OneShape, Incoherent>(&[-36.0, 0.0, 36.0]);
     }
 }

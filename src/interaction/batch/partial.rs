@@ -1,5 +1,6 @@
 //! The partially coherent lobe batch in lanes: `Kernel::evaluate_batch` for a Gaussian PSD
-//! blurred in closed form ([`Partial`]`<`[`ClosedForm`]`>`), [`FresnelReflection`] specular
+//! blurred in closed form ([`Partial`]`<`[`ClosedForm`]`>`) or in the incoherent limit
+//! ([`Incoherent`]), [`FresnelReflection`] specular
 //! reflection and [`RayleighRice`] scattering, in reflection, at the [`Full`] and [`OneShape`]
 //! levels — both lobes and the exit frames, 4 (`f64`) or 8 (`f32`) exits per instruction.
 //!
@@ -15,6 +16,7 @@
 //!
 //! [`Partial`]: crate::interaction::Partial
 //! [`ClosedForm`]: crate::psd::ClosedForm
+//! [`Incoherent`]: crate::interaction::Incoherent
 //! [`FresnelReflection`]: crate::interaction::FresnelReflection
 //! [`RayleighRice`]: crate::interaction::RayleighRice
 //! [`Full`]: crate::interaction::Full
@@ -35,8 +37,8 @@ use crate::frame::Frame;
 use crate::interaction::pbsdf::Pbsdf;
 use crate::interaction::polarization::{KernelOutput, PolarizationLevel};
 use crate::interaction::{
-    CoherenceWeights, Geometry, Kernel, Partial, PolarizationModel, PreparedPacket, RoughConductor,
-    RoughSurface,
+    CoherenceWeights, Geometry, Incoherent, Kernel, Partial, PolarizationModel, PreparedPacket,
+    RoughConductor, RoughSurface,
 };
 use crate::packet::WavePacket;
 use crate::psd::{ClosedForm, GaussianPsd, Psd};
@@ -319,7 +321,10 @@ where
         PolarizationLevel::Intensity => return None,
     };
     let coherence: &dyn Any = kernel.coherence();
-    coherence.downcast_ref::<Partial<ClosedForm>>()?;
+    let incoherent = coherence.is::<Incoherent>();
+    if !(incoherent || coherence.is::<Partial<ClosedForm>>()) {
+        return None;
+    }
     let any: &dyn Any = material;
     let m = any.downcast_ref::<RoughConductor<T, GaussianPsd<T, 2>>>()?;
     let prep = LobePrep::new(
@@ -331,6 +336,11 @@ where
         surface,
         full,
     )?;
+    let prep = if incoherent {
+        prep.incoherent(&m.psd)?
+    } else {
+        prep
+    };
     let scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
         let exit = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
         let g = Geometry::for_packet(packet, surface, exit)?;
@@ -422,6 +432,61 @@ mod tests {
         assert_eq!(calls, 0, "lanes redone by the per-direction kernel");
         assert!(out.scattered.s[0].iter().all(|v| *v > T::zero()));
         assert!(out.specular.s[0].iter().filter(|v| **v > T::zero()).count() > n / 2);
+    }
+
+    /// `try_evaluate` takes the lane path for exactly the documented kernels and materials.
+    #[test]
+    fn the_lane_path_is_taken_where_documented() {
+        use crate::interaction::{
+            FresnelInterface, Intensity, OneShape, PlaneWave, RayleighRice, RoughDielectric,
+        };
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let travel = Vector3::new(0.4, 0.1, -0.91).normalize();
+        let packet = WavePacket::new(
+            Stokes::new(1.0, 0.3, -0.2, 0.5).unwrap(),
+            CoherenceShape::isotropic(6.0).unwrap(),
+            CoherenceShape::isotropic(7.2).unwrap(),
+            Frame::sp(travel, Vector3::z()).unwrap(),
+            0.55,
+        )
+        .unwrap();
+        let psd = GaussianPsd::<f64, 2>::isotropic(0.02, 1.5).unwrap();
+        let gold = RoughConductor::new(psd, Complex::new(0.2, 3.4)).unwrap();
+        let glass: RoughDielectric<f64, _> = RoughSurface {
+            psd,
+            specular: FresnelInterface::new(1.5).unwrap(),
+            scatter: RayleighRice::new(Complex::new(1.5, 0.0)).unwrap(),
+        };
+        let (x, y, z) = ([0.3], [0.1], [0.9]);
+        let mut buf = [[0.0; 1]; 8];
+        let [a, b, c, d, e, f, g, h] = &mut buf;
+        let mut out = LobesSoa {
+            specular: super::super::StokesSoa { s: [a, b, c, d] },
+            scattered: super::super::StokesSoa { s: [e, f, g, h] },
+        };
+        macro_rules! taken {
+            ($pol:ty, $coh:ty, $m:expr) => {{
+                let kernel = Kernel::<$pol, $coh>::default();
+                let prepared = kernel.prepare(&packet, &surface).unwrap();
+                let exits = DirectionsSoa {
+                    x: &x,
+                    y: &y,
+                    z: &z,
+                };
+                try_evaluate(
+                    &kernel, $m, &prepared, &packet, &surface, exits, &mut out, None,
+                )
+                .map(|r| r.unwrap())
+                .is_some()
+            }};
+        }
+        assert!(taken!(Full, Partial, &gold));
+        assert!(taken!(OneShape, Partial, &gold));
+        assert!(taken!(Full, Incoherent, &gold));
+        assert!(taken!(OneShape, Incoherent, &gold));
+        assert!(!taken!(Intensity, Partial, &gold));
+        assert!(!taken!(Full, PlaneWave, &gold));
+        assert!(!taken!(Full, Partial, &glass));
     }
 
     #[test]

@@ -339,4 +339,19 @@ impl<T: Real> LobePrep<T> {
             && out.fresnel.iter().all(|v| v.is_finite());
         (out.inc.plain_q && finite && ln_s0.is_finite()).then_some(out)
     }
+
+    /// The constants for the incoherent limit ([`crate::interaction::Incoherent`]) instead of
+    /// the partially coherent one: the scattered channel weights become
+    /// `ln K_α = ln K^spec_α + ln ∫p − ln 2π` (`|Σ|^{1/2} g^Ξ(h_t) ∫p`), the covariance of the
+    /// smooth-surface lobe; `None` where `ln ∫p` is not finite.
+    pub(crate) fn incoherent(mut self, psd: &GaussianPsd<T, 2>) -> Option<Self> {
+        let shift = psd.integral().ln() - crate::interaction::coherence::ln_two_pi::<T>();
+        for (scat, spec) in self.scat.iter_mut().zip(&self.spec) {
+            *scat = LogGaussian {
+                c: spec.c + shift,
+                ..*spec
+            };
+        }
+        shift.is_finite().then_some(self)
+    }
 }
