@@ -31,7 +31,33 @@
 //! `std::time::Instant`, inputs and outputs through `std::hint::black_box`; the per-scene median
 //! time per evaluation, then the median over scenes. These are comparable medians from one run;
 //! the criterion benches (`cargo bench --bench kernel`, `--bench polarization`) give the precise
-//! numbers.
+//! numbers. A per-direction row times `Kernel::prepare` once per batch plus
+//! `Kernel::evaluate_prepared` per exit on geometries built beforehand (outside the timing).
+//!
+//! **Batch rows** (label ending in “batch”): the same models through the library's
+//! structure-of-arrays entry points, one call per timing batch for every exit direction of the
+//! scene, time per evaluation = call time / number of exits, the per-packet work and the exit
+//! geometries inside the call (the output buffers are allocated once per scene, outside the
+//! timing; same timing policy as the per-direction rows). `Full·Partial·exact` and
+//! `OneShape·Partial·exact` (f64, f32) call `Kernel::evaluate_batch` (`interface = None` in
+//! reflection, `Some(1.5)` for glass transmission; no exit frames requested). Like their
+//! per-direction twins they apply to every material with a closed-form blur (not the
+//! K-correlation): on the Gaussian and brushed materials (Gaussian PSD, Fresnel reflection,
+//! Rayleigh–Rice, reflection) the call runs SIMD lanes, on the grating and glass transmission
+//! it loops the per-direction kernel inside the call — kept so that a batch row covers the same
+//! scenes as its twin. `Full·PlaneWave·—` (f64, f32) calls
+//! `interaction::batch::plane_wave_rayleigh_rice`, the scattered lobe of the plane-wave level
+//! (its specular lobe is a delta, not compared by any row): Gaussian-PSD reflection materials
+//! only (the Gaussian and brushed ones; the function takes neither other PSDs nor transmission),
+//! so the row covers fewer scenes than `Full·PlaneWave·—` per direction. Errors are computed as
+//! for every row (scattered lobe, same reference, floor and definitions). The section “Batch vs
+//! one at a time” compares each batch row with its per-direction twin on the same scenes, split
+//! into lane and looped scenes: times (plus the separately timed per-exit cost of
+//! `Geometry::for_packet` / `for_packet_at_interface`, which the batch call does inside and the
+//! per-direction rows do not time), and the largest `max_k |S_k − S_k'| / S0'` against the
+//! twin's output, leaving out and counting directions where either `S0` is below 1e6 times the
+//! precision's smallest normal number. The Advice, the Goals and the coherence-limit table use
+//! the per-direction rows only; the Pareto plot draws batch rows as triangles.
 
 mod measure;
 mod plot;
@@ -40,7 +66,7 @@ mod scenes;
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
-use measure::{Blur, Coh, Measured, Pol, Prec, Timing, all_variants, median};
+use measure::{Api, Blur, Coh, Measured, Pol, Prec, Timing, all_variants, median};
 use scenes::{Input, Material, MaterialSpec, SceneSpec};
 
 /// Relative S0 floor: directions whose reference S0 is below this fraction of the scene's
@@ -59,7 +85,18 @@ struct SceneResult {
     scene: usize,
     ns: f64,
     points: Vec<Point>,
+    /// Batch rows against the per-direction twin's output `S'` on the same scene: the largest
+    /// `max_k |S_k − S_k'| / S0'` over the kept directions where both `S0` are at least
+    /// [`UNDERFLOW`] times the precision's smallest normal number, and how many kept directions
+    /// fell below that.
+    vs_twin: Option<(f64, usize)>,
 }
+
+/// Directions whose batch or per-direction `S0` is below this many times the precision's
+/// smallest normal number are left out of the batch-vs-per-direction difference (both paths
+/// round through subnormal numbers there, or one underflows to 0; the library documents an
+/// absolute, not relative, bound of `MIN_POSITIVE` for them).
+const UNDERFLOW: f64 = 1e6;
 
 impl SceneResult {
     fn s0_max(&self) -> f64 {
@@ -242,6 +279,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mats64: Vec<Material<f64>> = materials.iter().map(scenes::build_material).collect();
     let mats32: Vec<Material<f32>> = materials.iter().map(scenes::build_material).collect();
     let variants = all_variants();
+    // The per-direction twin of each batch row (same model, blur and precision).
+    let twin: Vec<Option<usize>> = variants
+        .iter()
+        .map(|v| {
+            (v.api == Api::Batch).then(|| {
+                variants
+                    .iter()
+                    .position(|w| *w == v.per_direction())
+                    .expect("every batch row has a per-direction twin")
+            })
+        })
+        .collect();
+    let is_twin: Vec<bool> = (0..variants.len())
+        .map(|i| twin.contains(&Some(i)))
+        .collect();
     eprintln!(
         "accuracy: {} scenes × {} variants{}",
         specs.len(),
@@ -259,6 +311,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut crosscheck_n = 0usize;
     let mut scene_exits = Vec::new();
     let mut ref_rows = Vec::new();
+    // Per scene: the time to build one exit geometry, f64 and f32 (for the batch section).
+    let mut geom_ns: Vec<[f64; 2]> = Vec::new();
     for (si, s) in specs.iter().enumerate() {
         let transmission = materials[s.material].transmission();
         let exits = match transmission {
@@ -303,6 +357,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             }
         }
+        geom_ns.push([
+            measure::geometry_ns(&sc64, timing),
+            measure::geometry_ns(&sc32, timing),
+        ]);
+        // This scene's outputs of the per-direction twins of the batch rows.
+        let mut twin_stokes: Vec<Option<Vec<[f64; 4]>>> = vec![None; variants.len()];
         for (vi, v) in variants.iter().enumerate() {
             if !v.applies(mat) || (matches!(v.blur, Blur::Adaptive(_)) && s.theta_i != 45.0) {
                 continue;
@@ -312,6 +372,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 Prec::F32 => measure::measure(v, &mats32[s.material], &sc32, timing),
             };
             let Some(m) = m else { continue };
+            let tiny = UNDERFLOW
+                * match v.prec {
+                    Prec::F64 => f64::MIN_POSITIVE,
+                    Prec::F32 => f64::from(f32::MIN_POSITIVE),
+                };
+            let vs_twin = twin[vi].and_then(|t| twin_stokes[t].as_ref()).map(|one| {
+                let (mut worst, mut below) = (0.0_f64, 0usize);
+                for ((b, o), _) in m.stokes.iter().zip(one).zip(&keep).filter(|(_, k)| **k) {
+                    if b[0] < tiny || o[0] < tiny {
+                        below += 1;
+                        continue;
+                    }
+                    for c in 0..4 {
+                        worst = worst.max((b[c] - o[c]).abs() / o[0]);
+                    }
+                }
+                (worst, below)
+            });
+            if is_twin[vi] {
+                twin_stokes[vi] = Some(m.stokes.clone());
+            }
             let points = m
                 .stokes
                 .iter()
@@ -327,6 +408,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 scene: si,
                 ns: m.ns,
                 points,
+                vs_twin,
             });
         }
         if si % 20 == 19 {
@@ -352,7 +434,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "Suite: {} scenes ({} materials × {} incidences (K-correlation: 45° only) × {} coherence \
          widths × 2 inputs), {} exit directions kept, {} skipped (reference S0 < {FLOOR:e} of the \
          scene maximum). Errors are on the scattered radiance (the coherent specular lobe, a delta \
-         in the plane-wave limit, is excluded). Adaptive 1e-4: Full·f64 on 45° scenes only.\n",
+         in the plane-wave limit, is excluded). Adaptive 1e-4: Full·f64 on 45° scenes only. Rows \
+         ending in “batch”: one library batch call per pass for every exit of the scene, the \
+         geometries built inside the call (see “Batch vs one at a time”).\n",
         specs.len(),
         materials.len(),
         incidences.len(),
@@ -428,7 +512,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let find = |pol: Pol, coh: Coh, blur: Blur, prec: Prec| {
         variants
             .iter()
-            .position(|v| v.pol == pol && v.coh == coh && v.blur == blur && v.prec == prec)
+            .position(|v| {
+                v.pol == pol
+                    && v.coh == coh
+                    && v.blur == blur
+                    && v.prec == prec
+                    && v.api == Api::PerDirection
+            })
             .expect("variant exists")
     };
     let pw = find(Pol::Full, Coh::PlaneWave, Blur::None, Prec::F64);
@@ -487,6 +577,77 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         limits_advice.push((m.name(), pw_from, inc_upto));
     }
 
+    // ---- Batch rows against their per-direction twins, on the same scenes.
+    let mut batch_md = String::new();
+    writeln!(
+        batch_md,
+        "Each batch row against the per-direction row of the same model and precision, on the \
+         same scenes, split by the path the batch takes: SIMD lanes (Gaussian PSD, Fresnel \
+         reflection and Rayleigh–Rice, in reflection: the Gauss and brushed materials) or the \
+         per-direction kernel looped inside the call (grating, glass transmission). Times are \
+         medians over scenes of the per-scene median ns per exit. “one at a time” is the \
+         per-direction row (geometries precomputed, outside its timing); “+ geometry” adds the \
+         per-scene median time to build one exit geometry, which the batch call does inside — \
+         the like-for-like comparison. Δ: max over kept directions of `max_k |S_k − S_k'| / S0'` \
+         against the per-direction output `S'`, leaving out (and counting) the kept directions \
+         where either S0 is below {UNDERFLOW:.0e} × the precision's smallest normal number \
+         (subnormal rounding or underflow to 0 on one path; the library's bound there is \
+         absolute).\n"
+    )?;
+    writeln!(
+        batch_md,
+        "| batch row | path | scenes | ns/eval batch | ns/eval one at a time | + geometry | speed-up vs + geometry | max Δ vs one at a time | underflow (left out of Δ) |"
+    )?;
+    writeln!(batch_md, "|---|---|---:|---:|---:|---:|---:|---:|---:|")?;
+    let lanes_material = |mi: usize| {
+        matches!(
+            materials[mi],
+            MaterialSpec::Gaussian { .. } | MaterialSpec::Brushed { .. }
+        )
+    };
+    for (vi, t) in twin.iter().enumerate() {
+        let Some(t) = *t else { continue };
+        let v = &variants[vi];
+        let prec = usize::from(v.prec == Prec::F32);
+        for (lanes, path) in [(true, "lanes"), (false, "per exit")] {
+            let rs: Vec<&SceneResult> = results[vi]
+                .iter()
+                .filter(|r| lanes_material(specs[r.scene].material) == lanes)
+                .collect();
+            if rs.is_empty() {
+                continue;
+            }
+            let one_of = |scene: usize| results[t].iter().find(|r| r.scene == scene);
+            let mut batch_t: Vec<f64> = rs.iter().map(|r| r.ns).collect();
+            let mut one_t: Vec<f64> = rs
+                .iter()
+                .filter_map(|r| one_of(r.scene).map(|o| o.ns))
+                .collect();
+            let mut one_geom_t: Vec<f64> = rs
+                .iter()
+                .filter_map(|r| one_of(r.scene).map(|o| o.ns + geom_ns[r.scene][prec]))
+                .collect();
+            let delta = rs
+                .iter()
+                .filter_map(|r| r.vs_twin)
+                .fold(0.0_f64, |a, (d, _)| a.max(d));
+            let below: usize = rs.iter().filter_map(|r| r.vs_twin).map(|(_, b)| b).sum();
+            let kept_dirs: usize = rs.iter().map(|r| r.points.len()).sum();
+            let (b, o, og) = (
+                median(&mut batch_t),
+                median(&mut one_t),
+                median(&mut one_geom_t),
+            );
+            writeln!(
+                batch_md,
+                "| {} | {path} | {} | {b:.1} | {o:.1} | {og:.1} | {:.2}× | {delta:.1e} | {below}/{kept_dirs} |",
+                v.label(),
+                rs.len(),
+                og / b
+            )?;
+        }
+    }
+
     // ---- Advice: sunlight on brushed aluminium.
     let brushed = materials
         .iter()
@@ -501,6 +662,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let full = find(Pol::Full, Coh::Partial, Blur::Exact, Prec::F64);
         let full_t = stats(results[full].iter().filter(sel)).ns;
         let mut cands: Vec<(usize, Stats)> = (0..variants.len())
+            .filter(|&i| variants[i].api == Api::PerDirection)
             .map(|i| (i, stats(results[i].iter().filter(sel))))
             .filter(|(_, st)| st.scenes > 0)
             .collect();
@@ -558,7 +720,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let full_exact = t_of(find(Pol::Full, Coh::Partial, Blur::Exact, Prec::F64));
     let full_pw = t_of(pw);
     let full_inc = t_of(inc);
-    let fastest = order[0];
+    // The goals are about the model levels one direction at a time (the batch rows have their
+    // own section).
+    let fastest = order
+        .iter()
+        .copied()
+        .find(|&i| variants[i].api == Api::PerDirection)
+        .expect("a per-direction variant");
     let fs = &all_stats[fastest];
     writeln!(
         goals,
@@ -597,7 +765,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let fastest_partial = order
         .iter()
         .copied()
-        .find(|&i| variants[i].coh == Coh::Partial)
+        .find(|&i| variants[i].coh == Coh::Partial && variants[i].api == Api::PerDirection)
         .expect("a partial variant");
     let fp = &all_stats[fastest_partial];
     writeln!(
@@ -625,7 +793,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         std::thread::available_parallelism().map_or(0, |n| n.get()),
         elapsed
     );
-    let report = format!("{header}\n{md}\n## Advice\n\n{advice}\n## Goals\n\n{goals}");
+    let report = format!(
+        "{header}\n{md}\n## Batch vs one at a time\n\n{batch_md}\n## Advice\n\n{advice}\n## Goals\n\n{goals}"
+    );
     println!("{report}");
     std::fs::write(out_dir.join("accuracy.md"), &report)?;
     std::fs::write(out_dir.join("accuracy.csv"), &csv)?;
@@ -679,6 +849,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s0_rms: all_stats[i].s0_rms,
             f32: variants[i].prec == Prec::F32,
             coh: variants[i].coh,
+            batch: variants[i].api == Api::Batch,
         })
         .collect();
     plot::pareto(&png, &pts, &header_line(quick, specs.len()))?;

@@ -1,5 +1,5 @@
-//! Variants (model level × blur method × precision), their dispatch to monomorphised kernels,
-//! and the timing loop.
+//! Variants (model level × blur method × precision × API), their dispatch to monomorphised
+//! kernels, and the timing loop.
 
 use std::cell::RefCell;
 use std::hint::black_box;
@@ -7,11 +7,13 @@ use std::time::{Duration, Instant};
 
 use gmueller::Real;
 use gmueller::gaussian::Gaussian;
+use gmueller::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa, plane_wave_rayleigh_rice};
 use gmueller::interaction::{
-    CoherenceLevel, CoherenceWeights, Full, Kernel, KernelOutput, Level, LevelVisitor, Partial,
-    Pbsdf, PolarizationLevel, PolarizationModel, RoughSurface,
+    CoherenceLevel, CoherenceModel, CoherenceWeights, Full, Geometry, Intensity, Kernel,
+    KernelOutput, Level, LevelVisitor, OneShape, Partial, Pbsdf, PolarizationLevel,
+    PolarizationModel, RayleighRice, RoughSurface,
 };
-use gmueller::psd::{Adaptive, BlurMethod, ClosedForm, GaussHermite, Psd};
+use gmueller::psd::{Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianPsd, Psd};
 use nalgebra::{Matrix2, Vector2};
 
 use super::scenes::{MIXTURES, Material, SceneData};
@@ -51,6 +53,18 @@ pub enum Prec {
     F64,
 }
 
+/// How a variant calls the library.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Api {
+    /// `Kernel::prepare` once per pass, then `Kernel::evaluate_prepared` per exit direction on
+    /// the scene's precomputed geometries.
+    PerDirection,
+    /// One batch call per pass for every exit direction of the scene (geometries built inside
+    /// the call): `Kernel::evaluate_batch` at the partially coherent level,
+    /// `interaction::batch::plane_wave_rayleigh_rice` at the plane-wave level.
+    Batch,
+}
+
 /// One model variant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Variant {
@@ -58,13 +72,15 @@ pub struct Variant {
     pub coh: Coh,
     pub blur: Blur,
     pub prec: Prec,
+    pub api: Api,
 }
 
 impl Variant {
-    /// Human-readable label, e.g. `Full·Partial·GH8·f64`.
+    /// Human-readable label, e.g. `Full·Partial·GH8·f64`, or `Full·Partial·exact·f64 batch`
+    /// for a batch row.
     pub fn label(&self) -> String {
         format!(
-            "{}·{}·{}·{}",
+            "{}·{}·{}·{}{}",
             match self.pol {
                 Pol::Intensity => "Intensity",
                 Pol::OneShape => "OneShape",
@@ -79,8 +95,20 @@ impl Variant {
             match self.prec {
                 Prec::F32 => "f32",
                 Prec::F64 => "f64",
+            },
+            match self.api {
+                Api::PerDirection => "",
+                Api::Batch => " batch",
             }
         )
+    }
+
+    /// The per-direction variant of the same model (itself for a per-direction variant).
+    pub fn per_direction(&self) -> Self {
+        Self {
+            api: Api::PerDirection,
+            ..*self
+        }
     }
 
     /// The blur part of the label.
@@ -95,8 +123,13 @@ impl Variant {
     }
 
     /// Whether the variant applies to a material (quadrature needs a continuous PSD, the
-    /// mixture fit a K-correlation, the exact blur a closed form).
+    /// mixture fit a K-correlation, the exact blur a closed form; the plane-wave batch
+    /// `plane_wave_rayleigh_rice` a Gaussian PSD in reflection).
     pub fn applies(&self, m: &super::scenes::MaterialSpec) -> bool {
+        use super::scenes::MaterialSpec as M;
+        if self.api == Api::Batch && self.coh == Coh::PlaneWave {
+            return matches!(m, M::Gaussian { .. } | M::Brushed { .. });
+        }
         match self.blur {
             Blur::None => true,
             Blur::Exact => !matches!(m, super::scenes::MaterialSpec::KCorr { .. }),
@@ -117,6 +150,7 @@ pub fn all_variants() -> Vec<Variant> {
                     coh,
                     blur: Blur::None,
                     prec,
+                    api: Api::PerDirection,
                 });
             }
             let mut blurs = vec![Blur::Exact];
@@ -132,8 +166,27 @@ pub fn all_variants() -> Vec<Variant> {
                     coh: Coh::Partial,
                     blur,
                     prec,
+                    api: Api::PerDirection,
                 });
             }
+        }
+    }
+    // The batch rows (after their per-direction twins, which are measured first on each scene):
+    // `Kernel::evaluate_batch` at Full and OneShape · Partial · exact, and the plane-wave batch
+    // `plane_wave_rayleigh_rice` (= Full·PlaneWave), both precisions.
+    for prec in [Prec::F64, Prec::F32] {
+        for (pol, coh, blur) in [
+            (Pol::Full, Coh::Partial, Blur::Exact),
+            (Pol::OneShape, Coh::Partial, Blur::Exact),
+            (Pol::Full, Coh::PlaneWave, Blur::None),
+        ] {
+            v.push(Variant {
+                pol,
+                coh,
+                blur,
+                prec,
+                api: Api::Batch,
+            });
         }
     }
     v
@@ -153,6 +206,26 @@ pub struct Timing {
     pub budget: Duration,
     pub min_batches: usize,
     pub max_batches: usize,
+}
+
+/// The timing policy applied to a scene whose first (recording) pass took `first`: repeated
+/// passes of `pass`, each over `n` evaluations; the median time per evaluation (ns).
+fn timed(first: Duration, n: f64, timing: Timing, mut pass: impl FnMut()) -> f64 {
+    let mut times = Vec::new();
+    let min = if first > timing.budget {
+        times.push(first.as_secs_f64() * 1e9 / n);
+        0
+    } else {
+        timing.min_batches
+    };
+    let start = Instant::now();
+    while times.len() < min || (start.elapsed() < timing.budget && times.len() < timing.max_batches)
+    {
+        let t = Instant::now();
+        pass();
+        times.push(t.elapsed().as_secs_f64() * 1e9 / n);
+    }
+    median(&mut times)
 }
 
 fn run<T, Pol2, Coh2, P, Sp, Sc>(
@@ -193,29 +266,183 @@ where
         })
         .collect();
     let first = t0.elapsed();
-    let mut times = Vec::new();
-    let min = if first > timing.budget {
-        times.push(first.as_secs_f64() * 1e9 / n);
-        0
-    } else {
-        timing.min_batches
-    };
-    let start = Instant::now();
-    while times.len() < min || (start.elapsed() < timing.budget && times.len() < timing.max_batches)
-    {
-        let t = Instant::now();
+    let ns = timed(first, n, timing, || {
         let prepared = kernel
             .prepare(black_box(&s.packet), s.geoms[0].surface())
             .expect("the scene's packet travels toward the surface");
         for g in &s.geoms {
             black_box(kernel.evaluate_prepared(black_box(m), black_box(&prepared), black_box(g)));
         }
-        times.push(t.elapsed().as_secs_f64() * 1e9 / n);
+    });
+    Measured { stokes, ns }
+}
+
+/// The f64 Stokes vectors of a batch's scattered lobe (the Intensity level writes `S0` only; the
+/// other columns stay at the buffers' initial 0, as the per-direction rows record them).
+fn soa_stokes<T: Real>(s: &[&mut [T]; 4], n: usize) -> Vec<[f64; 4]> {
+    (0..n)
+        .map(|i| [0, 1, 2, 3].map(|c| s[c][i].to_f64()))
+        .collect()
+}
+
+/// A batch row through `Kernel::evaluate_batch`: one call per pass for every exit direction of
+/// the scene (the per-packet work and the geometries inside the call, as a renderer would use
+/// it), the time per evaluation = call time / number of exits. The output buffers are
+/// allocated once, outside the timed region; the frames are not requested.
+fn run_batch<T, Pol2, Coh2, P, Sp, Sc>(
+    kernel: &Kernel<Pol2, Coh2>,
+    m: &RoughSurface<P, Sp, Sc>,
+    s: &SceneData<T>,
+    timing: Timing,
+) -> Measured
+where
+    T: Real,
+    Pol2: PolarizationModel,
+    Coh2: CoherenceModel + CoherenceWeights<T, P> + 'static,
+    P: Psd<T, 2> + 'static,
+    Sp: Pbsdf<T> + 'static,
+    Sc: Pbsdf<T> + 'static,
+{
+    let n = s.exits[0].len();
+    let exits = DirectionsSoa {
+        x: &s.exits[0],
+        y: &s.exits[1],
+        z: &s.exits[2],
+    };
+    let mut buf = vec![vec![T::zero(); n]; 8];
+    let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
+        unreachable!("eight columns")
+    };
+    let mut out = LobesSoa {
+        specular: StokesSoa { s: [a, b, c, d] },
+        scattered: StokesSoa { s: [e, f, g, h] },
+    };
+    let call = |out: &mut LobesSoa<'_, T>| {
+        kernel
+            .evaluate_batch(
+                black_box(m),
+                black_box(&s.packet),
+                black_box(&s.surface),
+                black_box(s.interface),
+                black_box(exits),
+                out,
+                None,
+            )
+            .expect("every exit of the scene is valid");
+        black_box(&mut *out);
+    };
+    let t0 = Instant::now();
+    call(&mut out);
+    let first = t0.elapsed();
+    let stokes = soa_stokes(&out.scattered.s, n);
+    let ns = timed(first, n as f64, timing, || call(&mut out));
+    Measured { stokes, ns }
+}
+
+/// The plane-wave batch row: `plane_wave_rayleigh_rice` (the scattered lobe of
+/// `Kernel::<Full, PlaneWave>`; its specular lobe is a delta, 0 off the exact specular
+/// direction, so the scattered lobe is what the per-direction rows record too), one call per
+/// pass, buffers allocated outside the timed region.
+fn run_plane_wave_batch<T: Real, Sp>(
+    m: &RoughSurface<GaussianPsd<T, 2>, Sp, RayleighRice<T>>,
+    s: &SceneData<T>,
+    timing: Timing,
+) -> Measured {
+    let n = s.exits[0].len();
+    let exits = DirectionsSoa {
+        x: &s.exits[0],
+        y: &s.exits[1],
+        z: &s.exits[2],
+    };
+    let mut buf = vec![vec![T::zero(); n]; 4];
+    let [a, b, c, d] = &mut buf[..] else {
+        unreachable!("four columns")
+    };
+    let mut out = StokesSoa { s: [a, b, c, d] };
+    let call = |out: &mut StokesSoa<'_, T>| {
+        plane_wave_rayleigh_rice(
+            black_box(m),
+            black_box(&s.packet),
+            black_box(&s.surface),
+            black_box(&exits),
+            out,
+        )
+        .expect("every exit of the scene is valid");
+        black_box(&mut *out);
+    };
+    let t0 = Instant::now();
+    call(&mut out);
+    let first = t0.elapsed();
+    let stokes = soa_stokes(&out.s, n);
+    let ns = timed(first, n as f64, timing, || call(&mut out));
+    Measured { stokes, ns }
+}
+
+/// `Kernel::evaluate_batch` at polarization level `pol`, `Partial(ClosedForm)`.
+fn batch_partial_exact<T, P, Sp, Sc>(
+    pol: Pol,
+    m: &RoughSurface<P, Sp, Sc>,
+    s: &SceneData<T>,
+    timing: Timing,
+) -> Measured
+where
+    T: Real,
+    Partial<ClosedForm>: CoherenceWeights<T, P>,
+    P: Psd<T, 2> + 'static,
+    Sp: Pbsdf<T> + 'static,
+    Sc: Pbsdf<T> + 'static,
+{
+    let coh = Partial(ClosedForm);
+    match pol {
+        Pol::Full => run_batch(&Kernel::<Full, _>::new(coh), m, s, timing),
+        Pol::OneShape => run_batch(&Kernel::<OneShape, _>::new(coh), m, s, timing),
+        Pol::Intensity => run_batch(&Kernel::<Intensity, _>::new(coh), m, s, timing),
     }
-    Measured {
-        stokes,
-        ns: median(&mut times),
-    }
+}
+
+/// Runs a batch variant; `None` where it does not apply (see [`Variant::applies`]).
+fn measure_batch<T: Real>(
+    v: &Variant,
+    mat: &Material<T>,
+    s: &SceneData<T>,
+    timing: Timing,
+) -> Option<Measured> {
+    Some(match (v.coh, v.blur, mat) {
+        (Coh::PlaneWave, Blur::None, Material::Gauss(m))
+            if v.pol == Pol::Full && s.interface.is_none() =>
+        {
+            run_plane_wave_batch(m, s, timing)
+        }
+        (Coh::Partial, Blur::Exact, Material::Gauss(m)) => batch_partial_exact(v.pol, m, s, timing),
+        (Coh::Partial, Blur::Exact, Material::Grating(m)) => {
+            batch_partial_exact(v.pol, m, s, timing)
+        }
+        (Coh::Partial, Blur::Exact, Material::Interface(m)) => {
+            batch_partial_exact(v.pol, m, s, timing)
+        }
+        _ => return None,
+    })
+}
+
+/// The median time (ns) to build one exit geometry of the scene (`Geometry::for_packet` or
+/// `Geometry::for_packet_at_interface`), which the per-direction rows take precomputed and the
+/// batch calls build inside: for the batch section's like-for-like comparison.
+pub fn geometry_ns<T: Real>(s: &SceneData<T>, timing: Timing) -> f64 {
+    let n = s.exits[0].len();
+    let pass = || {
+        for i in 0..n {
+            let e = nalgebra::Vector3::new(s.exits[0][i], s.exits[1][i], s.exits[2][i]);
+            let (p, f) = (black_box(&s.packet), black_box(&s.surface));
+            black_box(match s.interface {
+                None => Geometry::for_packet(p, f, black_box(e)),
+                Some(eta) => Geometry::for_packet_at_interface(p, f, eta, black_box(e)),
+            })
+            .expect("every exit of the scene is valid");
+        }
+    };
+    let t0 = Instant::now();
+    pass();
+    timed(t0.elapsed(), n as f64, timing, pass)
 }
 
 /// Median (sorts in place); NaN for an empty slice.
@@ -290,6 +517,9 @@ pub fn measure<T: Real>(
     s: &SceneData<T>,
     timing: Timing,
 ) -> Option<Measured> {
+    if v.api == Api::Batch {
+        return measure_batch(v, mat, s, timing);
+    }
     let gh = |n: usize| GaussHermite::<T>::new(n).expect("order in range");
     let ad = |t: f64| Adaptive::new(T::lit(t)).expect("tolerance in range");
     Some(match (mat, v.blur) {

@@ -26,6 +26,8 @@ pub struct ParetoPoint {
     pub s0_rms: f64,
     pub f32: bool,
     pub coh: Coh,
+    /// A batch row (drawn as a triangle).
+    pub batch: bool,
 }
 
 /// Errors below this are drawn at it (the exact variants have error 0 or ~1e-16).
@@ -115,7 +117,7 @@ pub fn pareto(
         chart
             .draw_series(
                 pts.iter()
-                    .filter(|p| p.coh == coh && !p.f32)
+                    .filter(|p| p.coh == coh && !p.f32 && !p.batch)
                     .map(|p| Circle::new((p.ns, e(p)), 5, c.filled())),
             )?
             .label(format!("{name} · f64 (filled)"))
@@ -123,12 +125,21 @@ pub fn pareto(
         chart
             .draw_series(
                 pts.iter()
-                    .filter(|p| p.coh == coh && p.f32)
+                    .filter(|p| p.coh == coh && p.f32 && !p.batch)
                     .map(|p| Circle::new((p.ns, e(p)), 5, c.stroke_width(2))),
             )?
             .label(format!("{name} · f32 (open)"))
             .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.stroke_width(2)));
+        // Batch rows: triangles, filled f64, open f32.
+        chart.draw_series(pts.iter().filter(|p| p.coh == coh && p.batch).map(|p| {
+            let style = if p.f32 { c.stroke_width(2) } else { c.filled() };
+            TriangleMarker::new((p.ns, e(p)), 7, style)
+        }))?;
     }
+    chart
+        .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+        .label("batch rows (triangles)")
+        .legend(|(x, y)| TriangleMarker::new((x + 10, y), 7, BLACK.stroke_width(2)));
     // RMS as small grey dots under each point.
     chart.draw_series(
         pts.iter()

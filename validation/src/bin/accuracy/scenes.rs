@@ -233,10 +233,18 @@ pub struct SceneSpec {
     pub input: Input,
 }
 
-/// The packet and the exit geometries of a scene, in precision `T`.
+/// The packet and the exit geometries of a scene, in precision `T`; for the batch rows also the
+/// surface frame, the exit directions as a structure of arrays and the interface index.
 pub struct SceneData<T: Real> {
     pub packet: WavePacket<T>,
     pub geoms: Vec<Geometry<T>>,
+    /// The surface frame the geometries were built with (normal +z).
+    pub surface: Frame<T>,
+    /// The exit directions, `x, y, z` components (the same directions as `geoms`, in order).
+    pub exits: [Vec<T>; 3],
+    /// The relative index of the medium below for a transmission material (`evaluate_batch`'s
+    /// `interface`), `None` in reflection.
+    pub interface: Option<T>,
 }
 
 /// The exit directions (unit vectors, surface normal +z, incidence in the x–z plane travelling
@@ -353,5 +361,12 @@ pub fn build_scene<T: Real>(
             }
         })
         .collect();
-    SceneData { packet, geoms }
+    let component = |c: usize| exits.iter().map(|e| T::lit(e[c])).collect();
+    SceneData {
+        packet,
+        geoms,
+        surface,
+        exits: [component(0), component(1), component(2)],
+        interface: transmission.map(T::lit),
+    }
 }
