@@ -109,7 +109,10 @@ fn row<S: Simd, F: Real>(s: S, m: &nalgebra::Matrix4<F>, i: usize, v: [F::V<S>; 
 }
 
 /// `u` onto the cone of valid Stokes vectors (`onto_cone`): the polarized part scaled down to
-/// `u₀` where it is longer, 0 where `u₀ ≤ 0`.
+/// `u₀` where it is longer, 0 where `u₀ ≤ 0`. It compares `u₀²` with `|u_pol|²` directly, so
+/// it holds only where those squares are normal numbers ([`cone_range`]); the lane path's
+/// inputs are unscaled (`O(1)` pBSDF entries times a normalised Stokes vector), and lanes
+/// outside the range go to the per-direction kernel.
 #[inline(always)]
 pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4] {
     let c = |x: F| F::vsplat(s, x);
@@ -129,6 +132,31 @@ pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4]
         F::vselect(s, pos, F::vmul(s, u[2], f), zero),
         F::vselect(s, pos, F::vmul(s, u[3], f), zero),
     ]
+}
+
+/// The lanes where [`onto_cone`] is exact up to rounding: `u₀ ≤ 0`, or `u₀²` and `|u_pol|²`
+/// both at most `MAX` and `u₀²` at least `MIN_POSITIVE`.
+#[inline(always)]
+pub(crate) fn cone_range<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> F::M<S> {
+    let c = |x: F| F::vsplat(s, x);
+    let pol2 = F::vmul_add(
+        s,
+        u[1],
+        u[1],
+        F::vmul_add(s, u[2], u[2], F::vmul(s, u[3], u[3])),
+    );
+    let u2 = F::vmul(s, u[0], u[0]);
+    let ok = F::vand(
+        s,
+        F::vand(
+            s,
+            F::vle(s, c(F::MIN_POSITIVE), u2),
+            F::vle(s, u2, c(F::MAX)),
+        ),
+        F::vle(s, pol2, c(F::MAX)),
+    );
+    let nonpos = F::vle(s, u[0], c(F::zero()));
+    F::vnot(s, F::vand(s, F::vnot(s, ok), F::vnot(s, nonpos)))
 }
 
 /// `u · e^{ln_e}` with the lanes where the part is dark (`ln_e` below the smallest subnormal
