@@ -11,9 +11,8 @@
 //! ([`stages::stokes`]), the specular one ([`stages::specular`]), the projection onto the cone
 //! and the final scale. The lanes the stages cannot reproduce — within `√ε` of the normal
 //! (where `Frame::sp_unit` takes a tangent), a lit part whose scale leaves the normal range
-//! (where the scalar kernel folds `|u|` into the exponent), and a lit part whose unscaled
-//! vector has squares outside the normal range (`channels::cone_range`) — are redone by the
-//! per-direction kernel, lane by lane.
+//! (where the scalar kernel folds `|u|` into the exponent) — are redone by the per-direction
+//! kernel, lane by lane.
 //!
 //! [`Partial`]: crate::interaction::Partial
 //! [`ClosedForm`]: crate::psd::ClosedForm
@@ -128,12 +127,9 @@ fn lobe_lanes<S: Simd, F: Real>(
         factors,
         cos_o,
     );
-    let range_scat = stages::channels::cone_range::<S, F>(s, raw_scat);
     let u_scat = stages::channels::onto_cone::<S, F>(s, raw_scat);
     let ln_scat = add(s, add(s, ln_alpha, m_scat), c(p.ln_scat));
     let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
-    let lit_scat = F::vle(s, c(p.ln_dark), ln_scat);
-    let redo_scat = or::<S, F>(s, redo_scat, F::vand(s, lit_scat, F::vnot(s, range_scat)));
     let ln_spec = add(s, add(s, ln_alpha, m_spec), c(p.ln_spec));
     let zero = c(F::zero());
     let (specular, redo_spec) = if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) {
@@ -149,19 +145,7 @@ fn lobe_lanes<S: Simd, F: Real>(
                 mul(s, v_spec[3], cos_o),
             ],
         );
-        let lit = F::vle(s, c(p.ln_dark), ln_spec);
-        let out_of_range = F::vand(
-            s,
-            lit,
-            F::vnot(s, stages::channels::cone_range::<S, F>(s, u)),
-        );
-        let (v, redo) = stages::channels::scaled::<S, F>(
-            s,
-            p,
-            stages::channels::onto_cone::<S, F>(s, u),
-            ln_spec,
-        );
-        (v, or::<S, F>(s, redo, out_of_range))
+        stages::channels::scaled::<S, F>(s, p, stages::channels::onto_cone::<S, F>(s, u), ln_spec)
     } else {
         ([zero; 4], F::vlt(s, zero, zero))
     };

@@ -108,23 +108,25 @@ fn row<S: Simd, F: Real>(s: S, m: &nalgebra::Matrix4<F>, i: usize, v: [F::V<S>; 
     )
 }
 
-/// `u` onto the cone of valid Stokes vectors (`onto_cone`): the polarized part scaled down to
-/// `u₀` where it is longer, 0 where `u₀ ≤ 0`. It compares `u₀²` with `|u_pol|²` directly, so
-/// it holds only where those squares are normal numbers ([`cone_range`]); the lane path's
-/// inputs are unscaled (`O(1)` pBSDF entries times a normalised Stokes vector), and lanes
-/// outside the range go to the per-direction kernel.
+/// `u` onto the cone of valid Stokes vectors, as the scalar `onto_cone`: with `a_k = u_k/u₀`
+/// (times the reciprocal `1/u₀`, or divided where that overflows), the polarized part scaled
+/// by `1/√Σa_k²` where `Σa_k² > 1`, 0 where `u₀ ≤ 0` — the scalar's operations, so its result
+/// bit for bit, at every magnitude.
 #[inline(always)]
 pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4] {
     let c = |x: F| F::vsplat(s, x);
-    let zero = c(F::zero());
-    let pol2 = F::vmul_add(
+    let (zero, one) = (c(F::zero()), c(F::one()));
+    let inv = F::vdiv(s, one, u[0]);
+    let finite = F::vle(s, inv, c(F::MAX));
+    let ratio = |x: F::V<S>| F::vselect(s, finite, F::vmul(s, x, inv), F::vdiv(s, x, u[0]));
+    let (a, b, d) = (ratio(u[1]), ratio(u[2]), ratio(u[3]));
+    let r2 = F::vadd(
         s,
-        u[1],
-        u[1],
-        F::vmul_add(s, u[2], u[2], F::vmul(s, u[3], u[3])),
+        F::vadd(s, F::vmul(s, a, a), F::vmul(s, b, b)),
+        F::vmul(s, d, d),
     );
-    let over = F::vlt(s, F::vmul(s, u[0], u[0]), pol2);
-    let f = F::vselect(s, over, F::vdiv(s, u[0], F::vsqrt(s, pol2)), c(F::one()));
+    let over = F::vlt(s, one, r2);
+    let f = F::vselect(s, over, F::vdiv(s, one, F::vsqrt(s, r2)), one);
     let pos = F::vlt(s, zero, u[0]);
     [
         F::vselect(s, pos, u[0], zero),
@@ -132,31 +134,6 @@ pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4]
         F::vselect(s, pos, F::vmul(s, u[2], f), zero),
         F::vselect(s, pos, F::vmul(s, u[3], f), zero),
     ]
-}
-
-/// The lanes where [`onto_cone`] is exact up to rounding: `u₀ ≤ 0`, or `u₀²` and `|u_pol|²`
-/// both at most `MAX` and `u₀²` at least `MIN_POSITIVE`.
-#[inline(always)]
-pub(crate) fn cone_range<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> F::M<S> {
-    let c = |x: F| F::vsplat(s, x);
-    let pol2 = F::vmul_add(
-        s,
-        u[1],
-        u[1],
-        F::vmul_add(s, u[2], u[2], F::vmul(s, u[3], u[3])),
-    );
-    let u2 = F::vmul(s, u[0], u[0]);
-    let ok = F::vand(
-        s,
-        F::vand(
-            s,
-            F::vle(s, c(F::MIN_POSITIVE), u2),
-            F::vle(s, u2, c(F::MAX)),
-        ),
-        F::vle(s, pol2, c(F::MAX)),
-    );
-    let nonpos = F::vle(s, u[0], c(F::zero()));
-    F::vnot(s, F::vand(s, F::vnot(s, ok), F::vnot(s, nonpos)))
 }
 
 /// `u · e^{ln_e}` with the lanes where the part is dark (`ln_e` below the smallest subnormal
