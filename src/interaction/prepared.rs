@@ -291,8 +291,11 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
         // exp(ln_e) · S0 would round exp(ln_e) first, with a subnormal's few digits when the
         // weight is tiny and S0 bright: one exponential of the sum instead.
         let e = (ln_e + self.ln_s0).exp();
-        if (e >= T::MIN_POSITIVE && e <= T::MAX) || u[0] <= T::zero() {
+        if e >= T::MIN_POSITIVE && e <= T::MAX {
             u * e
+        } else if u[0] <= T::zero() {
+            // No magnitude to fold; a 0 entry stays 0 rather than 0 · ∞ = NaN.
+            u.map(|x| if x == T::zero() { x } else { x * e })
         } else {
             // An overflow stays an overflow (±∞), but an entry that is exactly 0 stays 0 rather
             // than becoming 0 · ∞ = NaN.
@@ -391,5 +394,39 @@ pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
         m.map(|x| if x == T::zero() { x } else { x * e })
     } else {
         nalgebra::SMatrix::zeros()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Vector3, Vector4};
+
+    use crate::frame::Frame;
+    use crate::interaction::{Full, Kernel, Partial};
+    use crate::packet::{CoherenceShape, WavePacket};
+    use crate::stokes::Stokes;
+
+    /// A zero vector (what `onto_cone` returns for `u₀ ≤ 0`) stays 0 under a scale that
+    /// overflows, instead of becoming `0 · ∞ = NaN` (found by the batch stage tests).
+    #[test]
+    fn a_zero_vector_stays_zero_under_an_overflowing_scale() {
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let travel = Vector3::new(0.4, 0.1, -0.91).normalize();
+        let packet = WavePacket::from_stokes(
+            Stokes::new(1e-150, 0.0, 0.0, 0.0).unwrap(),
+            CoherenceShape::isotropic(6.0).unwrap(),
+            Frame::sp(travel, Vector3::z()).unwrap(),
+            0.55,
+        )
+        .unwrap();
+        let prepared = Kernel::<Full, Partial>::default()
+            .prepare(&packet, &surface)
+            .unwrap();
+        for ln_e in [1000.0, 1100.0, 1e5] {
+            let z = prepared.scaled(Vector4::zeros(), ln_e);
+            assert_eq!(z, Vector4::zeros(), "ln_e {ln_e}");
+            let neg = prepared.scaled(Vector4::new(-1.0, 0.0, 0.5, 0.0), ln_e);
+            assert!(neg[1] == 0.0 && neg[3] == 0.0 && neg[0] < 0.0, "{neg:?}");
+        }
     }
 }
