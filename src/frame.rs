@@ -87,8 +87,7 @@ impl<T: Real> Frame<T> {
     /// accepted within `256 ε` (`≈ 5.7e-14` for `f64`, `≈ 3.1e-5` for `f32`).
     pub const TOLERANCE_ULPS: f64 = 256.0;
 
-    /// `TOLERANCE_ULPS · ε`.
-    pub(crate) fn tolerance() -> T {
+    fn tolerance() -> T {
         T::lit(Self::TOLERANCE_ULPS) * T::EPSILON
     }
 

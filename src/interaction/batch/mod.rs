@@ -37,7 +37,7 @@ mod stages;
 
 pub use lobes::{ExitFramesSoa, LobesSoa};
 pub(crate) use prep::PlaneWavePrep;
-use stages::validity::validate_all;
+use stages::validity::{clearly_valid, clearly_valid_lanes};
 
 /// A batch of directions as three slices of equal length (world coordinates; need not be unit).
 #[derive(Debug, Clone, Copy)]
@@ -337,8 +337,22 @@ impl<F: Real> WithSimd for Batch<'_, '_, '_, F> {
         );
         let nv = hx.len();
         let (hy, hz) = (&ys_v[..nv], &zs_v[..nv]);
+        let lanes = F::width::<S>();
+        let exit = |i: usize| Vector3::new(xs[i], ys[i], zs[i]);
         // Validate everything before writing anything.
-        validate_all::<S, F>(s, prep, xs, ys, zs)?;
+        for i in 0..nv {
+            let ok = clearly_valid_lanes::<S, F>(s, prep, hx[i], hy[i], hz[i]);
+            if F::vany(s, F::vnot(s, ok)) {
+                for j in i * lanes..(i + 1) * lanes {
+                    prep.check_exact(exit(j))?;
+                }
+            }
+        }
+        for j in nv * lanes..n {
+            if !clearly_valid(prep, xs[j], ys[j], zs[j]) {
+                prep.check_exact(exit(j))?;
+            }
+        }
         let lanes_map = StokesLanes(prep);
         let [o0, o1, o2, o3] = &mut out.s;
         let (o0, o1, o2, o3) = (&mut o0[..n], &mut o1[..n], &mut o2[..n], &mut o3[..n]);

@@ -31,7 +31,7 @@ use super::DirectionsSoa;
 use super::lobes::{ExitFramesSoa, LobesSoa};
 use super::prep::LobePrep;
 use super::stages;
-use super::stages::validity::validate_all;
+use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::pbsdf::Pbsdf;
@@ -213,8 +213,29 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
         let n = exits.len();
         let (xs, ys, zs) = (&exits.x[..n], &exits.y[..n], &exits.z[..n]);
         let lanes = F::width::<S>();
+        let exit = |i: usize| Vector3::new(xs[i], ys[i], zs[i]);
         // Validate everything before writing anything.
-        validate_all::<S, F>(s, prep, xs, ys, zs)?;
+        let nv = n / lanes;
+        {
+            let (hx, hy, hz) = (
+                F::vsplit::<S>(xs).0,
+                F::vsplit::<S>(ys).0,
+                F::vsplit::<S>(zs).0,
+            );
+            for i in 0..nv {
+                let ok = clearly_valid_lanes::<S, F>(s, prep, hx[i], hy[i], hz[i]);
+                if F::vany(s, F::vnot(s, ok)) {
+                    for j in i * lanes..(i + 1) * lanes {
+                        prep.check_exact(exit(j))?;
+                    }
+                }
+            }
+            for j in nv * lanes..n {
+                if !clearly_valid(prep, xs[j], ys[j], zs[j]) {
+                    prep.check_exact(exit(j))?;
+                }
+            }
+        }
         if n == 0 {
             return Ok(());
         }

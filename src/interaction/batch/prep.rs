@@ -330,7 +330,7 @@ impl<T: Real> LobePrep<T> {
             ))
             .0,
             spec_frame: Frame::sp_unit(r_spec, inc.n),
-            flip_tol: Frame::<T>::tolerance(),
+            flip_tol: T::lit(Frame::<T>::TOLERANCE_ULPS) * T::EPSILON,
             inc,
         };
         let finite = out.spec.iter().chain(&out.scat).all(LogGaussian::is_finite)

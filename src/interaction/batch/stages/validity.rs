@@ -60,42 +60,6 @@ pub(crate) fn clearly_valid_lanes<S: Simd, F: Real>(
     )
 }
 
-/// Every exit of `(xs, ys, zs)` (equal lengths) accepted by the per-direction kernel: the fast
-/// test per vector, the exact one (`Incidence::check_exact`) for a vector it does not clear
-/// and for the tail; the error of the first rejected exit. Run before anything is written.
-#[inline(always)]
-pub(crate) fn validate_all<S: Simd, F: Real>(
-    s: S,
-    p: &Incidence<F>,
-    xs: &[F],
-    ys: &[F],
-    zs: &[F],
-) -> Result<(), crate::error::Error> {
-    let n = xs.len();
-    let lanes = F::width::<S>();
-    let exit = |i: usize| nalgebra::Vector3::new(xs[i], ys[i], zs[i]);
-    let (hx, hy, hz) = (
-        F::vsplit::<S>(xs).0,
-        F::vsplit::<S>(&ys[..n]).0,
-        F::vsplit::<S>(&zs[..n]).0,
-    );
-    let nv = hx.len();
-    for i in 0..nv {
-        let ok = clearly_valid_lanes::<S, F>(s, p, hx[i], hy[i], hz[i]);
-        if F::vany(s, F::vnot(s, ok)) {
-            for j in i * lanes..(i + 1) * lanes {
-                p.check_exact(exit(j))?;
-            }
-        }
-    }
-    for j in nv * lanes..n {
-        if !clearly_valid(p, xs[j], ys[j], zs[j]) {
-            p.check_exact(exit(j))?;
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use nalgebra::Vector3;
