@@ -5,8 +5,8 @@
 //! (reflection or, with `interface = Some(η)`, reflection and transmission at a dielectric
 //! interface) and every PSD and blur: the per-packet work once, then the exits — 4 (`f64`) or
 //! 8 (`f32`) per instruction for the partially coherent (closed-form blur) and incoherent
-//! Gaussian-PSD rough conductor in reflection at the `Full` and `OneShape` levels (`super::partial`), one at a time otherwise —
-//! with no heap allocation. For several wavelengths, call it once per wavelength's packet with
+//! Gaussian-PSD rough conductor in reflection at every polarization level (`super::partial`),
+//! one at a time otherwise — with no heap allocation. For several wavelengths, call it once per wavelength's packet with
 //! the same [`DirectionsSoa`].
 
 use super::{DirectionsSoa, StokesSoa};
@@ -50,7 +50,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// level only `S0` (`s[0]`) of each lobe is written: the level does not compute `S1..S3`.
     ///
     /// # Lanes
-    /// With `interface = None`, the [`super::super::Full`] or [`super::super::OneShape`] level,
+    /// With `interface = None`, the [`super::super::Full`], [`super::super::OneShape`] or
+    /// [`super::super::Intensity`] level (the last as `OneShape` on the effective vector
+    /// `(1, 0, 0, 0)`, `S0` written),
     /// [`super::super::Partial`]`<`[`crate::psd::ClosedForm`]`>` or
     /// [`super::super::Incoherent`] coherence and a
     /// [`super::super::RoughConductor`] with a [`crate::psd::GaussianPsd`] (Fresnel specular
@@ -364,7 +366,7 @@ mod tests {
         let any: &dyn core::any::Any = material;
         let coh: &dyn core::any::Any = kernel.coherence();
         interface.is_none()
-            && matches!(Pol::LEVEL, L::Full | L::OneShape)
+            && matches!(Pol::LEVEL, L::Full | L::OneShape | L::Intensity)
             && (coh.is::<Partial>() || coh.is::<Incoherent>())
             && any.is::<RoughConductor<T, GaussianPsd<T, 2>>>()
     }
@@ -546,7 +548,7 @@ mod lane_tests {
     //! The lane path (`super::super::partial`) on batches of every length and at extreme
     //! scales of the packet.
     use super::*;
-    use crate::interaction::{Full, Incoherent, OneShape, Partial, RoughConductor};
+    use crate::interaction::{Full, Incoherent, Intensity, OneShape, Partial, RoughConductor};
     use crate::packet::CoherenceShape;
     use crate::psd::GaussianPsd;
     use crate::stokes::Stokes;
@@ -670,6 +672,8 @@ mod lane_tests {
         prefixes::<f32, Full>();
         prefixes::<f64, OneShape>();
         prefixes::<f32, OneShape>();
+        prefixes::<f64, Intensity>();
+        prefixes::<f32, Intensity>();
     }
 
     /// At packet `S0` from the smallest normal number to near the largest, the lane path
@@ -692,9 +696,18 @@ mod lane_tests {
                 let exit = Vector3::new(d[0][j], d[1][j], d[2][j]);
                 let g = Geometry::for_packet(&p, &surface, exit).unwrap();
                 let r = kernel.evaluate(&gold::<T>(), &p, &g);
-                let (sp, sc) = r.stokes().unwrap();
-                for (lobe, want) in [sp, sc].iter().enumerate() {
-                    let l = want.s0().to_f64();
+                // Every Stokes parameter the level computes (S0 only at the Intensity level).
+                let wants: [Vec<f64>; 2] = match r.stokes() {
+                    Some((sp, sc)) => {
+                        [sp, sc].map(|v| v.vector().iter().map(|w| w.to_f64()).collect())
+                    }
+                    None => [
+                        vec![r.specular_intensity().to_f64()],
+                        vec![r.scattered_intensity().to_f64()],
+                    ],
+                };
+                for (lobe, want) in wants.iter().enumerate() {
+                    let l = want[0];
                     let ln_s0 = p.stokes().s0().to_f64().ln().abs();
                     let rel = if l > 0.0 {
                         l.ln().abs() + 2.0 * ln_s0
@@ -704,19 +717,25 @@ mod lane_tests {
                     let bound =
                         4.0 * T::EPSILON.to_f64() * (4.0 + rel) * l + T::MIN_POSITIVE.to_f64();
                     let v: Vec<f64> = (0..4).map(|k| got[4 * lobe + k][j].to_f64()).collect();
-                    for (k, (&b, w)) in v.iter().zip(want.vector().iter()).enumerate() {
-                        let w = w.to_f64();
+                    for (k, (&b, &w)) in v.iter().zip(want).enumerate() {
                         assert!(
                             (b - w).abs() <= bound || (w.is_infinite() && b == w),
                             "S0 1e{e} exit {j} lobe {lobe} S{k}: batch {b:e}, one at a time {w:e}"
                         );
                     }
-                    assert!(
-                        v[0] >= 0.0
-                            && v[1] * v[1] + v[2] * v[2] + v[3] * v[3]
-                                <= v[0] * v[0] * (1.0 + 8.0 * T::EPSILON.to_f64()),
-                        "exit {j} lobe {lobe}: {v:?} not a valid Stokes vector"
-                    );
+                    if want.len() == 4 {
+                        assert!(
+                            v[0] >= 0.0
+                                && v[1] * v[1] + v[2] * v[2] + v[3] * v[3]
+                                    <= v[0] * v[0] * (1.0 + 8.0 * T::EPSILON.to_f64()),
+                            "exit {j} lobe {lobe}: {v:?} not a valid Stokes vector"
+                        );
+                    } else {
+                        assert!(
+                            v[0] >= 0.0 && v[1..].iter().all(|&u| u == -7.0),
+                            "exit {j} lobe {lobe}: {v:?}, S1..S3 written at the Intensity level"
+                        );
+                    }
                     if l > 0.0 {
                         lit += 1;
                     }
@@ -736,5 +755,9 @@ mod lane_tests {
         scales::<f64, OneShape, Incoherent>(&[-300.0, 0.0, 300.0]);
         scales::<f32, Full, Incoherent>(&[-36.0, 0.0, 36.0]);
         scales::<f32, OneShape, Incoherent>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Intensity, Partial>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Intensity, Partial>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Intensity, Incoherent>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Intensity, Incoherent>(&[-36.0, 0.0, 36.0]);
     }
 }

@@ -1,8 +1,10 @@
 //! The partially coherent lobe batch in lanes: `Kernel::evaluate_batch` for a Gaussian PSD
 //! blurred in closed form ([`Partial`]`<`[`ClosedForm`]`>`) or in the incoherent limit
 //! ([`Incoherent`]), [`FresnelReflection`] specular
-//! reflection and [`RayleighRice`] scattering, in reflection, at the [`Full`] and [`OneShape`]
-//! levels — both lobes and the exit frames, 4 (`f64`) or 8 (`f32`) exits per instruction.
+//! reflection and [`RayleighRice`] scattering, in reflection, at the [`Full`], [`OneShape`] and
+//! [`Intensity`] levels — both lobes and the exit frames, 4 (`f64`) or 8 (`f32`) exits per
+//! instruction. The `Intensity` level runs the `OneShape` stages on the effective vector
+//! `(1, 0, 0, 0)` and writes `S0` only.
 //!
 //! Per vector of exits, the stages in order: r̂ and `cos θ_o` ([`stages::geometry`]), the exit
 //! s vector and azimuth ([`stages::azimuth`]), `q_o` ([`stages::fresnel`]), the Rayleigh–Rice
@@ -21,6 +23,7 @@
 //! [`RayleighRice`]: crate::interaction::RayleighRice
 //! [`Full`]: crate::interaction::Full
 //! [`OneShape`]: crate::interaction::OneShape
+//! [`Intensity`]: crate::interaction::Intensity
 
 use core::any::Any;
 
@@ -242,6 +245,8 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
         // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` exits (overlapping
         // the vector before it), or, for a batch shorter than one vector, padded with exit 0.
         let chunks = n.div_ceil(lanes);
+        // The Intensity level writes S0 only.
+        let stokes_len = if prep.intensity { 1 } else { 4 };
         let mut buf = [[F::zero(); MAX_LANES]; 3];
         for chunk in 0..chunks {
             let (start, count) = if n >= lanes {
@@ -254,7 +259,7 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
             let y = load::<S, F>(ys, by, start, count);
             let z = load::<S, F>(zs, bz, start, count);
             let l = lobe_lanes::<S, F>(s, prep, x, y, z);
-            for k in 0..4 {
+            for k in 0..stokes_len {
                 store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
                 store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
             }
@@ -271,7 +276,7 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
                     if *flag != F::zero() {
                         let i = start + j;
                         let (sp, sc, so) = scalar(i)?;
-                        for k in 0..4 {
+                        for k in 0..stokes_len {
                             out.specular.s[k][i] = sp[k];
                             out.scattered.s[k][i] = sc[k];
                         }
@@ -313,10 +318,10 @@ where
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P> + 'static,
 {
-    let full = match Pol::LEVEL {
-        PolarizationLevel::Full => true,
-        PolarizationLevel::OneShape => false,
-        PolarizationLevel::Intensity => return None,
+    let (full, intensity) = match Pol::LEVEL {
+        PolarizationLevel::Full => (true, false),
+        PolarizationLevel::OneShape => (false, false),
+        PolarizationLevel::Intensity => (false, true),
     };
     let coherence: &dyn Any = kernel.coherence();
     let incoherent = coherence.is::<Incoherent>();
@@ -336,6 +341,11 @@ where
     )?;
     let prep = if incoherent {
         prep.incoherent(&m.psd)?
+    } else {
+        prep
+    };
+    let prep = if intensity {
+        prep.intensity_only()
     } else {
         prep
     };
@@ -482,7 +492,9 @@ mod tests {
         assert!(taken!(OneShape, Partial, &gold));
         assert!(taken!(Full, Incoherent, &gold));
         assert!(taken!(OneShape, Incoherent, &gold));
-        assert!(!taken!(Intensity, Partial, &gold));
+        assert!(taken!(Intensity, Partial, &gold));
+        assert!(taken!(Intensity, Incoherent, &gold));
+        assert!(!taken!(Intensity, PlaneWave, &gold));
         assert!(!taken!(Full, PlaneWave, &gold));
         assert!(!taken!(Full, Partial, &glass));
     }

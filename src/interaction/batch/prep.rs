@@ -262,6 +262,8 @@ pub(crate) struct LobePrep<T: Real> {
     pub(crate) spec_frame: Frame<T>,
     /// `256 ε`: `r̂·r̂_spec` below its negative counts as a flipped frame change.
     pub(crate) flip_tol: T,
+    /// The `Intensity` level: only `S0` of each lobe is written.
+    pub(crate) intensity: bool,
 }
 
 impl<T: Real> core::ops::Deref for LobePrep<T> {
@@ -331,6 +333,7 @@ impl<T: Real> LobePrep<T> {
             .0,
             spec_frame: Frame::sp_unit(r_spec, inc.n),
             flip_tol: T::lit(Frame::<T>::TOLERANCE_ULPS) * T::EPSILON,
+            intensity: false,
             inc,
         };
         let finite = out.spec.iter().chain(&out.scat).all(LogGaussian::is_finite)
@@ -338,6 +341,16 @@ impl<T: Real> LobePrep<T> {
             && ln_scat.is_finite()
             && out.fresnel.iter().all(|v| v.is_finite());
         (out.inc.plain_q && finite && ln_s0.is_finite()).then_some(out)
+    }
+
+    /// The constants for the [`crate::interaction::Intensity`] level (from those of the
+    /// `OneShape` level, `full = false`): the effective vector becomes `(1, 0, 0, 0)`, so that
+    /// `S0` of each lobe is `M₀₀` times the one-weight scale, as
+    /// `Intensity::evaluate` (`onto_cone` keeps `S0`), and only `S0` is written.
+    pub(crate) fn intensity_only(mut self) -> Self {
+        self.t_stokes = Vector4::new(T::one(), T::zero(), T::zero(), T::zero());
+        self.intensity = true;
+        self
     }
 
     /// The constants for the incoherent limit ([`crate::interaction::Incoherent`]) instead of
