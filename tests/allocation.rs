@@ -5,7 +5,8 @@
 //! interface in reflection and transmission, plus `Mueller::from_jones`, frame changes and
 //! `Geometry::for_packet`; and the renderer layer (`gmueller::bsdf`: light helpers, `prepare`,
 //! `eval` in both forms, both samplers with their draws, densities and weights) at every level
-//! on rough glass and a grating; the count must be zero.
+//! on rough glass and a grating; and `Kernel::evaluate_batch` at every level (lanes and one
+//! exit at a time) and `plane_wave_rayleigh_rice`; the count must be zero.
 //!
 //! The counting allocator needs `unsafe impl GlobalAlloc`: the crate's `[lints]` deny
 //! `unsafe_code` for every target and the library forbids it in `src/lib.rs`; this test file alone
@@ -362,4 +363,133 @@ fn renderer_layer<T: Real>() {
 fn renderer_layer_allocates_nothing() {
     renderer_layer::<f64>();
     renderer_layer::<f32>();
+}
+
+/// `Kernel::evaluate_batch` at every level (the lane path on a Gaussian-PSD rough conductor,
+/// one exit at a time on a glass interface in reflection and transmission) and
+/// `plane_wave_rayleigh_rice`, with the exit frames: 200 exits per call, buffers allocated
+/// before counting.
+fn batches<T: Real>() {
+    use gmueller::interaction::batch::{
+        DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa, plane_wave_rayleigh_rice,
+    };
+    use gmueller::interaction::{
+        Full, Incoherent, Intensity, OneShape, Partial, PlaneWave, RoughConductor,
+    };
+    let s = scene::<T>();
+    let n = 200;
+    let mut d: [Vec<T>; 3] = Default::default();
+    for i in 0..n {
+        let e = s.exits[i % s.exits.len()];
+        // Every other pass mirrored below the surface (transmission at the interface).
+        let z = if (i / s.exits.len()) % 2 == 1 {
+            -e.z
+        } else {
+            e.z
+        };
+        for (c, v) in d.iter_mut().zip([e.x, e.y, z]) {
+            c.push(v);
+        }
+    }
+    let above: [Vec<T>; 3] = [
+        d[0].clone(),
+        d[1].clone(),
+        d[2].iter().map(|z| z.abs()).collect(),
+    ];
+    let gold = RoughConductor::new(
+        GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap(),
+        Complex::new(T::lit(0.2), T::lit(3.4)),
+    )
+    .unwrap();
+    let glass = RoughDielectric::new(
+        GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap(),
+        T::lit(1.5),
+    )
+    .unwrap();
+    let mut buf = vec![vec![T::zero(); n]; 11];
+    macro_rules! level {
+        ($pol:ty, $coh:ty) => {{
+            let kernel = Kernel::<$pol, $coh>::default();
+            let [a, b, c, e, f, g, h, i, sx, sy, sz] = &mut buf[..] else {
+                unreachable!()
+            };
+            let mut out = LobesSoa {
+                specular: StokesSoa { s: [a, b, c, e] },
+                scattered: StokesSoa { s: [f, g, h, i] },
+            };
+            let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
+            let (count, ok) = count(|| {
+                let lanes = DirectionsSoa {
+                    x: &above[0],
+                    y: &above[1],
+                    z: &above[2],
+                };
+                let both = DirectionsSoa {
+                    x: &d[0],
+                    y: &d[1],
+                    z: &d[2],
+                };
+                let a = kernel.evaluate_batch(
+                    black_box(&gold),
+                    &s.packet,
+                    &s.surface,
+                    None,
+                    lanes,
+                    &mut out,
+                    Some(&mut frames),
+                );
+                let lit = out.scattered.s[0].iter().any(|v| *v > T::zero());
+                let b = kernel.evaluate_batch(
+                    black_box(&glass),
+                    &s.packet,
+                    &s.surface,
+                    Some(T::lit(1.5)),
+                    both,
+                    &mut out,
+                    Some(&mut frames),
+                );
+                a.is_ok() && b.is_ok() && lit
+            });
+            let name = stringify!($pol, $coh);
+            assert!(ok, "{name}: the batches ran and lit something");
+            assert_eq!(
+                count, 0,
+                "{name}: {count} allocations in two batches of {n}"
+            );
+        }};
+    }
+    level!(Intensity, PlaneWave);
+    level!(Intensity, Partial);
+    level!(Intensity, Incoherent);
+    level!(OneShape, PlaneWave);
+    level!(OneShape, Partial);
+    level!(OneShape, Incoherent);
+    level!(Full, PlaneWave);
+    level!(Full, Partial);
+    level!(Full, Incoherent);
+    let plane = RoughSurface {
+        psd: GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap(),
+        specular: FresnelReflection::new(Complex::new(T::lit(1.5), T::zero())).unwrap(),
+        scatter: RayleighRice::new(Complex::new(T::lit(1.5), T::zero())).unwrap(),
+    };
+    let [a, b, c, e, ..] = &mut buf[..] else {
+        unreachable!()
+    };
+    let mut out = StokesSoa { s: [a, b, c, e] };
+    let (count, r) = count(|| {
+        let exits = DirectionsSoa {
+            x: &above[0],
+            y: &above[1],
+            z: &above[2],
+        };
+        plane_wave_rayleigh_rice(black_box(&plane), &s.packet, &s.surface, &exits, &mut out)
+    });
+    assert!(r.is_ok() && out.s[0].iter().any(|v| *v > T::zero()));
+    assert_eq!(count, 0, "{count} allocations in plane_wave_rayleigh_rice");
+}
+
+#[test]
+fn batch_evaluation_allocates_nothing() {
+    batches::<f64>();
+    batches::<f32>();
 }
