@@ -39,6 +39,32 @@ pub struct ExitFramesSoa<'a, T> {
     pub s: [&'a mut [T]; 3],
 }
 
+/// [`Error::OutOfRange`] unless every direction, lobe and frame slice is at least as long as
+/// `exits.x`.
+pub(crate) fn check_lengths<T>(
+    exits: &DirectionsSoa<'_, T>,
+    outs: &[LobesSoa<'_, T>],
+    frames: Option<&ExitFramesSoa<'_, T>>,
+) -> Result<(), Error> {
+    let n = exits.len();
+    let short = |len: usize| len < n;
+    if short(exits.y.len())
+        || short(exits.z.len())
+        || outs.iter().any(|out| {
+            out.specular.s.iter().any(|s| short(s.len()))
+                || out.scattered.s.iter().any(|s| short(s.len()))
+        })
+        || frames.is_some_and(|f| f.s.iter().any(|s| short(s.len())))
+    {
+        return Err(Error::OutOfRange {
+            what: "batch slice length",
+            value: n as f64,
+            expected: "every direction, lobe and frame slice at least as long as exits.x",
+        });
+    }
+    Ok(())
+}
+
 impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// Evaluates S2.20 for `packet` leaving along every direction of `exits`, writing both lobes
     /// into `out` and, when given, the exit s/p frames into `frames`.
@@ -133,21 +159,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         Sc: Pbsdf<T> + 'static,
     {
         let n = exits.len();
-        let short = |len: usize| len < n;
-        if short(exits.y.len())
-            || short(exits.z.len())
-            || out.specular.s.iter().any(|s| short(s.len()))
-            || out.scattered.s.iter().any(|s| short(s.len()))
-            || frames
-                .as_ref()
-                .is_some_and(|f| f.s.iter().any(|s| short(s.len())))
-        {
-            return Err(Error::OutOfRange {
-                what: "batch slice length",
-                value: n as f64,
-                expected: "every direction, lobe and frame slice at least as long as exits.x",
-            });
-        }
+        check_lengths(&exits, core::slice::from_ref(out), frames.as_deref())?;
         let facing = match interface {
             Some(_) => surface.facing(&-packet.direction()),
             None => *surface,

@@ -33,10 +33,12 @@ use crate::simd::{Soa, SoaMut};
 mod lobes;
 mod partial;
 mod prep;
+mod spectral;
 mod stages;
 
 pub use lobes::{ExitFramesSoa, LobesSoa};
 pub(crate) use prep::PlaneWavePrep;
+pub use spectral::{MAX_WAVELENGTHS, Wavelength};
 use stages::validity::{clearly_valid, clearly_valid_lanes};
 
 /// A batch of directions as three slices of equal length (world coordinates; need not be unit).

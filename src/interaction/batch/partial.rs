@@ -32,7 +32,7 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::lobes::{ExitFramesSoa, LobesSoa};
-use super::prep::LobePrep;
+use super::prep::{Incidence, LobePrep};
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
@@ -55,7 +55,6 @@ pub(crate) type ScalarExit<F> = ([F; 4], [F; 4], [F; 3]);
 struct LobeLanes<S: Simd, F: Real> {
     specular: [F::V<S>; 4],
     scattered: [F::V<S>; 4],
-    s_out: [F::V<S>; 3],
     /// The lanes the per-direction kernel must redo.
     redo: F::M<S>,
 }
@@ -66,20 +65,35 @@ fn or<S: Simd, F: Real>(s: S, a: F::M<S>, b: F::M<S>) -> F::M<S> {
     F::vnot(s, F::vand(s, F::vnot(s, a), F::vnot(s, b)))
 }
 
-/// The kernel on one vector of (validated) exits `(x, y, z)`.
+/// The wavelength-independent part of one vector of exits: r̂, `cos θ_o` and the exit frame.
+struct ExitLanes<S: Simd, F: Real> {
+    r: [F::V<S>; 3],
+    cos_o: F::V<S>,
+    frame: stages::azimuth::ExitFrame<S, F>,
+}
+
+/// [`ExitLanes`] of one vector of (validated) exits `(x, y, z)`: the incidence `inc` of any
+/// of the wavelengths (their directions and surface are the same).
 #[inline(always)]
-fn lobe_lanes<S: Simd, F: Real>(
+fn exit_lanes<S: Simd, F: Real>(
     s: S,
-    p: &LobePrep<F>,
+    inc: &Incidence<F>,
     x: F::V<S>,
     y: F::V<S>,
     z: F::V<S>,
-) -> LobeLanes<S, F> {
+) -> ExitLanes<S, F> {
+    let (r, cos_o) = stages::geometry::exit_direction::<S, F>(s, inc, x, y, z);
+    let frame = stages::azimuth::exit_frame::<S, F>(s, inc, r);
+    ExitLanes { r, cos_o, frame }
+}
+
+/// The kernel of one wavelength (`p`) on one vector of exits.
+#[inline(always)]
+fn lobe_lanes<S: Simd, F: Real>(s: S, p: &LobePrep<F>, e: &ExitLanes<S, F>) -> LobeLanes<S, F> {
     let c = |v: F| F::vsplat(s, v);
     let (add, mul) = (F::vadd::<S>, F::vmul::<S>);
     let inc = &p.inc;
-    let (r, cos_o) = stages::geometry::exit_direction::<S, F>(s, inc, x, y, z);
-    let frame = stages::azimuth::exit_frame::<S, F>(s, inc, r);
+    let (r, cos_o, frame) = (e.r, e.cos_o, &e.frame);
     let (so2, qo) = stages::fresnel::exit_q::<S, F>(s, inc, cos_o);
     let factors = stages::rayleigh_rice::factors::<S, F>(
         s,
@@ -155,17 +169,18 @@ fn lobe_lanes<S: Simd, F: Real>(
     LobeLanes {
         specular,
         scattered,
-        s_out: frame.s_out,
         redo: or::<S, F>(s, frame.normal, or::<S, F>(s, redo_scat, redo_spec)),
     }
 }
 
-/// The SIMD loop over a batch of exits, instantiated by [`pulp::Arch::dispatch`] once per
-/// instruction set; `scalar(i)` evaluates exit `i` with the per-direction kernel.
+/// The SIMD loop over a batch of exits and one or more wavelengths, instantiated by
+/// [`pulp::Arch::dispatch`] once per instruction set: `preps[w]` and `outs[w]` are wavelength
+/// `w`'s constants and lobes (the exit geometry is computed once per vector for all of them);
+/// `scalar(w, i)` evaluates exit `i` at wavelength `w` with the per-direction kernel.
 pub(crate) struct PartialLobes<'r, 'e, 'o, 'f, F: Real, G> {
-    pub(crate) prep: &'r LobePrep<F>,
+    pub(crate) preps: &'r [LobePrep<F>],
     pub(crate) exits: DirectionsSoa<'e, F>,
-    pub(crate) out: &'r mut LobesSoa<'o, F>,
+    pub(crate) outs: &'r mut [LobesSoa<'o, F>],
     pub(crate) frames: Option<&'r mut ExitFramesSoa<'f, F>>,
     pub(crate) scalar: G,
 }
@@ -198,7 +213,7 @@ fn store<S: Simd, F: Real>(s: S, o: &mut [F], v: F::V<S>, start: usize, count: u
 /// At most this many lanes in a vector (`f32` under AVX-512).
 const MAX_LANES: usize = 16;
 
-impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
+impl<F: Real, G: FnMut(usize, usize) -> Result<ScalarExit<F>, Error>> WithSimd
     for PartialLobes<'_, '_, '_, '_, F, G>
 {
     type Output = Result<(), Error>;
@@ -207,17 +222,21 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
     #[inline(always)]
     fn with_simd<S: Simd>(self, s: S) -> Result<(), Error> {
         let Self {
-            prep,
+            preps,
             exits,
-            out,
+            outs,
             mut frames,
             mut scalar,
         } = self;
+        let Some(prep) = preps.first() else {
+            return Ok(());
+        };
         let n = exits.len();
         let (xs, ys, zs) = (&exits.x[..n], &exits.y[..n], &exits.z[..n]);
         let lanes = F::width::<S>();
         let exit = |i: usize| Vector3::new(xs[i], ys[i], zs[i]);
-        // Validate everything before writing anything.
+        // Validate everything before writing anything (the exits' validity does not depend on
+        // the wavelength: the same direction and surface).
         let nv = n / lanes;
         {
             let (hx, hy, hz) = (
@@ -258,31 +277,37 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
             let x = load::<S, F>(xs, bx, start, count);
             let y = load::<S, F>(ys, by, start, count);
             let z = load::<S, F>(zs, bz, start, count);
-            let l = lobe_lanes::<S, F>(s, prep, x, y, z);
-            for k in 0..stokes_len {
-                store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
-                store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
-            }
+            let e = exit_lanes::<S, F>(s, prep, x, y, z);
             if let Some(f) = frames.as_deref_mut() {
                 for k in 0..3 {
-                    store::<S, F>(s, f.s[k], l.s_out[k], start, count);
+                    store::<S, F>(s, f.s[k], e.frame.s_out[k], start, count);
                 }
             }
-            if F::vany(s, l.redo) {
-                let mut flags = [F::zero(); MAX_LANES];
-                let redo = F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
-                F::store_partial(s, &mut flags[..lanes], redo);
-                for (j, flag) in flags[..count].iter().enumerate() {
-                    if *flag != F::zero() {
-                        let i = start + j;
-                        let (sp, sc, so) = scalar(i)?;
-                        for k in 0..stokes_len {
-                            out.specular.s[k][i] = sp[k];
-                            out.scattered.s[k][i] = sc[k];
-                        }
-                        if let Some(f) = frames.as_deref_mut() {
-                            for (col, v) in f.s.iter_mut().zip(so) {
-                                col[i] = v;
+            for (w, (p, out)) in preps.iter().zip(outs.iter_mut()).enumerate() {
+                let l = lobe_lanes::<S, F>(s, p, &e);
+                for k in 0..stokes_len {
+                    store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
+                    store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
+                }
+                if F::vany(s, l.redo) {
+                    let mut flags = [F::zero(); MAX_LANES];
+                    let redo =
+                        F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
+                    F::store_partial(s, &mut flags[..lanes], redo);
+                    for (j, flag) in flags[..count].iter().enumerate() {
+                        if *flag != F::zero() {
+                            let i = start + j;
+                            let (sp, sc, so) = scalar(w, i)?;
+                            for k in 0..stokes_len {
+                                out.specular.s[k][i] = sp[k];
+                                out.scattered.s[k][i] = sc[k];
+                            }
+                            if w == 0
+                                && let Some(f) = frames.as_deref_mut()
+                            {
+                                for (col, v) in f.s.iter_mut().zip(so) {
+                                    col[i] = v;
+                                }
                             }
                         }
                     }
@@ -293,23 +318,16 @@ impl<F: Real, G: FnMut(usize) -> Result<ScalarExit<F>, Error>> WithSimd
     }
 }
 
-/// The lane path of [`Kernel::evaluate_batch`] in reflection, when the kernel and the material
-/// are those of the module docs; `None` when they are not (or the per-packet constants are
-/// outside what the lanes reproduce: see [`LobePrep::new`]), and the caller goes exit by exit.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "evaluate_batch's arguments and its prepared packet"
-)]
-pub(crate) fn try_evaluate<T, P, Sp, Sc, Pol, Coh>(
+/// The lane constants of one wavelength: `Some` when the kernel and the material are those of
+/// the module docs and the per-packet constants are inside what the lanes reproduce (see
+/// [`LobePrep::new`]); `None` otherwise, and the caller goes exit by exit.
+pub(crate) fn lane_prep<T, P, Sp, Sc, Pol, Coh>(
     kernel: &Kernel<Pol, Coh>,
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
     surface: &Frame<T>,
-    exits: DirectionsSoa<'_, T>,
-    out: &mut LobesSoa<'_, T>,
-    frames: Option<&mut ExitFramesSoa<'_, T>>,
-) -> Option<Result<(), Error>>
+) -> Option<LobePrep<T>>
 where
     T: Real,
     P: Psd<T, 2> + 'static,
@@ -344,33 +362,81 @@ where
     } else {
         prep
     };
-    let prep = if intensity {
+    Some(if intensity {
         prep.intensity_only()
     } else {
         prep
+    })
+}
+
+/// Exit `exit` of `packet` by the per-direction kernel in reflection, as the lanes write it.
+pub(crate) fn scalar_exit<T, P, Sp, Sc, Pol, Coh>(
+    kernel: &Kernel<Pol, Coh>,
+    material: &RoughSurface<P, Sp, Sc>,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    packet: &WavePacket<T>,
+    surface: &Frame<T>,
+    exit: Vector3<T>,
+) -> Result<ScalarExit<T>, Error>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, P>,
+{
+    let g = Geometry::for_packet(packet, surface, exit)?;
+    let r = kernel.evaluate_prepared(material, prepared, &g);
+    let z = T::zero();
+    let (sp, sc) = match r.stokes() {
+        Some((sp, sc)) => (sp.0.into(), sc.0.into()),
+        None => (
+            [r.specular_intensity(), z, z, z],
+            [r.scattered_intensity(), z, z, z],
+        ),
     };
-    let scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
+    Ok((sp, sc, g.exit_sp().x().into()))
+}
+
+/// The lane path of [`Kernel::evaluate_batch`] in reflection (see [`lane_prep`]); `None` when
+/// it does not apply.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "evaluate_batch's arguments and its prepared packet"
+)]
+pub(crate) fn try_evaluate<T, P, Sp, Sc, Pol, Coh>(
+    kernel: &Kernel<Pol, Coh>,
+    material: &RoughSurface<P, Sp, Sc>,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    packet: &WavePacket<T>,
+    surface: &Frame<T>,
+    exits: DirectionsSoa<'_, T>,
+    out: &mut LobesSoa<'_, T>,
+    frames: Option<&mut ExitFramesSoa<'_, T>>,
+) -> Option<Result<(), Error>>
+where
+    T: Real,
+    P: Psd<T, 2> + 'static,
+    Sp: Pbsdf<T> + 'static,
+    Sc: Pbsdf<T> + 'static,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, P> + 'static,
+{
+    let prep = lane_prep(kernel, material, prepared, packet, surface)?;
+    let scalar = |_: usize, i: usize| {
         let exit = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
-        let g = Geometry::for_packet(packet, surface, exit)?;
-        let r = kernel.evaluate_prepared(material, prepared, &g);
-        let z = T::zero();
-        let (sp, sc) = match r.stokes() {
-            Some((sp, sc)) => (sp.0.into(), sc.0.into()),
-            None => (
-                [r.specular_intensity(), z, z, z],
-                [r.scattered_intensity(), z, z, z],
-            ),
-        };
-        Ok((sp, sc, g.exit_sp().x().into()))
+        scalar_exit(kernel, material, prepared, packet, surface, exit)
     };
     Some(crate::simd::dispatch(PartialLobes {
-        prep: &prep,
+        preps: core::slice::from_ref(&prep),
         exits,
-        out,
+        outs: core::slice::from_mut(out),
         frames,
         scalar,
     }))
 }
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -423,15 +489,15 @@ mod tests {
         };
         let mut calls = 0;
         crate::simd::dispatch(PartialLobes {
-            prep: &prep,
+            preps: core::slice::from_ref(&prep),
             exits: DirectionsSoa {
                 x: &x,
                 y: &y,
                 z: &z,
             },
-            out: &mut out,
+            outs: core::slice::from_mut(&mut out),
             frames: None,
-            scalar: |_| {
+            scalar: |_, _| {
                 calls += 1;
                 Ok(([T::zero(); 4], [T::zero(); 4], [T::zero(); 3]))
             },
