@@ -12,6 +12,8 @@
 //! level at a rough glass interface, reflection against transmission, same scenes, same run.
 //! `kernel_batch_partial/{f64,f32}`: `Kernel::<Full, Partial>::evaluate_batch` (both lobes, exit
 //! frames, geometry included) against the per-direction prepared kernel, same 1024 exits.
+//! `kernel_batch_spectral/{f64,f32}`: `evaluate_batch_spectral` on 4 wavelengths × the same
+//! 1024 exits against 4 `evaluate_batch` calls.
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -523,6 +525,124 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
     g.finish();
 }
 
+/// Four wavelengths of one path (λ = 0.45–0.60 µm, the index and the packet's shapes per
+/// wavelength) on the 1024 exits of [`batch_partial_for`]: `evaluate_batch_spectral` (the exit
+/// geometry once per vector of exits) against four `evaluate_batch` calls, both lobes and the
+/// exit frames. Throughput counts direction–wavelength pairs.
+fn batch_spectral_for<T: Real>(c: &mut Criterion, prec: &str) {
+    use gmueller::interaction::batch::Wavelength;
+    const M: usize = 1024;
+    const W: usize = 4;
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let materials: Vec<_> = (0..W)
+        .map(|w| {
+            let eta = Complex::new(T::lit(1.52 - 0.01 * w as f64), T::zero());
+            RoughSurface {
+                psd,
+                specular: FresnelReflection::new(eta).unwrap(),
+                scatter: RayleighRice::new(eta).unwrap(),
+            }
+        })
+        .collect();
+    let theta_i = 30f64.to_radians();
+    let base = scene::<T>(theta_i, theta_i, 0.0, 0.7, 5.0).packet;
+    let packets: Vec<_> = (0..W)
+        .map(|w| {
+            let lambda = T::lit(0.45 + 0.05 * w as f64);
+            // The scene's shapes (Θ_x = w², Θ_y = (1.2 w)², w = 5), grown with λ.
+            let wx = 5.0 * (1.0 + 0.05 * w as f64);
+            let wy = 1.2 * wx;
+            let shape = |v: f64| {
+                CoherenceShape::new(Matrix2::new(v * v, 0.0, 0.0, v * v).map(T::lit)).unwrap()
+            };
+            WavePacket::new(base.stokes(), shape(wx), shape(wy), *base.frame(), lambda).unwrap()
+        })
+        .collect();
+    let wavelengths: Vec<_> = (0..W)
+        .map(|w| Wavelength {
+            material: &materials[w],
+            packet: &packets[w],
+            interface: None,
+        })
+        .collect();
+    let kernel = Kernel::<Full, Partial>::default();
+    let surf = surface::<T>();
+    let mut rng = Lcg(0xba7c);
+    let exits: Vec<Vector3<T>> = (0..M)
+        .map(|_| {
+            let to = (theta_i + (rng.uniform() - 0.5) * 0.26).abs();
+            let po = (rng.uniform() - 0.5) * 0.52;
+            Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(T::lit)
+        })
+        .collect();
+    let columns = |k: usize| exits.iter().map(|e| e[k]).collect::<Vec<T>>();
+    let (x, y, z) = (columns(0), columns(1), columns(2));
+    let mut buf = vec![vec![vec![T::zero(); M]; 8]; W];
+    let mut fbuf = vec![vec![T::zero(); M]; 3];
+    let [sx, sy, sz] = &mut fbuf[..] else {
+        unreachable!()
+    };
+    let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
+    let mut outs: Vec<_> = buf
+        .iter_mut()
+        .map(|cols| {
+            let [a, b, cc, d, e, f, gg, h] = &mut cols[..] else {
+                unreachable!()
+            };
+            LobesSoa {
+                specular: StokesSoa { s: [a, b, cc, d] },
+                scattered: StokesSoa { s: [e, f, gg, h] },
+            }
+        })
+        .collect();
+    let dirs = DirectionsSoa {
+        x: &x,
+        y: &y,
+        z: &z,
+    };
+    let mut g = c.benchmark_group(format!("kernel_batch_spectral/{prec}"));
+    g.throughput(criterion::Throughput::Elements((M * W) as u64));
+    g.bench_function(
+        BenchmarkId::new("evaluate_batch_spectral", "4x1024"),
+        |bch| {
+            bch.iter(|| {
+                kernel
+                    .evaluate_batch_spectral(
+                        black_box(&wavelengths),
+                        &surf,
+                        dirs,
+                        &mut outs,
+                        Some(&mut frames),
+                    )
+                    .unwrap();
+                black_box(outs[W - 1].scattered.s[0][M - 1])
+            });
+        },
+    );
+    g.bench_function(
+        BenchmarkId::new("evaluate_batch-per-wavelength", "4x1024"),
+        |bch| {
+            bch.iter(|| {
+                for (w, out) in wavelengths.iter().zip(outs.iter_mut()) {
+                    kernel
+                        .evaluate_batch(
+                            black_box(w.material),
+                            black_box(w.packet),
+                            &surf,
+                            None,
+                            dirs,
+                            out,
+                            Some(&mut frames),
+                        )
+                        .unwrap();
+                }
+                black_box(outs[W - 1].scattered.s[0][M - 1])
+            });
+        },
+    );
+    g.finish();
+}
+
 /// Reflection against transmission at a rough glass interface (`RoughDielectric`, η = 1.5, the
 /// same Gaussian PSD), every level, per exit of a prepared packet, same run: the seeded scenes
 /// of [`scenes`] with the exits either within ~15° of the mirror direction or within ~15° of
@@ -615,6 +735,8 @@ fn benches(c: &mut Criterion) {
     batch_for::<f32>(c, "f32");
     batch_partial_for::<f64>(c, "f64");
     batch_partial_for::<f32>(c, "f32");
+    batch_spectral_for::<f64>(c, "f64");
+    batch_spectral_for::<f32>(c, "f32");
 }
 
 criterion_group!(kernel, benches);
