@@ -365,8 +365,9 @@ fn renderer_layer_allocates_nothing() {
     renderer_layer::<f32>();
 }
 
-/// `Kernel::evaluate_batch` at every level (the lane path on a Gaussian-PSD rough conductor,
-/// one exit at a time on a glass interface in reflection and transmission) and
+/// `Kernel::evaluate_batch` at every level (the lane path on a Gaussian-PSD and a
+/// two-component mixture-PSD rough conductor, one exit at a time on a glass interface in
+/// reflection and transmission) and
 /// `plane_wave_rayleigh_rice`, with the exit frames: 200 exits per call, buffers allocated
 /// before counting.
 fn batches<T: Real>() {
@@ -406,6 +407,15 @@ fn batches<T: Real>() {
         T::lit(1.5),
     )
     .unwrap();
+    let mixture = RoughConductor::new(
+        gmueller::psd::GaussianMixturePsd::new(vec![
+            GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap(),
+            GaussianPsd::<T, 2>::isotropic(T::lit(0.01), T::lit(0.7)).unwrap(),
+        ])
+        .unwrap(),
+        Complex::new(T::lit(0.2), T::lit(3.4)),
+    )
+    .unwrap();
     let mut buf = vec![vec![T::zero(); n]; 11];
     macro_rules! level {
         ($pol:ty, $coh:ty) => {{
@@ -439,6 +449,15 @@ fn batches<T: Real>() {
                     Some(&mut frames),
                 );
                 let lit = out.scattered.s[0].iter().any(|v| *v > T::zero());
+                let m = kernel.evaluate_batch(
+                    black_box(&mixture),
+                    &s.packet,
+                    &s.surface,
+                    None,
+                    lanes,
+                    &mut out,
+                    Some(&mut frames),
+                );
                 let b = kernel.evaluate_batch(
                     black_box(&glass),
                     &s.packet,
@@ -448,7 +467,7 @@ fn batches<T: Real>() {
                     &mut out,
                     Some(&mut frames),
                 );
-                a.is_ok() && b.is_ok() && lit
+                a.is_ok() && m.is_ok() && b.is_ok() && lit
             });
             let name = stringify!($pol, $coh);
             assert!(ok, "{name}: the batches ran and lit something");

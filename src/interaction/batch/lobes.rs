@@ -5,9 +5,10 @@
 //! (reflection or, with `interface = Some(η)`, reflection and transmission at a dielectric
 //! interface) and every PSD and blur: the per-packet work once, then the exits — 4 (`f64`) or
 //! 8 (`f32`) per instruction for the partially coherent (closed-form blur) and incoherent
-//! Gaussian-PSD rough conductor in reflection at every polarization level (`super::partial`),
-//! one at a time otherwise — with no heap allocation. For several wavelengths, call it once per wavelength's packet with
-//! the same [`DirectionsSoa`].
+//! Gaussian- or Gaussian-mixture-PSD rough conductor in reflection at every polarization level
+//! (`super::partial`), one at a time otherwise — with no heap allocation. For several
+//! wavelengths of one path, `Kernel::evaluate_batch_spectral` (`super::spectral`) shares the
+//! exit geometry between them.
 
 use super::{DirectionsSoa, StokesSoa};
 use crate::error::Error;
@@ -81,7 +82,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// `(1, 0, 0, 0)`, `S0` written),
     /// [`super::super::Partial`]`<`[`crate::psd::ClosedForm`]`>` or
     /// [`super::super::Incoherent`] coherence and a
-    /// [`super::super::RoughConductor`] with a [`crate::psd::GaussianPsd`] (Fresnel specular
+    /// [`super::super::RoughConductor`] with a [`crate::psd::GaussianPsd`] or a
+    /// [`crate::psd::GaussianMixturePsd`] of at most 8 components (Fresnel specular
     /// reflection and Rayleigh–Rice scattering, `Complex` index), the exits run through the
     /// SIMD stages of `interaction::batch::stages`, 4 (`f64`) or 8 (`f32`) per instruction
     /// under AVX2 + FMA (pulp's run-time detection; elsewhere a scalar instantiation of the
@@ -216,7 +218,7 @@ mod tests {
         Full, Incoherent, Intensity, OneShape, Partial, PlaneWave, RoughConductor, RoughDielectric,
     };
     use crate::packet::CoherenceShape;
-    use crate::psd::GaussianPsd;
+    use crate::psd::{GaussianMixturePsd, GaussianPsd};
     use crate::stokes::Stokes;
     use num_complex::Complex;
 
@@ -380,7 +382,10 @@ mod tests {
         interface.is_none()
             && matches!(Pol::LEVEL, L::Full | L::OneShape | L::Intensity)
             && (coh.is::<Partial>() || coh.is::<Incoherent>())
-            && any.is::<RoughConductor<T, GaussianPsd<T, 2>>>()
+            && (any.is::<RoughConductor<T, GaussianPsd<T, 2>>>()
+                || any
+                    .downcast_ref::<RoughConductor<T, GaussianMixturePsd<T, 2>>>()
+                    .is_some_and(|m| m.psd.components().len() <= 8))
     }
 
     macro_rules! every_level {
@@ -473,6 +478,37 @@ mod tests {
             .unwrap();
             let lit = every_level!(f32, gold32, None, two, 1e-6);
             assert!(lit > 60, "only {lit} lit lobes checked (f32)");
+        }
+    }
+
+    /// A rough conductor with a three-component Gaussian-mixture PSD (the lane path at the
+    /// `Partial` and `Incoherent` levels) and with a nine-component one (one at a time).
+    #[test]
+    fn mixture_batch_equals_one_at_a_time_at_every_level() {
+        fn mixture<T: Real>(m: usize) -> RoughConductor<T, GaussianMixturePsd<T, 2>> {
+            let comps = (0..m)
+                .map(|j| {
+                    let f = j as f64;
+                    GaussianPsd::<T, 2>::isotropic(T::lit(0.02 / (1.0 + f)), T::lit(0.6 + 0.8 * f))
+                        .unwrap()
+                })
+                .collect();
+            RoughConductor::new(
+                GaussianMixturePsd::new(comps).unwrap(),
+                Complex::new(T::lit(0.2), T::lit(3.4)),
+            )
+            .unwrap()
+        }
+        for two in [false, true] {
+            for m in [3, 9] {
+                let lit = every_level!(f64, mixture::<f64>(m), None, two, 1e-14);
+                assert!(lit > 100, "{m} components: only {lit} lit lobes checked");
+                let lit = every_level!(f32, mixture::<f32>(m), None, two, 1e-6);
+                assert!(
+                    lit > 60,
+                    "{m} components: only {lit} lit lobes checked (f32)"
+                );
+            }
         }
     }
 

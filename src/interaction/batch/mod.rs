@@ -12,9 +12,11 @@
 //! Lay a batch out with [`crate::mueller::batch::padded_stride`].
 //!
 //! [`Kernel::evaluate_batch`] is the batch form of the partially coherent kernel at every level
-//! (both lobes and the exit frames, into [`LobesSoa`] and [`ExitFramesSoa`]); for `Full` and
-//! `OneShape` · `Partial` on a Gaussian-PSD [`super::RoughConductor`] in reflection it runs the
-//! same stages in lanes (`partial.rs`), elsewhere the per-direction kernel per exit.
+//! (both lobes and the exit frames, into [`LobesSoa`] and [`ExitFramesSoa`]), and
+//! [`Kernel::evaluate_batch_spectral`] its form for several wavelengths of one path; at every
+//! polarization level with `Partial` or `Incoherent` coherence, on a [`super::RoughConductor`]
+//! with a Gaussian or Gaussian-mixture (≤ 8 components) PSD in reflection, they run the same
+//! stages in lanes (`partial.rs`), elsewhere the per-direction kernel per exit.
 
 use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};

@@ -1,4 +1,6 @@
-//! The partially coherent lobe batch in lanes: `Kernel::evaluate_batch` for a Gaussian PSD
+//! The partially coherent lobe batch in lanes: `Kernel::evaluate_batch` (and
+//! `evaluate_batch_spectral`, several wavelengths per pass over the exits) for a Gaussian PSD,
+//! or a mixture of at most 8 Gaussians (`ln Σⱼ Kⱼ` per channel by `channels::mixture_log`),
 //! blurred in closed form ([`Partial`]`<`[`ClosedForm`]`>`) or in the incoherent limit
 //! ([`Incoherent`]), [`FresnelReflection`] specular
 //! reflection and [`RayleighRice`] scattering, in reflection, at the [`Full`], [`OneShape`] and
@@ -44,7 +46,7 @@ use crate::interaction::{
     RoughConductor, RoughSurface,
 };
 use crate::packet::WavePacket;
-use crate::psd::{ClosedForm, GaussianPsd, Psd};
+use crate::psd::{ClosedForm, GaussianMixturePsd, GaussianPsd, Psd};
 use crate::real::Real;
 
 /// One exit evaluated by the per-direction kernel: the specular and scattered Stokes vectors
@@ -115,6 +117,7 @@ fn lobe_lanes<S: Simd, F: Real>(s: S, p: &LobePrep<F>, e: &ExitLanes<S, F>) -> L
     let v = mul(s, kk, add(s, c(inc.cos_i), cos_o));
     let ln_alpha = F::vneg_mul_add(s, mul(s, v, v), c(p.variance), c(F::zero()));
     let lg = stages::channels::log_gaussian::<S, F>;
+    let (ml, nc) = (stages::channels::mixture_log::<S, F>, p.components);
     let ((v_spec, m_spec), (v_scat, m_scat)) = if p.three {
         let (sx, sy, sh) = (
             lg(s, &p.spec[0], h0, h1),
@@ -122,9 +125,9 @@ fn lobe_lanes<S: Simd, F: Real>(s: S, p: &LobePrep<F>, e: &ExitLanes<S, F>) -> L
             lg(s, &p.spec[2], h0, h1),
         );
         let (dx, dy, dh) = (
-            lg(s, &p.scat[0], h0, h1),
-            lg(s, &p.scat[1], h0, h1),
-            lg(s, &p.scat[2], h0, h1),
+            ml(s, &p.scat[0][..nc], h0, h1),
+            ml(s, &p.scat[1][..nc], h0, h1),
+            ml(s, &p.scat[2][..nc], h0, h1),
         );
         (
             stages::channels::channel_mix::<S, F>(s, p, sx, sy, sh),
@@ -135,7 +138,7 @@ fn lobe_lanes<S: Simd, F: Real>(s: S, p: &LobePrep<F>, e: &ExitLanes<S, F>) -> L
         let tv = [c(t[0]), c(t[1]), c(t[2]), c(t[3])];
         (
             (tv, lg(s, &p.spec[2], h0, h1)),
-            (tv, lg(s, &p.scat[2], h0, h1)),
+            (tv, ml(s, &p.scat[2][..nc], h0, h1)),
         )
     };
     let raw_scat = stages::stokes::assemble_vector::<S, F>(
@@ -347,18 +350,40 @@ where
         return None;
     }
     let any: &dyn Any = material;
-    let m = any.downcast_ref::<RoughConductor<T, GaussianPsd<T, 2>>>()?;
+    // A Gaussian PSD, or a mixture of at most MAX_COMPONENTS Gaussians (LobePrep::new).
+    let (components, variance, integral, specular, scatter) =
+        if let Some(m) = any.downcast_ref::<RoughConductor<T, GaussianPsd<T, 2>>>() {
+            let c = core::slice::from_ref(&m.psd);
+            (
+                c,
+                m.psd.variance(),
+                m.psd.integral(),
+                &m.specular,
+                &m.scatter,
+            )
+        } else {
+            let m = any.downcast_ref::<RoughConductor<T, GaussianMixturePsd<T, 2>>>()?;
+            let c = m.psd.components();
+            (
+                c,
+                m.psd.variance(),
+                m.psd.integral(),
+                &m.specular,
+                &m.scatter,
+            )
+        };
     let prep = LobePrep::new(
         prepared,
-        &m.psd,
-        m.specular.index(),
-        m.scatter.permittivity(),
+        components,
+        variance,
+        specular.index(),
+        scatter.permittivity(),
         packet,
         surface,
         full,
     )?;
     let prep = if incoherent {
-        prep.incoherent(&m.psd)?
+        prep.incoherent(integral)?
     } else {
         prep
     };
@@ -467,8 +492,17 @@ mod tests {
         let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
         let kernel = Kernel::<Full, Partial>::default();
         let prepared = kernel.prepare(&packet, &surface).unwrap();
-        let prep = LobePrep::new(&prepared, &psd, eta, eta * eta, &packet, &surface, true)
-            .expect("the lane constants");
+        let prep = LobePrep::new(
+            &prepared,
+            core::slice::from_ref(&psd),
+            psd.variance(),
+            eta,
+            eta * eta,
+            &packet,
+            &surface,
+            true,
+        )
+        .expect("the lane constants");
         assert!(prep.three);
         let n = 64;
         let (mut x, mut y, mut z) = (vec![], vec![], vec![]);
@@ -563,6 +597,16 @@ mod tests {
         assert!(!taken!(Intensity, PlaneWave, &gold));
         assert!(!taken!(Full, PlaneWave, &gold));
         assert!(!taken!(Full, Partial, &glass));
+        let mixture = |m: usize| {
+            let c = (0..m)
+                .map(|j| GaussianPsd::<f64, 2>::isotropic(0.01, 1.0 + j as f64).unwrap())
+                .collect();
+            RoughConductor::new(GaussianMixturePsd::new(c).unwrap(), Complex::new(0.2, 3.4))
+                .unwrap()
+        };
+        assert!(taken!(Full, Partial, &mixture(1)));
+        assert!(taken!(OneShape, Incoherent, &mixture(8)));
+        assert!(!taken!(Full, Partial, &mixture(9)));
     }
 
     #[test]

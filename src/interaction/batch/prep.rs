@@ -228,6 +228,10 @@ impl<T: Real> LogGaussian<T> {
     }
 }
 
+/// At most this many Gaussian components of a mixture PSD run in lanes (a larger mixture goes
+/// exit by exit).
+pub(crate) const MAX_COMPONENTS: usize = 8;
+
 /// The per-packet constants of the partially coherent lobe batch
 /// ([`super::partial`]): a Gaussian PSD blurred in closed form, Fresnel specular
 /// reflection and Rayleigh–Rice scattering, in reflection, at the `Full` or `OneShape` level.
@@ -236,9 +240,12 @@ pub(crate) struct LobePrep<T: Real> {
     pub(crate) inc: Incidence<T>,
     /// The `Full` level with two shapes: three channels mixed per exit (else `Ξ_½` only).
     pub(crate) three: bool,
-    /// `ln K^spec_α` and `ln K_α` for `α = x, y, ½` (only `½` when not `three`), `ln 2π` in `c`.
+    /// `ln K^spec_α` and `ln K_α` for `α = x, y, ½` (only `½` when not `three`), `ln 2π` in `c`;
+    /// `ln K_α` per PSD component (`scat[α][j]`, `j < components`: `K_α = Σⱼ K_αj`).
     pub(crate) spec: [LogGaussian<T>; 3],
-    pub(crate) scat: [LogGaussian<T>; 3],
+    pub(crate) scat: [[LogGaussian<T>; MAX_COMPONENTS]; 3],
+    /// The PSD's Gaussian components (1 for a `GaussianPsd`).
+    pub(crate) components: usize,
     /// The channel mix's constants (`PreparedPacket::channel_mix`).
     pub(crate) ln_sx: T,
     pub(crate) ln_sy: T,
@@ -275,26 +282,39 @@ impl<T: Real> core::ops::Deref for LobePrep<T> {
 }
 
 impl<T: Real> LobePrep<T> {
-    /// The constants from the scalar kernel's prepared packet; `None` where the lanes would not
-    /// reproduce the scalar kernel (a section that is not positive definite, a Cholesky factor
+    /// The constants from the scalar kernel's prepared packet, for a PSD of Gaussian components
+    /// `psd` (one for a `GaussianPsd`, those of a `GaussianMixturePsd`) and total variance
+    /// `variance`; `None` where the lanes would not reproduce the scalar kernel (no component or
+    /// more than [`MAX_COMPONENTS`], a section that is not positive definite, a Cholesky factor
     /// of a sum that fails, an index outside the plain `hypot` range, a non-finite constant).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the prepared packet, the PSD's components and variance, the two indices, the packet, the surface and the level"
+    )]
     pub(crate) fn new<Pol, Coh>(
         prepared: &crate::interaction::PreparedPacket<T, Pol, Coh>,
-        psd: &GaussianPsd<T, 2>,
+        psd: &[GaussianPsd<T, 2>],
+        variance: T,
         fresnel_eta: Complex<T>,
         epsilon: Complex<T>,
         packet: &WavePacket<T>,
         surface: &Frame<T>,
         full: bool,
     ) -> Option<Self> {
+        if psd.is_empty() || psd.len() > MAX_COMPONENTS {
+            return None;
+        }
         let inc = Incidence::new(epsilon, packet, surface).ok()?;
         let three = full && !prepared.single_shape;
         let ln2pi = crate::interaction::coherence::ln_two_pi::<T>();
         let zero = Vector2::zeros();
         let channel = |xi: &crate::gaussian::Gaussian<T, 2>| -> Option<_> {
             let spec = LogGaussian::new(ln2pi - T::lit(0.5) * xi.log_det(), xi.cholesky_factor());
-            let l = crate::gaussian::cholesky_of_sum(psd.spectral_shape(), xi)?;
-            let scat = LogGaussian::new(ln2pi + psd.log_normalized_blur(xi, &zero), &l);
+            let mut scat = [spec; MAX_COMPONENTS];
+            for (out, c) in scat.iter_mut().zip(psd) {
+                let l = crate::gaussian::cholesky_of_sum(c.spectral_shape(), xi)?;
+                *out = LogGaussian::new(ln2pi + c.log_normalized_blur(xi, &zero), &l);
+            }
             Some((spec, scat))
         };
         let half = channel(prepared.sections[2].as_ref()?)?;
@@ -315,6 +335,7 @@ impl<T: Real> LobePrep<T> {
             three,
             spec: [x.0, y.0, half.0],
             scat: [x.1, y.1, half.1],
+            components: psd.len(),
             ln_sx: prepared.ln_sx,
             ln_sy: prepared.ln_sy,
             ln_c: prepared.ln_c,
@@ -322,7 +343,7 @@ impl<T: Real> LobePrep<T> {
             phase: prepared.phase,
             t: prepared.t,
             t_stokes: prepared.t_stokes,
-            variance: psd.variance(),
+            variance,
             ln_spec,
             ln_scat,
             ln_dark: T::lit(crate::interaction::coherence::ln_smallest_subnormal::<T>()),
@@ -336,7 +357,11 @@ impl<T: Real> LobePrep<T> {
             intensity: false,
             inc,
         };
-        let finite = out.spec.iter().chain(&out.scat).all(LogGaussian::is_finite)
+        let finite = out.spec.iter().all(LogGaussian::is_finite)
+            && out
+                .scat
+                .iter()
+                .all(|ch| ch[..out.components].iter().all(LogGaussian::is_finite))
             && ln_spec.is_finite()
             && ln_scat.is_finite()
             && out.fresnel.iter().all(|v| v.is_finite());
@@ -354,17 +379,19 @@ impl<T: Real> LobePrep<T> {
     }
 
     /// The constants for the incoherent limit ([`crate::interaction::Incoherent`]) instead of
-    /// the partially coherent one: the scattered channel weights become
+    /// the partially coherent one, for a PSD of integral `integral` (`∫p`, every component's
+    /// together): one scattered weight per channel,
     /// `ln K_α = ln K^spec_α + ln ∫p − ln 2π` (`|Σ|^{1/2} g^Ξ(h_t) ∫p`), the covariance of the
     /// smooth-surface lobe; `None` where `ln ∫p` is not finite.
-    pub(crate) fn incoherent(mut self, psd: &GaussianPsd<T, 2>) -> Option<Self> {
-        let shift = psd.integral().ln() - crate::interaction::coherence::ln_two_pi::<T>();
+    pub(crate) fn incoherent(mut self, integral: T) -> Option<Self> {
+        let shift = integral.ln() - crate::interaction::coherence::ln_two_pi::<T>();
         for (scat, spec) in self.scat.iter_mut().zip(&self.spec) {
-            *scat = LogGaussian {
+            scat[0] = LogGaussian {
                 c: spec.c + shift,
                 ..*spec
             };
         }
+        self.components = 1;
         shift.is_finite().then_some(self)
     }
 }

@@ -20,7 +20,9 @@ use nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
 use num_complex::Complex;
 use pulp::Simd;
 
-use super::channels::{channel_mix, halves, log_gaussian, mat_vec, onto_cone, scaled};
+use super::channels::{
+    channel_mix, halves, ln_small, log_gaussian, mat_vec, mixture_log, onto_cone, scaled,
+};
 use super::fixture::{PerWidth, chunks, every_width, lanes_of, load, same, scenes};
 use super::specular::fresnel_stokes;
 use crate::interaction::batch::prep::{LobePrep, LogGaussian};
@@ -30,7 +32,7 @@ use crate::interaction::{
 };
 use crate::numerics::principal_sqrt;
 use crate::packet::{CoherenceShape, WavePacket};
-use crate::psd::{ClosedForm, GaussianPsd};
+use crate::psd::{ClosedForm, GaussianMixturePsd, GaussianPsd, Psd};
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -42,6 +44,10 @@ struct Case<F: Real> {
     psd: GaussianPsd<F, 2>,
     /// The Fresnel index `η` (`√ε` of the scene's Rayleigh–Rice permittivity).
     eta: Complex<F>,
+    /// The scene's Rayleigh–Rice permittivity, its packet and surface.
+    epsilon: Complex<F>,
+    packet: WavePacket<F>,
+    surface: crate::frame::Frame<F>,
     geometries: Vec<Geometry<F>>,
 }
 
@@ -75,8 +81,17 @@ fn cases<F: Real>(brightness: f64) -> Vec<Case<F>> {
                 .unwrap();
             let epsilon = sc.scatter.permittivity();
             let eta = principal_sqrt(epsilon);
-            let prep = LobePrep::new(&prepared, &sc.psd, eta, epsilon, &packet, &sc.surface, true)
-                .expect("the lane constants of a fixture scene");
+            let prep = LobePrep::new(
+                &prepared,
+                core::slice::from_ref(&sc.psd),
+                sc.psd.variance(),
+                eta,
+                epsilon,
+                &packet,
+                &sc.surface,
+                true,
+            )
+            .expect("the lane constants of a fixture scene");
             assert!(
                 prep.three,
                 "two shapes at the Full level mix three channels"
@@ -92,6 +107,9 @@ fn cases<F: Real>(brightness: f64) -> Vec<Case<F>> {
                 prep,
                 psd: sc.psd,
                 eta,
+                epsilon,
+                packet,
+                surface: sc.surface,
                 geometries,
             });
         }
@@ -212,7 +230,7 @@ impl<F: Real> PerWidth for LogGaussians<F> {
                         ),
                         (
                             "scat",
-                            &c.prep.scat[ch],
+                            &c.prep.scat[ch][0],
                             LN_2PI + amp.abs() + 0.5 * (lsd.abs() + sum_det.abs()),
                             &|h| {
                                 CoherenceWeights::<F, GaussianPsd<F, 2>>::log_scatter_weight(
@@ -256,6 +274,161 @@ fn log_gaussian_matches_the_scalar_channel_weights() {
     let t = LogGaussians(cases::<f32>(1.0), Worst::default());
     every_width(&t);
     t.1.report("log_gaussian f32");
+}
+
+// ---------------------------------------------------------------------------------------------
+// ln_small and mixture_log (Gaussian-mixture PSDs)
+
+/// `ln_small` against `f64::ln` at 4001 points of `[1, 8]` (ends included), rounded to `F`.
+///
+/// Bound: `4 ε` absolute. After the two Halley steps the iteration error is below `1e-20`
+/// (see `ln_small`); what remains is the last step's rounding: `eʸ` within 2 ulp, so
+/// `f − eʸ` and the correction `2 (f − eʸ)/(f + eʸ)` carry `≈ 2 ε` of `y`, plus the final sum's
+/// `½ ulp(y)` and the rounding of `f` itself (`½ ε` relative, `½ ε` in `ln f`): `3 ε`, with
+/// one `ε` of margin for the correction's own three roundings (each `ε/2` of a term below
+/// `1e-7`).
+struct LnSmall(Worst);
+
+impl PerWidth for LnSmall {
+    fn run<S: Simd>(&self, s: S, what: &str) {
+        fn per<S: Simd, F: Real>(s: S, w: &Worst, what: &str) -> usize {
+            let xs: Vec<F> = (0..=4000)
+                .map(|i| F::lit(1.0 + 7.0 * f64::from(i) / 4000.0))
+                .collect();
+            let mut checked = 0;
+            chunks::<S, F>(xs.len(), |i, len| {
+                let got =
+                    lanes_of::<S, F>(s, ln_small::<S, F>(s, load::<S, F>(s, &xs[i..i + len])));
+                for j in 0..len {
+                    let x = xs[i + j].to_f64();
+                    let err = (got[j].to_f64() - x.ln()).abs();
+                    w.check::<F>(err, 4.0, 1.0, 0.0, || format!("{what}: ln {x}"));
+                    checked += 1;
+                }
+            });
+            checked
+        }
+        let n = per::<S, f64>(s, &self.0, what) + per::<S, f32>(s, &self.0, what);
+        assert_eq!(n, 8002, "{what}: lanes checked");
+    }
+}
+
+#[test]
+fn ln_small_matches_ln_on_one_to_eight() {
+    let t = LnSmall(Worst::default());
+    every_width(&t);
+    t.0.report("ln_small f64 and f32");
+}
+
+/// Three Gaussian components: the fixture's PSD, a narrower-in-space (wider in frequency)
+/// and a longer-correlated one.
+fn mixture_of<F: Real>(psd: &GaussianPsd<F, 2>) -> Vec<GaussianPsd<F, 2>> {
+    vec![
+        *psd,
+        GaussianPsd::<F, 2>::isotropic(F::lit(0.012), F::lit(0.6)).unwrap(),
+        GaussianPsd::<F, 2>::isotropic(F::lit(0.006), F::lit(4.0)).unwrap(),
+    ]
+}
+
+/// `mixture_log` (the components' `LobePrep::scat[α][j]` of a three-component mixture)
+/// against `Partial::log_scatter_weight` of the [`GaussianMixturePsd`], the three channels of
+/// every case, at `h_t` of every exit.
+///
+/// Bound: `6 ε B + 9 ε`, `B = maxⱼ (Pⱼ + Yⱼ² + Zⱼ²)` of the components (as in
+/// [`LogGaussians`]). Each component's logarithm is within `5 ε (Pⱼ + Yⱼ² + Zⱼ²)` of the
+/// scalar's on both sides; a weighted mean of those errors enters the logarithm of the sum. The
+/// lanes then add: `lⱼ − m` (`½ ε` of it, at most `½ ε · |lⱼ − m| e^{−|lⱼ−m|} ≤ ε/5` after
+/// weighting), `exp` (2 ulp: `2 ε`), the sum of three (`1 ε`), `ln_small` (`4 ε`) and
+/// `m + ln f` (`½ ulp` of a result `≤ B`: `½ ε B`); the scalar: its sum and its one
+/// logarithm (`1.5 ε`). `5 ε B + ½ ε B + 8.7 ε`.
+struct MixtureLogs<F: Real>(Vec<Case<F>>, Worst);
+
+impl<F: Real> PerWidth for MixtureLogs<F> {
+    fn run<S: Simd>(&self, s: S, what: &str) {
+        let mut checked = 0;
+        for (ci, c) in self.0.iter().enumerate() {
+            let comps = mixture_of(&c.psd);
+            let mix = GaussianMixturePsd::new(comps.clone()).unwrap();
+            let variance = mix.variance();
+            let prep = LobePrep::new(
+                &c.prepared,
+                &comps,
+                variance,
+                c.eta,
+                c.epsilon,
+                &c.packet,
+                &c.surface,
+                true,
+            )
+            .expect("the lane constants of a mixture");
+            assert_eq!(prep.components, 3);
+            chunks::<S, F>(c.geometries.len(), |i, len| {
+                let h: Vec<Vector2<F>> =
+                    c.geometries[i..i + len].iter().map(Geometry::h_t).collect();
+                let h0 = lanes::<S, F>(s, len, |j| h[j].x);
+                let h1 = lanes::<S, F>(s, len, |j| h[j].y);
+                for ch in 0..3 {
+                    let xi = c.prepared.sections[ch].as_ref();
+                    let got =
+                        lanes_of::<S, F>(s, mixture_log::<S, F>(s, &prep.scat[ch][..3], h0, h1));
+                    for j in 0..len {
+                        let want =
+                            CoherenceWeights::<F, GaussianMixturePsd<F, 2>>::log_scatter_weight(
+                                &Partial::<ClosedForm>::default(),
+                                &mix,
+                                xi,
+                                &h[j],
+                            );
+                        let b = comps
+                            .iter()
+                            .zip(&prep.scat[ch])
+                            .map(|(comp, g)| {
+                                let lsd = comp.spectral_shape().log_det().to_f64();
+                                let amp = comp.log_value(&Vector2::zeros()).to_f64();
+                                let sum = crate::gaussian::cholesky_of_sum(
+                                    comp.spectral_shape(),
+                                    xi.unwrap(),
+                                )
+                                .unwrap();
+                                let sum_det =
+                                    2.0 * (sum[(0, 0)].to_f64().ln() + sum[(1, 1)].to_f64().ln());
+                                let (hx, hy) = (h[j].x.to_f64(), h[j].y.to_f64());
+                                let y0 = hx * g.inv_l00.to_f64();
+                                let l10y0 = g.l10.to_f64() * y0;
+                                let z = (l10y0.abs() + (hy - l10y0).abs()) * g.inv_l11.to_f64();
+                                LN_2PI
+                                    + amp.abs()
+                                    + 0.5 * (lsd.abs() + sum_det.abs())
+                                    + y0 * y0
+                                    + z * z
+                            })
+                            .fold(0.0, f64::max);
+                        let err = diff(got[j], want);
+                        let eps = F::EPSILON.to_f64();
+                        self.1.check::<F>(err, 6.0, b, 9.0 * eps, || {
+                            format!(
+                                "{what}: case {ci}, exit {}, channel {ch}: {:?} vs {want:?}",
+                                i + j,
+                                got[j]
+                            )
+                        });
+                        checked += 1;
+                    }
+                }
+            });
+        }
+        assert!(checked > 1000, "{what}: {checked} lanes");
+    }
+}
+
+#[test]
+fn mixture_log_matches_the_scalar_mixture_weights() {
+    let t = MixtureLogs(cases::<f64>(1.0), Worst::default());
+    every_width(&t);
+    t.1.report("mixture_log f64");
+    let t = MixtureLogs(cases::<f32>(1.0), Worst::default());
+    every_width(&t);
+    t.1.report("mixture_log f32");
 }
 
 // ---------------------------------------------------------------------------------------------
