@@ -639,24 +639,53 @@ mod lane_tests {
         .unwrap()
     }
 
-    fn gold<T: Real>() -> RoughConductor<T, GaussianPsd<T, 2>> {
-        RoughConductor::new(
-            GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(1.5)).unwrap(),
-            Complex::new(T::lit(0.2), T::lit(3.4)),
-        )
-        .unwrap()
+    /// A rough gold surface of the lane path: a Gaussian PSD ([`Gold`]) or a three-component
+    /// mixture ([`GoldMixture`]).
+    trait Surface<T: Real> {
+        type P: Psd<T, 2> + 'static;
+        fn make() -> RoughConductor<T, Self::P>;
+    }
+
+    struct Gold;
+    struct GoldMixture;
+
+    impl<T: Real> Surface<T> for Gold {
+        type P = GaussianPsd<T, 2>;
+        fn make() -> RoughConductor<T, Self::P> {
+            RoughConductor::new(
+                GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(1.5)).unwrap(),
+                Complex::new(T::lit(0.2), T::lit(3.4)),
+            )
+            .unwrap()
+        }
+    }
+
+    impl<T: Real> Surface<T> for GoldMixture {
+        type P = crate::psd::GaussianMixturePsd<T, 2>;
+        fn make() -> RoughConductor<T, Self::P> {
+            let c = |h: f64, l: f64| GaussianPsd::<T, 2>::isotropic(T::lit(h), T::lit(l)).unwrap();
+            RoughConductor::new(
+                crate::psd::GaussianMixturePsd::new(vec![
+                    c(0.02, 1.5),
+                    c(0.012, 0.6),
+                    c(0.006, 4.0),
+                ])
+                .unwrap(),
+                Complex::new(T::lit(0.2), T::lit(3.4)),
+            )
+            .unwrap()
+        }
     }
 
     /// The first `n` exits through `evaluate_batch`: `[specular S0..S3, scattered S0..S3,
     /// frame x, y, z]`, each `n` long.
-    fn batch<
-        T: Real,
-        Pol: PolarizationModel,
-        Coh: CoherenceWeights<T, GaussianPsd<T, 2>> + Default + 'static,
-    >(
+    fn batch<T: Real, Pol: PolarizationModel, Coh, M: Surface<T>>(
         packet: &WavePacket<T>,
         n: usize,
-    ) -> Vec<Vec<T>> {
+    ) -> Vec<Vec<T>>
+    where
+        Coh: CoherenceWeights<T, M::P> + Default + 'static,
+    {
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
         let d = exits::<T>();
         let mut buf = vec![vec![T::lit(-7.0); n]; 11];
@@ -675,7 +704,7 @@ mod lane_tests {
         };
         Kernel::<Pol, Coh>::default()
             .evaluate_batch(
-                &gold::<T>(),
+                &M::make(),
                 packet,
                 &surface,
                 None,
@@ -692,10 +721,10 @@ mod lane_tests {
     /// one vector padded).
     fn prefixes<T: Real, Pol: PolarizationModel>() {
         let p = packet::<T>(1.0);
-        let all = batch::<T, Pol, Partial>(&p, 41);
+        let all = batch::<T, Pol, Partial, Gold>(&p, 41);
         let mut lit = 0;
         for n in 0..=41 {
-            let part = batch::<T, Pol, Partial>(&p, n);
+            let part = batch::<T, Pol, Partial, Gold>(&p, n);
             for (k, (a, b)) in part.iter().zip(&all).enumerate() {
                 for j in 0..n {
                     assert_eq!(
@@ -729,9 +758,9 @@ mod lane_tests {
     /// plus `MIN_POSITIVE` (`L` a lobe's `S0`; the exponent summed before the one exponential
     /// holds `ln S0` of the packet and the weight's logarithm, `ln L` minus `ln S0` and bounded
     /// terms), and valid Stokes vectors.
-    fn scales<T: Real, Pol: PolarizationModel, Coh>(exps: &[f64])
+    fn scales<T: Real, Pol: PolarizationModel, Coh, M: Surface<T>>(exps: &[f64])
     where
-        Coh: CoherenceWeights<T, GaussianPsd<T, 2>> + Default + 'static,
+        Coh: CoherenceWeights<T, M::P> + Default + 'static,
     {
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
         let d = exits::<T>();
@@ -739,11 +768,11 @@ mod lane_tests {
         let mut lit = 0;
         for &e in exps {
             let p = packet::<T>(10f64.powf(e));
-            let got = batch::<T, Pol, Coh>(&p, 41);
+            let got = batch::<T, Pol, Coh, M>(&p, 41);
             for j in 0..41 {
                 let exit = Vector3::new(d[0][j], d[1][j], d[2][j]);
                 let g = Geometry::for_packet(&p, &surface, exit).unwrap();
-                let r = kernel.evaluate(&gold::<T>(), &p, &g);
+                let r = kernel.evaluate(&M::make(), &p, &g);
                 // Every Stokes parameter the level computes (S0 only at the Intensity level).
                 let wants: [Vec<f64>; 2] = match r.stokes() {
                     Some((sp, sc)) => {
@@ -795,17 +824,22 @@ mod lane_tests {
 
     #[test]
     fn the_lane_path_holds_its_bound_at_extreme_scales() {
-        scales::<f64, Full, Partial>(&[-300.0, -150.0, 0.0, 150.0, 300.0]);
-        scales::<f64, OneShape, Partial>(&[-300.0, 0.0, 300.0]);
-        scales::<f32, Full, Partial>(&[-36.0, -20.0, 0.0, 20.0, 36.0]);
-        scales::<f32, OneShape, Partial>(&[-36.0, 0.0, 36.0]);
-        scales::<f64, Full, Incoherent>(&[-300.0, 0.0, 300.0]);
-        scales::<f64, OneShape, Incoherent>(&[-300.0, 0.0, 300.0]);
-        scales::<f32, Full, Incoherent>(&[-36.0, 0.0, 36.0]);
-        scales::<f32, OneShape, Incoherent>(&[-36.0, 0.0, 36.0]);
-        scales::<f64, Intensity, Partial>(&[-300.0, 0.0, 300.0]);
-        scales::<f32, Intensity, Partial>(&[-36.0, 0.0, 36.0]);
-        scales::<f64, Intensity, Incoherent>(&[-300.0, 0.0, 300.0]);
-        scales::<f32, Intensity, Incoherent>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Full, Partial, Gold>(&[-300.0, -150.0, 0.0, 150.0, 300.0]);
+        scales::<f64, OneShape, Partial, Gold>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Full, Partial, Gold>(&[-36.0, -20.0, 0.0, 20.0, 36.0]);
+        scales::<f32, OneShape, Partial, Gold>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Full, Incoherent, Gold>(&[-300.0, 0.0, 300.0]);
+        scales::<f64, OneShape, Incoherent, Gold>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Full, Incoherent, Gold>(&[-36.0, 0.0, 36.0]);
+        scales::<f32, OneShape, Incoherent, Gold>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Intensity, Partial, Gold>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Intensity, Partial, Gold>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, Intensity, Incoherent, Gold>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Intensity, Incoherent, Gold>(&[-36.0, 0.0, 36.0]);
+        // A three-component mixture PSD (per channel ln Σⱼ Kⱼ in the lanes).
+        scales::<f64, Full, Partial, GoldMixture>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Full, Partial, GoldMixture>(&[-36.0, 0.0, 36.0]);
+        scales::<f64, OneShape, Incoherent, GoldMixture>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Intensity, Partial, GoldMixture>(&[-36.0, 0.0, 36.0]);
     }
 }
