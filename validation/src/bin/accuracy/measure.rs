@@ -172,12 +172,17 @@ pub fn all_variants() -> Vec<Variant> {
         }
     }
     // The batch rows (after their per-direction twins, which are measured first on each scene):
-    // `Kernel::evaluate_batch` at Full and OneShape · Partial · exact, and the plane-wave batch
+    // `Kernel::evaluate_batch` at Full, OneShape and Intensity · Partial · exact, Full · Partial
+    // on the K-correlation's mixture fits, Full · Incoherent, and the plane-wave batch
     // `plane_wave_rayleigh_rice` (= Full·PlaneWave), both precisions.
     for prec in [Prec::F64, Prec::F32] {
         for (pol, coh, blur) in [
             (Pol::Full, Coh::Partial, Blur::Exact),
             (Pol::OneShape, Coh::Partial, Blur::Exact),
+            (Pol::Intensity, Coh::Partial, Blur::Exact),
+            (Pol::Full, Coh::Partial, Blur::Mixture(MIXTURES[0])),
+            (Pol::Full, Coh::Partial, Blur::Mixture(MIXTURES[1])),
+            (Pol::Full, Coh::Incoherent, Blur::None),
             (Pol::Full, Coh::PlaneWave, Blur::None),
         ] {
             v.push(Variant {
@@ -419,6 +424,19 @@ fn measure_batch<T: Real>(
         }
         (Coh::Partial, Blur::Exact, Material::Interface(m)) => {
             batch_partial_exact(v.pol, m, s, timing)
+        }
+        (Coh::Partial, Blur::Mixture(n), Material::K { mixtures, .. }) => {
+            let i = MIXTURES.iter().position(|&x| x == n)?;
+            batch_partial_exact(v.pol, &mixtures[i], s, timing)
+        }
+        (Coh::Incoherent, Blur::None, mat) if v.pol == Pol::Full => {
+            let k = Kernel::<Full, gmueller::interaction::Incoherent>::default();
+            match mat {
+                Material::Gauss(m) => run_batch(&k, m, s, timing),
+                Material::K { exact, .. } => run_batch(&k, exact, s, timing),
+                Material::Grating(m) => run_batch(&k, m, s, timing),
+                Material::Interface(m) => run_batch(&k, m, s, timing),
+            }
         }
         _ => return None,
     })
