@@ -291,7 +291,7 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
         // exp(ln_e) · S0 would round exp(ln_e) first, with a subnormal's few digits when the
         // weight is tiny and S0 bright: one exponential of the sum instead.
         let e = (ln_e + self.ln_s0).exp();
-        if e >= T::MIN_POSITIVE && e <= T::MAX {
+        subnormal_onto_cone(if e >= T::MIN_POSITIVE && e <= T::MAX {
             u * e
         } else if u[0] <= T::zero() {
             // No magnitude to fold; a 0 entry stays 0 rather than 0 · ∞ = NaN.
@@ -301,7 +301,7 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
             // than becoming 0 · ∞ = NaN.
             let e = (ln_e + self.ln_s0 + u[0].ln()).exp();
             (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
-        }
+        })
     }
 }
 
@@ -364,6 +364,43 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     }
 }
 
+/// A Stokes vector whose `S0` is subnormal, back inside the cone of valid vectors.
+///
+/// Each entry rounds to the subnormal grid on its own (steps of the smallest subnormal number
+/// `δ = MIN_POSITIVE · ε`), which can leave `S1² + S2² + S3² > S0²` by up to half a step per
+/// entry (f32, measured by `tests/lobe_batch.rs`: `(9, 9, 1, 0) δ`). The entries in steps are
+/// whole numbers (exact), so the test is done on them, and the polarized entries are shrunk
+/// toward 0 by one step at a time until the vector is valid (after four steps, to 0). The change
+/// is below `4 δ` per entry, within the `MIN_POSITIVE` of every documented bound. Unchanged
+/// when `S0` is normal, zero or negative.
+#[inline]
+pub(crate) fn subnormal_onto_cone<T: Real>(v: Vector4<T>) -> Vector4<T> {
+    if !(v[0] > T::zero() && v[0] < T::MIN_POSITIVE) {
+        return v;
+    }
+    let step = T::MIN_POSITIVE * T::EPSILON;
+    let mut n = v / step;
+    for _ in 0..4 {
+        if n[1] * n[1] + n[2] * n[2] + n[3] * n[3] <= n[0] * n[0] {
+            return n * step;
+        }
+        for k in 1..4 {
+            n[k] = if n[k] >= T::one() {
+                n[k] - T::one()
+            } else if n[k] <= -T::one() {
+                n[k] + T::one()
+            } else {
+                T::zero()
+            };
+        }
+    }
+    if n[1] * n[1] + n[2] * n[2] + n[3] * n[3] <= n[0] * n[0] {
+        n * step
+    } else {
+        Vector4::new(v[0], T::zero(), T::zero(), T::zero())
+    }
+}
+
 /// 0 when every entry of `m` is below the smallest normal number (a matrix whose entries are
 /// all subnormal has lost the digits that keep it valid, and 0 is a valid Mueller matrix);
 /// `m` otherwise.
@@ -399,7 +436,40 @@ pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
 
 #[cfg(test)]
 mod tests {
+    /// A subnormal vector that rounding left outside the cone (the f32 case `tests/lobe_batch.rs`
+    /// found, `(9, 9, 1, 0) δ`: 81 + 1 > 81) comes back inside by one step of its polarized
+    /// entries; a valid one, a normal one and a negative `S0` are unchanged.
+    #[test]
+    fn a_subnormal_vector_outside_the_cone_comes_back_inside() {
+        fn run<T: Real>() {
+            let d = T::MIN_POSITIVE * T::EPSILON;
+            let v = Vector4::new(T::lit(9.0), T::lit(9.0), T::lit(1.0), T::zero()) * d;
+            let w = subnormal_onto_cone(v);
+            assert_eq!(
+                w,
+                Vector4::new(T::lit(9.0), T::lit(8.0), T::zero(), T::zero()) * d
+            );
+            let inside = Vector4::new(T::lit(9.0), T::lit(8.0), -T::lit(4.0), T::zero()) * d;
+            assert_eq!(subnormal_onto_cone(inside), inside);
+            let normal = Vector4::new(T::one(), T::one(), T::lit(0.1), T::zero());
+            assert_eq!(subnormal_onto_cone(normal), normal);
+            let neg = Vector4::new(-d, d, d, d);
+            assert_eq!(subnormal_onto_cone(neg), neg);
+            // A polarized part far outside (not from rounding): to 0 after four steps.
+            let far = Vector4::new(T::lit(2.0), T::lit(100.0), T::zero(), T::zero()) * d;
+            assert_eq!(
+                subnormal_onto_cone(far),
+                Vector4::new(T::lit(2.0) * d, T::zero(), T::zero(), T::zero())
+            );
+        }
+        run::<f64>();
+        run::<f32>();
+    }
+
     use nalgebra::{Vector3, Vector4};
+
+    use super::subnormal_onto_cone;
+    use crate::real::Real;
 
     use crate::frame::Frame;
     use crate::interaction::{Full, Kernel, Partial};

@@ -800,11 +800,20 @@ mod lane_tests {
                             "S0 1e{e} exit {j} lobe {lobe} S{k}: batch {b:e}, one at a time {w:e}"
                         );
                     }
-                    if want.len() == 4 {
+                    if want.len() == 4 && v[0].is_infinite() {
+                        // An overflow stays an overflow (the per-direction kernel's too).
+                        assert!(v[0] > 0.0, "exit {j} lobe {lobe}: {v:?}");
+                    } else if want.len() == 4 {
+                        // As ratios to S0: the squares of entries near 1e-300 would underflow.
+                        let (r, one) = if v[0] > 0.0 {
+                            (v.iter().map(|x| x / v[0]).collect::<Vec<_>>(), 1.0)
+                        } else {
+                            (v.clone(), 0.0)
+                        };
                         assert!(
                             v[0] >= 0.0
-                                && v[1] * v[1] + v[2] * v[2] + v[3] * v[3]
-                                    <= v[0] * v[0] * (1.0 + 8.0 * T::EPSILON.to_f64()),
+                                && r[1] * r[1] + r[2] * r[2] + r[3] * r[3]
+                                    <= one * (1.0 + 8.0 * T::EPSILON.to_f64()),
                             "exit {j} lobe {lobe}: {v:?} not a valid Stokes vector"
                         );
                     } else {

@@ -201,7 +201,7 @@ where
     let xi = prepared.sections[2].as_ref();
     let kd = coherence.scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h());
     match prepared.linear_scale(kd, attenuation, g.eta) {
-        Some(e) => u * e,
+        Some(e) => crate::interaction::prepared::subnormal_onto_cone(u * e),
         None => {
             let ld =
                 ln_front + coherence.log_scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h());

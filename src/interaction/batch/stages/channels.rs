@@ -191,7 +191,7 @@ pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4]
 /// `u · e^{ln_e}` with the lanes where the part is dark (`ln_e` below the smallest subnormal
 /// number, or NaN) set to 0, and the mask of the lanes the scalar kernel must redo: not dark
 /// and `e^{ln_e}` outside the normal range (where the scalar kernel folds `|u|` into the
-/// exponent instead).
+/// exponent instead), or a positive `S0` of the result below the smallest normal number.
 #[inline(always)]
 pub(crate) fn scaled<S: Simd, F: Real>(
     s: S,
@@ -204,7 +204,11 @@ pub(crate) fn scaled<S: Simd, F: Real>(
     let lit = F::vle(s, c(p.ln_dark), ln_e);
     let e = vexp::<S, F>(s, ln_e);
     let normal = F::vand(s, F::vle(s, c(F::MIN_POSITIVE), e), F::vle(s, e, c(F::MAX)));
-    let redo = F::vand(s, lit, F::vnot(s, normal));
+    // A positive S0 below the smallest normal number: the scalar kernel moves the subnormal
+    // vector back into the cone (`prepared::subnormal_onto_cone`).
+    let s0 = F::vmul(s, u[0], e);
+    let tiny = F::vand(s, F::vlt(s, zero, s0), F::vlt(s, s0, c(F::MIN_POSITIVE)));
+    let redo = F::vand(s, lit, F::vnot(s, F::vand(s, normal, F::vnot(s, tiny))));
     (
         [
             F::vselect(s, lit, F::vmul(s, u[0], e), zero),

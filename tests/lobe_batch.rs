@@ -1,0 +1,338 @@
+//! Verifies `Kernel::evaluate_batch` on its SIMD lane path (a rough conductor with a Gaussian
+//! or Gaussian-mixture PSD, in reflection, at every polarization level with `Partial` or
+//! `Incoherent` coherence) against the per-direction kernel `Kernel::evaluate`, and
+//! `Kernel::evaluate_batch_spectral` against one `evaluate_batch` per wavelength: proptest over
+//! incidence 0–83°, tilted surfaces, turned packet frames, polarized input, two coherence shapes
+//! of widths 0.3–300 λ (ratio 0.5–2), anisotropic PSDs of 1–4 components, dielectric and
+//! absorbing indices (Im η up to 8), wavelengths 0.3–1 µm and exits near the specular direction
+//! and over the hemisphere (not unit length), f64 and f32.
+//!
+//! Tolerance: the documented bound of the lane path, per Stokes parameter of a lobe of
+//! one-at-a-time `S0 = L`, `|Δ| ≤ 4 ε (4 + |ln L| + 2 |ln S0|) L + MIN_POSITIVE` (`S0` the
+//! packet's); every lobe a valid Stokes vector (`S1² + S2² + S3² ≤ S0² (1 + 8 ε)`, `S0 ≥ 0`);
+//! the spectral batch equal bit for bit.
+
+mod common;
+
+use gmueller::Real;
+use gmueller::frame::Frame;
+use gmueller::gaussian::Gaussian;
+use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa, Wavelength};
+use gmueller::interaction::{
+    CoherenceModel, CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput,
+    OneShape, Partial, PolarizationModel, RoughConductor,
+};
+use gmueller::packet::{CoherenceShape, WavePacket};
+use gmueller::psd::{GaussianMixturePsd, GaussianPsd, Psd};
+use gmueller::stokes::Stokes;
+use nalgebra::{Matrix2, Vector3, Vector4};
+use num_complex::Complex;
+use proptest::prelude::*;
+
+/// One scene, in f64.
+#[derive(Debug, Clone)]
+struct Scene {
+    theta_i: f64,
+    phi_i: f64,
+    normal: Vector3<f64>,
+    psi: f64,
+    stokes: Vector4<f64>,
+    /// Coherence width of the x shape (λ units of length, µm) and the y/x width ratio.
+    width: f64,
+    ratio: f64,
+    eta: Complex<f64>,
+    /// Per component: rms height and correlation covariance.
+    components: Vec<(f64, Matrix2<f64>)>,
+    wavelength: f64,
+    exits: Vec<Vector3<f64>>,
+    /// Which of the six lane levels.
+    level: usize,
+}
+
+/// The scene's material, packet (at `wavelength × stretch`) and surface in `T`.
+fn build<T: Real>(
+    sc: &Scene,
+    stretch: f64,
+) -> (
+    RoughConductor<T, GaussianMixturePsd<T, 2>>,
+    WavePacket<T>,
+    Frame<T>,
+) {
+    let hint = if sc.normal.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let surface = Frame::from_direction_and_x(sc.normal.map(T::lit), hint.map(T::lit)).unwrap();
+    let (t1, t2, n) = (surface.x(), surface.y(), surface.k());
+    let (st, ct) = (T::lit(sc.theta_i.sin()), T::lit(sc.theta_i.cos()));
+    let (sp, cp) = (T::lit(sc.phi_i.sin()), T::lit(sc.phi_i.cos()));
+    let travel = -(t1 * (st * cp) + t2 * (st * sp) + n * ct);
+    let frame = Frame::sp(travel, n).unwrap().rotated(T::lit(sc.psi));
+    let shape = |w: f64| CoherenceShape::isotropic(T::lit(w)).unwrap();
+    // The correlated part (S2, S3) shrunk by halves until the two shapes can carry it (the
+    // Bochner bound |μ|² ≤ √(|Θx||Θy|)/|Θ½|): draws near the bound stay near it.
+    let mut shrink = 1.0;
+    let packet = loop {
+        let s = Vector4::new(
+            sc.stokes[0],
+            sc.stokes[1],
+            sc.stokes[2] * shrink,
+            sc.stokes[3] * shrink,
+        )
+        .map(T::lit);
+        match WavePacket::new(
+            Stokes::new(s[0], s[1], s[2], s[3]).unwrap(),
+            shape(sc.width * stretch),
+            shape(sc.width * sc.ratio * stretch),
+            frame,
+            T::lit(sc.wavelength * stretch),
+        ) {
+            Ok(p) => break p,
+            Err(_) => shrink *= 0.5,
+        }
+    };
+    let comps = sc
+        .components
+        .iter()
+        .map(|(sigma, cov)| {
+            let corr = Gaussian::new(cov.map(T::lit)).unwrap();
+            GaussianPsd::from_autocorrelation(T::lit(sigma * sigma), &corr).unwrap()
+        })
+        .collect();
+    let eta = Complex::new(T::lit(sc.eta.re * stretch.sqrt()), T::lit(sc.eta.im));
+    let material = RoughConductor::new(GaussianMixturePsd::new(comps).unwrap(), eta).unwrap();
+    (material, packet, surface)
+}
+
+type Columns<T> = Vec<Vec<T>>;
+
+fn soa<T>(cols: &mut [Vec<T>]) -> LobesSoa<'_, T> {
+    let [a, b, c, d, e, f, g, h] = cols else {
+        unreachable!()
+    };
+    LobesSoa {
+        specular: StokesSoa { s: [a, b, c, d] },
+        scattered: StokesSoa { s: [e, f, g, h] },
+    }
+}
+
+fn columns<T: Real>(n: usize) -> Columns<T> {
+    vec![vec![T::lit(-7.0); n]; 8]
+}
+
+/// The batch against one exit at a time within the documented bound, valid Stokes vectors,
+/// and the spectral batch of three wavelengths bit for bit.
+fn check<T, Pol, Coh>(sc: &Scene, what: &str)
+where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, GaussianMixturePsd<T, 2>> + Default + 'static,
+{
+    let kernel = Kernel::<Pol, Coh>::default();
+    let (material, packet, surface) = build::<T>(sc, 1.0);
+    let n = sc.exits.len();
+    let d: [Vec<T>; 3] = core::array::from_fn(|k| sc.exits.iter().map(|e| T::lit(e[k])).collect());
+    let dirs = DirectionsSoa {
+        x: &d[0],
+        y: &d[1],
+        z: &d[2],
+    };
+    let mut cols = columns::<T>(n);
+    kernel
+        .evaluate_batch(
+            &material,
+            &packet,
+            &surface,
+            None,
+            dirs,
+            &mut soa(&mut cols),
+            None,
+        )
+        .unwrap();
+    let eps = T::EPSILON.to_f64();
+    let ln_s0 = packet.stokes().s0().to_f64().ln().abs();
+    for (i, e) in d[0].iter().zip(&d[1]).zip(&d[2]).enumerate() {
+        let exit = Vector3::new(*e.0.0, *e.0.1, *e.1);
+        let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+        let r = kernel.evaluate(&material, &packet, &g);
+        let wants: [Vec<f64>; 2] = match r.stokes() {
+            Some((a, b)) => [a, b].map(|v| v.vector().iter().map(|w| w.to_f64()).collect()),
+            None => [
+                vec![r.specular_intensity().to_f64()],
+                vec![r.scattered_intensity().to_f64()],
+            ],
+        };
+        for (lobe, want) in wants.iter().enumerate() {
+            let l = want[0];
+            let ln_l = if l > 0.0 { l.ln().abs() } else { 0.0 };
+            let bound = 4.0 * eps * (4.0 + ln_l + 2.0 * ln_s0) * l + T::MIN_POSITIVE.to_f64();
+            let got: Vec<f64> = (0..4).map(|k| cols[4 * lobe + k][i].to_f64()).collect();
+            for (k, (&b, &w)) in got.iter().zip(want).enumerate() {
+                assert!(
+                    (b - w).abs() <= bound,
+                    "{what}: exit {i} {exit:?} lobe {lobe} S{k}: batch {b:e}, one at a time {w:e}, \
+                     bound {bound:e}"
+                );
+            }
+            if want.len() == 4 {
+                // As ratios to S0: the squares of tiny entries would underflow.
+                let r = |k: usize| {
+                    if got[0] > 0.0 {
+                        got[k] / got[0]
+                    } else {
+                        got[k]
+                    }
+                };
+                let pol = r(1) * r(1) + r(2) * r(2) + r(3) * r(3);
+                let one = if got[0] > 0.0 { 1.0 } else { 0.0 };
+                assert!(
+                    got[0] >= 0.0 && pol <= one * (1.0 + 8.0 * eps),
+                    "{what}: exit {i} lobe {lobe}: {got:?} is not a valid Stokes vector (one at a time: {want:?})"
+                );
+            }
+        }
+    }
+    // Three wavelengths of the same path through the spectral batch, against one call each.
+    let built: Vec<_> = [1.0, 1.1, 1.25]
+        .iter()
+        .map(|&f| build::<T>(sc, f))
+        .collect();
+    let ws: Vec<_> = built
+        .iter()
+        .map(|(m, p, _)| Wavelength {
+            material: m,
+            packet: p,
+            interface: None,
+        })
+        .collect();
+    let mut spectral: Vec<Columns<T>> = (0..3).map(|_| columns::<T>(n)).collect();
+    let mut frames = vec![vec![T::zero(); n]; 3];
+    {
+        let mut outs: Vec<_> = spectral.iter_mut().map(|c| soa(c)).collect();
+        let [fx, fy, fz] = &mut frames[..] else {
+            unreachable!()
+        };
+        let mut f = ExitFramesSoa { s: [fx, fy, fz] };
+        kernel
+            .evaluate_batch_spectral(&ws, &surface, dirs, &mut outs, Some(&mut f))
+            .unwrap();
+    }
+    for (w, (m, p, _)) in built.iter().enumerate() {
+        let mut one = columns::<T>(n);
+        kernel
+            .evaluate_batch(m, p, &surface, None, dirs, &mut soa(&mut one), None)
+            .unwrap();
+        for (k, (a, b)) in spectral[w].iter().zip(&one).enumerate() {
+            for i in 0..n {
+                assert_eq!(
+                    a[i].to_f64().to_bits(),
+                    b[i].to_f64().to_bits(),
+                    "{what}: wavelength {w} column {k} exit {i}"
+                );
+            }
+        }
+    }
+    for (i, exit) in sc.exits.iter().enumerate() {
+        let g = Geometry::for_packet(&packet, &surface, exit.map(T::lit)).unwrap();
+        let s = g.exit_sp().x();
+        for k in 0..3 {
+            assert_eq!(frames[k][i], s[k], "{what}: frame of exit {i}");
+        }
+    }
+}
+
+/// [`check`] at the scene's level.
+fn check_level<T: Real>(sc: &Scene, what: &str) {
+    match sc.level {
+        0 => check::<T, Full, Partial>(sc, what),
+        1 => check::<T, Full, Incoherent>(sc, what),
+        2 => check::<T, OneShape, Partial>(sc, what),
+        3 => check::<T, OneShape, Incoherent>(sc, what),
+        4 => check::<T, Intensity, Partial>(sc, what),
+        _ => check::<T, Intensity, Incoherent>(sc, what),
+    }
+}
+
+/// A small LCG for the exits.
+struct Lcg(u64);
+impl Lcg {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// `n` exits: half within ~10° of the specular direction, half over the hemisphere
+/// (`cos θ_o ≥ 0.002`), each scaled by a factor in [0.1, 10].
+fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
+    let hint = if sc.normal.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let f = Frame::from_direction_and_x(sc.normal, hint).unwrap();
+    let (t1, t2, nn) = (f.x(), f.y(), f.k());
+    let mut rng = Lcg(seed);
+    (0..n)
+        .map(|i| {
+            let (cos_o, phi) = if i % 2 == 0 {
+                let to = (sc.theta_i + (rng.uniform() - 0.5) * 0.35).abs().min(1.55);
+                (to.cos(), sc.phi_i + (rng.uniform() - 0.5) * 0.35)
+            } else {
+                (
+                    0.002 + 0.998 * rng.uniform(),
+                    rng.uniform() * std::f64::consts::TAU,
+                )
+            };
+            let sin_o = (1.0 - cos_o * cos_o).sqrt();
+            let scale = 0.1 * 100f64.powf(rng.uniform());
+            (t1 * (sin_o * phi.cos()) + t2 * (sin_o * phi.sin()) + nn * cos_o) * scale
+        })
+        .collect()
+}
+
+prop_compose! {
+    fn scene_strategy()(
+        theta_i in 0.0..83f64.to_radians(),
+        phi_i in common::angle(),
+        normal in common::unit_vector3(),
+        psi in common::angle(),
+        stokes in common::stokes_vector(),
+        log_width in -0.5..2.5f64,
+        ratio in 0.5..2.0f64,
+        eta in prop_oneof![
+            (1.0..3.0f64).prop_map(|n| Complex::new(n, 0.0)),
+            (0.05..3.0f64, 0.0..8.0f64).prop_map(|(n, k)| Complex::new(n, k)),
+        ],
+        components in prop::collection::vec((0.001..0.05f64, common::spd2()), 1..=4),
+        wavelength in 0.3..1.0f64,
+        len in 0..4usize,
+        seed in any::<u64>(),
+        level in 0..6usize,
+    ) -> Scene {
+        let mut sc = Scene {
+            theta_i, phi_i, normal, psi, stokes, width: 10f64.powf(log_width), ratio, eta,
+            components, wavelength, exits: Vec::new(), level,
+        };
+        sc.exits = exit_set(&sc, [1, 5, 17, 40][len], seed);
+        sc
+    }
+}
+
+proptest! {
+    #![proptest_config(common::proptest_config(64))]
+
+    #[test]
+    fn lane_batch_matches_the_per_direction_kernel_f64(sc in scene_strategy()) {
+        check_level::<f64>(&sc, "f64");
+    }
+
+    #[test]
+    fn lane_batch_matches_the_per_direction_kernel_f32(sc in scene_strategy()) {
+        check_level::<f32>(&sc, "f32");
+    }
+}
