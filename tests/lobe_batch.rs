@@ -23,7 +23,7 @@ use gmueller::interaction::{
     OneShape, Partial, PolarizationModel, RoughConductor,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{GaussianMixturePsd, GaussianPsd, Psd};
+use gmueller::psd::{GaussianMixturePsd, GaussianPsd};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector3, Vector4};
 use num_complex::Complex;
