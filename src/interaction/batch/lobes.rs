@@ -93,9 +93,14 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// kernel; the exponentials (a polynomial), the sums of the exponents and the matrix
     /// products (fused multiply–adds, another order) differ. Against the per-direction kernel,
     /// per Stokes parameter of a lobe of `S0 = L`:
-    /// `|Δ| ≤ 4 ε (4 + |ln L| + 2 |ln S0|) L + MIN_POSITIVE` with `S0` the packet's (every
-    /// exponent is summed before one exponential, so the rounding of the sum, relative to its
-    /// terms, becomes a relative error of the result: `tests` of `batch::lobes`). The NEON and AVX-512
+    /// `|Δ| ≤ 4 ε (4 + |ln L| + 2 |ln S0|) L̂ + MIN_POSITIVE` with `S` the packet's Stokes
+    /// vector and `L̂ = max(L, M₀₀ Σⱼ |Sⱼ|)`, `M₀₀` the lobe's in BSDF form
+    /// ([`Kernel::evaluate_mueller`]): every exponent is summed before one exponential, so the
+    /// rounding of the sum, relative to its terms, becomes a relative error of the result
+    /// (`tests` of `batch::lobes`); and the output is a sum of products `M_kj Sⱼ` (`|M_kj| ≤
+    /// M₀₀`), whose rounding is relative to `L̂` — far above `L` where the scatterer's
+    /// diattenuation cancels the packet's polarization (`tests/lobe_batch.rs`: a bound in `L`
+    /// alone failed there by 13× in f64). For unpolarized light `L̂ = L`. The NEON and AVX-512
     /// back-ends of pulp have never run on real hardware here (AVX-512 is off in this crate;
     /// the scalar back-ends of 1–8 lanes and AVX2 are tested).
     ///
@@ -754,7 +759,8 @@ mod lane_tests {
     }
 
     /// At packet `S0` from the smallest normal number to near the largest, the lane path
-    /// against `Kernel::evaluate` within its documented bound `4 ε (4 + |ln L| + 2 |ln S0|) L`
+    /// against `Kernel::evaluate` within `4 ε (4 + |ln L| + 2 |ln S0|) L` (the documented bound
+    /// with `L ≤ L̂` in place of `L̂`: stricter, no cancelling geometry among these exits)
     /// plus `MIN_POSITIVE` (`L` a lobe's `S0`; the exponent summed before the one exponential
     /// holds `ln S0` of the packet and the weight's logarithm, `ln L` minus `ln S0` and bounded
     /// terms), and valid Stokes vectors.

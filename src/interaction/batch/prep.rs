@@ -199,12 +199,14 @@ impl<T: Real> PlaneWavePrep<T> {
 }
 
 /// `c − ½ |L⁻¹ h|²`: the logarithm of a Gaussian channel weight in `h_t`, with `L` lower
-/// triangular (`l00`, `l10`, `l11`) and the reciprocals of its diagonal.
+/// triangular (`l00`, `l10`, `l11`).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct LogGaussian<T: Real> {
     pub(crate) c: T,
+    pub(crate) l00: T,
     pub(crate) l10: T,
-    pub(crate) inv_l00: T,
+    pub(crate) l11: T,
+    /// `1/ℓ₁₁`.
     pub(crate) inv_l11: T,
 }
 
@@ -213,8 +215,9 @@ impl<T: Real> LogGaussian<T> {
     fn new(c: T, l: &nalgebra::Matrix2<T>) -> Self {
         Self {
             c,
+            l00: l[(0, 0)],
             l10: l[(1, 0)],
-            inv_l00: l[(0, 0)].recip(),
+            l11: l[(1, 1)],
             inv_l11: l[(1, 1)].recip(),
         }
     }
@@ -223,8 +226,10 @@ impl<T: Real> LogGaussian<T> {
     fn is_finite(&self) -> bool {
         self.c.is_finite()
             && self.l10.is_finite()
-            && self.inv_l00.is_finite()
-            && self.inv_l11.is_finite()
+            && self.l00.is_finite()
+            && self.l11.is_finite()
+            && self.l00.recip().is_finite()
+            && self.l11.recip().is_finite()
     }
 }
 

@@ -187,12 +187,12 @@ const LN_2PI: f64 = 1.8378770664093453;
 /// (scattered) or `ln 2π`, `½ ln|Ξ|` (specular), of absolute sum `P`. At most three roundings
 /// on the scalar side, two in `c` and the final fused multiply–add on the lane side, each of
 /// `ε/2` of a partial sum no larger than `P + ½|L⁻¹h|²`: `3 ε (P + ½ m)`. The Mahalanobis
-/// term: the lanes multiply by the rounded reciprocals of `L`'s diagonal (`y₀` within 1 ε,
-/// the scalar's quotient within ½ ε) and fuse `h₁ − ℓ₁₀ y₀`; with `Y = |y₀|` and
-/// `Z = (|ℓ₁₀ y₀| + |h₁ − ℓ₁₀ y₀|)/ℓ₁₁ ≥ |y₁|` (the cancellation in `h₁ − ℓ₁₀ y₀` makes the
-/// error of `y₁` relative to `Z`, not to `|y₁|`), `|Δy₀| ≤ 1.5 ε Y`, `|Δy₁| ≤ 2 ε Z`, and
-/// `|Δm| ≤ 2 Y |Δy₀| + 2 Z |Δy₁| + 1.5 ε m ≤ 5.5 ε (Y² + Z²)`, of which half enters. With
-/// `m ≤ Y² + Z²`: `3 ε P + 4.25 ε (Y² + Z²) ≤ 5 ε (P + Y² + Z²)`.
+/// term (derived for the earlier form with both reciprocals and a fused `h₁ − ℓ₁₀ y₀`, and kept:
+/// the present form, `y₀` and `h₁ − ℓ₁₀ y₀` bit for bit the scalar's, only lowers the error):
+/// with `Y = |y₀|` and `Z = (|ℓ₁₀ y₀| + |h₁ − ℓ₁₀ y₀|)/ℓ₁₁ ≥ |y₁|` (the cancellation in
+/// `h₁ − ℓ₁₀ y₀` makes the error of `y₁` relative to `Z`, not to `|y₁|`), `|Δy₀| ≤ 1.5 ε Y`,
+/// `|Δy₁| ≤ 2 ε Z`, and `|Δm| ≤ 2 Y |Δy₀| + 2 Z |Δy₁| + 1.5 ε m ≤ 5.5 ε (Y² + Z²)`, of which
+/// half enters. With `m ≤ Y² + Z²`: `3 ε P + 4.25 ε (Y² + Z²) ≤ 5 ε (P + Y² + Z²)`.
 struct LogGaussians<F: Real>(Vec<Case<F>>, Worst);
 
 /// One weight of [`LogGaussians`]: its name, its lane constants, the absolute sum `P` of the
@@ -247,9 +247,9 @@ impl<F: Real> PerWidth for LogGaussians<F> {
                         for j in 0..len {
                             let want = scalar(&h[j]);
                             let (hx, hy) = (h[j].x.to_f64(), h[j].y.to_f64());
-                            let y0 = hx * g.inv_l00.to_f64();
+                            let y0 = hx * g.l00.to_f64().recip();
                             let l10y0 = g.l10.to_f64() * y0;
-                            let z = (l10y0.abs() + (hy - l10y0).abs()) * g.inv_l11.to_f64();
+                            let z = (l10y0.abs() + (hy - l10y0).abs()) * g.l11.to_f64().recip();
                             let err = diff(got[j], want);
                             self.1
                                 .check::<F>(err, 5.0, parts + y0 * y0 + z * z, 0.0, || {
@@ -393,9 +393,9 @@ impl<F: Real> PerWidth for MixtureLogs<F> {
                                 let sum_det =
                                     2.0 * (sum[(0, 0)].to_f64().ln() + sum[(1, 1)].to_f64().ln());
                                 let (hx, hy) = (h[j].x.to_f64(), h[j].y.to_f64());
-                                let y0 = hx * g.inv_l00.to_f64();
+                                let y0 = hx * g.l00.to_f64().recip();
                                 let l10y0 = g.l10.to_f64() * y0;
-                                let z = (l10y0.abs() + (hy - l10y0).abs()) * g.inv_l11.to_f64();
+                                let z = (l10y0.abs() + (hy - l10y0).abs()) * g.l11.to_f64().recip();
                                 LN_2PI
                                     + amp.abs()
                                     + 0.5 * (lsd.abs() + sum_det.abs())
