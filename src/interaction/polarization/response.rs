@@ -159,11 +159,18 @@ impl<T: Real> KernelOutput<T> for Response<T> {
     fn into_level_response(self) -> LevelResponse<T> {
         LevelResponse::Stokes(self)
     }
+    /// Each lobe times `factor`, a result whose `S0` falls into the subnormal range moved back
+    /// into the cone (`prepared::subnormal_onto_cone`: the entries round on their own there).
     #[inline]
     fn scaled(&self, factor: T) -> Self {
+        let scale = |s: &Stokes<T>| {
+            Stokes(crate::interaction::prepared::subnormal_onto_cone(
+                s.0 * factor,
+            ))
+        };
         Self {
-            specular: Stokes(self.specular.0 * factor),
-            scattered: Stokes(self.scattered.0 * factor),
+            specular: scale(&self.specular),
+            scattered: scale(&self.scattered),
             attenuation: self.attenuation,
             side: self.side,
         }
@@ -489,6 +496,38 @@ impl<T: Real> MuellerResponse<T, T> {
             scattered: self.scattered * s0,
             attenuation: self.attenuation,
             side: self.side,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector4;
+
+    /// A response scaled into the subnormal range stays a valid Stokes vector: the f32 vector
+    /// `(1, 0.998, 0.06, 0)` (valid) times `k δ` rounds entry by entry, e.g. to `(9, 9, 1, 0) δ`.
+    #[test]
+    fn a_response_scaled_to_subnormal_stays_valid() {
+        let v = Vector4::new(1.0_f32, 0.998, 0.06, 0.0);
+        assert!(v[1] * v[1] + v[2] * v[2] <= v[0] * v[0]);
+        let r = Response {
+            specular: Stokes(v),
+            scattered: Stokes(v),
+            attenuation: 1.0,
+            side: Side::Reflection,
+        };
+        let d = f32::MIN_POSITIVE * f32::EPSILON;
+        for k in 1..40 {
+            let s = KernelOutput::scaled(&r, d * k as f32 * 1.02);
+            for st in [s.specular.0, s.scattered.0] {
+                // In units of δ (exact), where the squares do not underflow.
+                let n = st / d;
+                assert!(
+                    n[0] >= 0.0 && n[1] * n[1] + n[2] * n[2] + n[3] * n[3] <= n[0] * n[0],
+                    "{k}: {n:?} δ is not a valid Stokes vector"
+                );
+            }
         }
     }
 }
