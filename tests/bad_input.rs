@@ -10,7 +10,7 @@
 //! (either side, reflection and transmission) are exercised too.
 #![allow(clippy::doc_markdown, reason = "math notation in test docs")]
 
-mod common;
+use crate::common;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 

@@ -33,7 +33,7 @@
 //! - `SurfaceCoherence::packet`'s section is `I/σ²`; `Frame::from_normal` is orthonormal and
 //!   right-handed; `Grating::sinusoidal_height` has the orders of its formula; `Bsdf::flags`.
 
-mod common;
+use crate::common;
 
 use std::cell::RefCell;
 

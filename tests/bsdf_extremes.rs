@@ -14,7 +14,7 @@
 //!   and on and beyond its boundary (0, the largest `T` below 1, 1, −10⁻³, ±∞, NaN);
 //! - no call panics. Most cases build (counted and asserted).
 
-mod common;
+use crate::common;
 
 use common::proptest_config;
 use gmueller::Real;

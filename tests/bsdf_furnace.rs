@@ -15,7 +15,7 @@
 //!   `∫ f²/q = Σ_j p_j E_{q_j}[f²/q²]` and `∫ f = Σ_j p_j E_{q_j}[f/q]`. Checked against a direct
 //!   run of the sampler.
 
-mod common;
+use crate::common;
 
 use common::rng::SplitMix64;
 use gmueller::bsdf::{Bsdf, Interface, LobeSampler, SamplingPsd, SurfaceCoherence};

@@ -17,7 +17,7 @@
 //!   source) does not at finite coherence while it does for plane waves; the mean of
 //!   `Bsdf::sample_exit` weights equals the quadrature of the albedo `∫ M₀₀ cos θ_o/cos θ_i dω_o`.
 
-mod common;
+use crate::common;
 
 use common::SplitMix64;
 use common::hemisphere::{Hemisphere, hemisphere_integral};

@@ -9,7 +9,7 @@
 //! density with the `cos θ` Jacobian applied twice. Also: `sample.pdf == pdf(sample.direction)`
 //! bit for bit, and the fraction of delta draws against the part probabilities.
 
-mod common;
+use crate::common;
 
 use common::chi2::{self, Disk, Grid};
 use common::rng::SplitMix64;

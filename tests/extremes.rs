@@ -7,12 +7,12 @@
 //! products, continuity into the plane-wave and incoherent limits against an independent closed
 //! form, and measures f32-vs-f64 relative error per function (the table of docs/numerical.md).
 //!
-//! Print the f32 error table: `cargo test --test extremes f32_error_table -- --nocapture`.
-//! Heavier sweep (10⁴ cases per property): `cargo test --test extremes -- --ignored`.
+//! Print the f32 error table: `cargo test --test integration extremes::f32_error_table -- --nocapture`.
+//! Heavier sweep (10⁴ cases per property): `cargo test --test integration extremes:: -- --ignored`.
 
 #![allow(clippy::doc_markdown, reason = "math notation in test docs")]
 
-mod common;
+use crate::common;
 
 use common::{Tol, assert_close};
 use gmueller::Real;
@@ -423,7 +423,7 @@ proptest! {
 proptest! {
     #![proptest_config(common::proptest_config(10_000))]
     #[test]
-    #[ignore = "heavy sweep: cargo test --test extremes -- --ignored"]
+    #[ignore = "heavy sweep: cargo test --test integration extremes:: -- --ignored"]
     fn heavy_kernel_sweep(s in scene(1e6)) {
         kernel_properties::<f64>(&s, false)?;
         kernel_properties::<f32>(&s, false)?;
@@ -1631,10 +1631,10 @@ fn normalized_blur_methods_agree_at_the_width_extremes() {
     }
 }
 
-/// The error table on 10× the samples (prints it): `cargo test --test extremes -- --ignored
+/// The error table on 10× the samples (prints it): `cargo test --test integration -- --ignored
 /// heavy_f32_error_table --nocapture`.
 #[test]
-#[ignore = "heavy sweep: cargo test --test extremes -- --ignored heavy_f32_error_table --nocapture"]
+#[ignore = "heavy sweep: cargo test --test integration -- --ignored heavy_f32_error_table --nocapture"]
 fn heavy_f32_error_table() {
     let rows = error_table(20_000);
     for (f, d, e, b) in &rows {

@@ -10,7 +10,7 @@
 //! the scalar type's grid of directions (width below 8ε) are refused at construction, while every
 //! accepted one, up to that limit, draws only directions with `pdf > 0`.
 
-mod common;
+use crate::common;
 
 use gmueller::Real;
 use gmueller::frame::Frame;

@@ -3,7 +3,7 @@
 //! backward cases of S2.3, the s/p frame builder, validation, Mitsuba 3 `rotator` values and the
 //! convention converters. Every law is checked in f32 and f64.
 
-mod common;
+use crate::common;
 
 use common::{
     F32, F64, Tol, angle, assert_all_close, assert_close, complex, complex_matrix2, entries4,

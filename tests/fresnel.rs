@@ -4,7 +4,7 @@
 //! formulas, s-light reflecting with `R_s` through the Mueller route, conductors, validation.
 //! Laws run in f64 and f32.
 
-mod common;
+use crate::common;
 
 use common::{flip_s3, json_rows as rows, peer_cases as cases};
 

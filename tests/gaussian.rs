@@ -3,7 +3,7 @@
 //! and 3-D, product/convolution closed forms and Parseval against quadrature, marginal vs section,
 //! and stability at extreme scales.
 
-mod common;
+use crate::common;
 
 use common::{F64, Tol, assert_close};
 use gmueller::Error;

@@ -19,7 +19,7 @@
 //! number times the output scale `2π cos θ_o/λ² · M₀₀ · S0_in · max(1, σ²|Λ|^{1/2})`, for results
 //! the per-direction path rounds through subnormal numbers.
 
-mod common;
+use crate::common;
 
 use gmueller::Real;
 use gmueller::error::Error;
@@ -602,7 +602,7 @@ fn errors_write_nothing() {
 /// FNV-1a over the output bits of both batch entry points (`plane_wave_rayleigh_rice` here,
 /// `mueller_from_jones_soa` too) in f32 and f64 on a large deterministic set with the edge cases
 /// of this file: a refactoring of the batch layer must leave the printed digests unchanged on
-/// one machine (run with `cargo test --release --test interaction_batch -- --ignored
+/// one machine (run with `cargo test --release --test integration -- --ignored
 /// --nocapture batch_output_digest`).
 #[test]
 #[ignore = "prints a digest to compare before and after a refactoring"]

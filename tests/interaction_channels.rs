@@ -54,7 +54,7 @@
 //! with each mutation. `channel_oracle_is_sensitive_to_the_shapes` asserts, test-side, that the
 //! oracle separates the first two readings by > 1e-2 in every scene and polarization.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::{PI, TAU};
 

@@ -3,7 +3,7 @@
 //! incident shape carried by the geometric map "project along the incident direction onto the
 //! surface, then onto the exit transverse plane", computed here independently from dot products.
 
-mod common;
+use crate::common;
 
 use common::{Tol, assert_all_close, assert_close};
 use gmueller::frame::Frame;

@@ -7,7 +7,7 @@
 //! known bugs of the authors' renderers (frame identity, `R_s` for s light, Malus with 2θ); the
 //! documented geometry errors. Energy conservation is in `tests/interaction_energy.rs`.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::{PI, TAU};
 

@@ -7,7 +7,7 @@
 //! `T(Frame::sp(r_spec, n̂) → exit) · M_Fresnel`, evaluated here literally, at incidences from
 //! exactly normal (the tangent fallback) through the re-orthogonalized band to grazing.
 
-mod common;
+use crate::common;
 
 use common::{Tol, assert_all_close, assert_close};
 use gmueller::Real;

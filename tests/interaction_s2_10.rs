@@ -34,7 +34,7 @@
 //! Everything runs in the default `cargo test --test interaction_s2_10` (≈ 2 s, the brute-force
 //! 4-D trapezoid and 6-D Gauss–Hermite quadratures being most of it).
 
-mod common;
+use crate::common;
 
 use std::f64::consts::{PI, TAU};
 

@@ -13,7 +13,7 @@
 //! has index 1 and the one below `η` (1.5 unless said); a packet's wavelength is the one in the
 //! medium it travels in (`λ₀/n`).
 
-mod common;
+use crate::common;
 
 use std::f64::consts::TAU;
 
@@ -378,7 +378,7 @@ fn rayleigh_rice_tends_to_the_phase_screen_at_the_specular_direction() {
 /// the finite-coherence property of S2.20 that `tests/interaction_energy.rs` tabulates for
 /// reflection.
 ///
-/// Measured (`cargo test --release --test interaction_transmission -- --nocapture energy`),
+/// Measured (`cargo test --release --test integration -- --nocapture interaction_transmission::energy`),
 /// `|1 − R − T|` at w = 100 λ, worst over ℓ, per kσ = 0.02, 0.05, 0.1, 0.2:
 /// ```text
 /// above  0°   1.2e-6  3.4e-6  3.5e-5  5.1e-4
@@ -747,7 +747,7 @@ fn the_four_lobes_are_reported_by_side() {
 /// the reflected `v σ = 2 k_i σ cos θ_i`, at most 0.3; rows beyond it are marked). Within the
 /// range, power moves monotonically from the coherent lobes to the scattered ones, and the sum
 /// stays within the energy bound of `energy_of_reflection_plus_transmission`. The README's table
-/// is this test's output (`cargo test --release --test interaction_transmission -- --nocapture
+/// is this test's output (`cargo test --release --test integration -- --nocapture
 /// smooth_to_rough`).
 #[test]
 fn smooth_to_rough_progression() {

@@ -2,7 +2,7 @@
 //! idempotence, unitarity, rotation), Jones → Stokes against the Mueller route, and Jones → Mueller
 //! against pySCATMECH / py-pol and Mitsuba 3 reference values. Every law runs in f64 and f32.
 
-mod common;
+use crate::common;
 
 use common::{flip_s3, json_rows as rows, peer_cases as cases};
 

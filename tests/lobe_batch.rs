@@ -15,7 +15,7 @@
 //! incidence); every lobe a valid Stokes vector (`S1² + S2² + S3² ≤ S0² (1 + 8 ε)`, `S0 ≥ 0`);
 //! the spectral batch equal bit for bit.
 
-mod common;
+use crate::common;
 
 use gmueller::Real;
 use gmueller::frame::Frame;

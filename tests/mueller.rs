@@ -8,7 +8,7 @@
 //! `10¹⁰·diag(2, 1)` checked against the hand values; and finite coherency eigenvalues for 10⁵
 //! random f32 and f64 Jones-derived matrices (three within 64ε·tr H of 0).
 
-mod common;
+use crate::common;
 
 use common::{
     F32, F64, Tol, assert_all_close, assert_close, assert_complex_close, complex_matrix2, entries4,

@@ -12,7 +12,7 @@
 //! evaluations differ by at most `4 ε N`: the tolerance is `abs = T::MIN_POSITIVE` (so the zero
 //! matrix must come out exactly zero up to the smallest normal) and `rel = 4 ε` of `N`.
 
-mod common;
+use crate::common;
 
 use common::{Tol, assert_close, complex_matrix2};
 use gmueller::Error;

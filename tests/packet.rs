@@ -6,7 +6,7 @@
 //! frame rotation against the field-level CSD transform and the curvature-matching rule by finite
 //! differences; validation errors; the 3-D shape and world precision against nalgebra; f32 and f64.
 
-mod common;
+use crate::common;
 
 use common::{F32, F64, Tol, assert_all_close, assert_close, gauss_legendre, spd2, unit_vector3};
 use gmueller::Error;

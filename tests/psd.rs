@@ -5,7 +5,7 @@
 //! blur method against the adaptive reference, and the Gaussian PSD's log-free blur path against
 //! its log-space form.
 
-mod common;
+use crate::common;
 
 use common::{Tol, assert_close, cube_quad};
 use gmueller::gaussian::Gaussian;

@@ -51,7 +51,7 @@
 //! `1/√T`, is asserted within 1e-6 relative for `s√T ≤ 0.05` (order 64) and only printed
 //! otherwise.
 
-mod common;
+use crate::common;
 
 use common::gauss_legendre;
 use gmueller::gaussian::Gaussian;

@@ -6,7 +6,7 @@
 //! check, the grating order cap (`Grating::MAX_ORDERS`, exact at its boundary), and blurs at huge
 //! frequencies (0, not NaN).
 
-mod common;
+use crate::common;
 
 use common::{Tol, assert_close};
 use gmueller::Error;

@@ -8,7 +8,7 @@
 //! Monte Carlo; the test's own erf/erfc match reference values; importance-sampled estimates of
 //! `∫ L_o dω` agree with quadrature of the kernel.
 
-mod common;
+use crate::common;
 
 use common::quadrature::{gauss_legendre, integrate};
 use common::{SplitMix64, Tol, assert_close};

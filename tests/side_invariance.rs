@@ -14,7 +14,7 @@
 //! checked the same way: the spread of the Monte Carlo weights, which depends on how well the
 //! lobes match the kernel, must be the same in both descriptions, forward and backward.
 
-mod common;
+use crate::common;
 
 use common::rng::SplitMix64;
 use gmueller::bsdf::Bsdf;

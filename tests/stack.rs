@@ -3,7 +3,7 @@
 //! `A ⊗ B`), the mixed-product law, the index formula, and that row stacking flips `S3` under the
 //! printed `A_mül`. Each law is checked in f64 and f32.
 
-mod common;
+use crate::common;
 
 use common::{F32, F64, Tol, assert_complex_close, complex_matrix2};
 use gmueller::real::Real;

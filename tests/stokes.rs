@@ -5,7 +5,7 @@
 //! matrices scaled by powers of two from the subnormal range to `T::MAX`: same verdict, finite
 //! ratios) and errors where a derived quantity would overflow. Generic checks run in f64 and f32.
 
-mod common;
+use crate::common;
 
 use common::{
     F32, F64, Tol, assert_all_close, assert_close, assert_complex_close, complex_matrix2,

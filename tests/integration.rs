@@ -1,0 +1,46 @@
+//! The integration tests, one module per file of `tests/`, built as one test binary
+//! (`[[test]] integration` in `Cargo.toml`; `autotests = false`).
+//!
+//! One binary instead of one per file: the kernel's generic code is instantiated and optimised
+//! once rather than in each of 34 binaries (as 34 binaries the test build took 16 min on the CI
+//! machine). Run one file's tests with a filter on its module path, e.g.
+//! `cargo test --test integration extremes::`. The counting global allocator of
+//! `allocation` serves the whole binary; it counts per thread, so the other tests running
+//! concurrently do not disturb its counts.
+
+mod common;
+
+mod allocation;
+mod architecture;
+mod bad_input;
+mod bsdf_eval;
+mod bsdf_extremes;
+mod bsdf_furnace;
+mod bsdf_reciprocity;
+mod bsdf_sampling;
+mod extremes;
+mod extremes_sampling;
+mod frame;
+mod fresnel;
+mod gaussian;
+mod interaction_batch;
+mod interaction_channels;
+mod interaction_energy;
+mod interaction_exitant;
+mod interaction_laws;
+mod interaction_prepared;
+mod interaction_reference;
+mod interaction_s2_10;
+mod interaction_transmission;
+mod jones;
+mod lobe_batch;
+mod mueller;
+mod mueller_batch;
+mod packet;
+mod psd;
+mod psd_kcorrelation;
+mod psd_validation;
+mod sampling;
+mod side_invariance;
+mod stack;
+mod stokes;
