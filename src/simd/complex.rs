@@ -45,7 +45,9 @@ impl<S: Simd> Cx<S> {
             im: F::vmul(self.0, z.im, t),
         }
     }
-    /// `1/z = z̄/|z|²` with one division.
+    /// `1/z = z̄/|z|²` with one division. The imaginary part is `−(Im z · inv)`, exactly the
+    /// scalar's `−Im z · inv` including the sign of a zero (`0 − Im z` turned `+0` into `+0`
+    /// where the scalar has `−0`): `−0 − Im z · inv`, one rounding fused or not.
     #[inline(always)]
     pub(crate) fn recip<F: Lanes>(self, z: C<F::V<S>>) -> C<F::V<S>> {
         let s = self.0;
@@ -53,7 +55,7 @@ impl<S: Simd> Cx<S> {
         let inv = F::vdiv(s, F::vlit(s, 1.0), n2);
         C {
             re: F::vmul(s, z.re, inv),
-            im: F::vmul(s, F::vsub(s, F::vlit(s, 0.0), z.im), inv),
+            im: F::vneg_mul_add(s, z.im, inv, F::vlit(s, -0.0)),
         }
     }
 }
