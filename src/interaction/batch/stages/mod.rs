@@ -7,7 +7,9 @@
 //! - [`azimuth`]: the exit s vector and `(cos φ, sin φ)` (`Frame::sp_unit`,
 //!   `Geometry::exit_azimuth`);
 //! - [`fresnel`]: `q_o = √(ε − sin²θ_o)` (`principal_sqrt`);
-//! - [`rayleigh_rice`]: the four factors `ss, ps, sp, pp` (`RayleighRice::factors`);
+//! - [`rayleigh_rice`]: the four factors `ss, ps, sp, pp` (`RayleighRice::factors`), in
+//!   reflection and, at a dielectric interface, in transmission (a stage the lane loop does not
+//!   run yet);
 //! - [`psd`]: the weight `cos θ_o · exp(ln prefactor + ln p(h_t) + ln α)`
 //!   (`GaussianPsd::log_value`, the Debye–Waller factor);
 //! - [`stokes`]: `w · M′ (T S)` from the factors (`Mueller::from_jones`);
