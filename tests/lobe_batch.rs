@@ -350,3 +350,44 @@ proptest! {
         check_level::<f32>(&sc, "f32");
     }
 }
+
+/// A known defect, found by a fresh-seed search (`GMUELLER_PROPTEST_SEARCH=50`, 2026-12-03) and
+/// not yet fixed: on this shrunk scene (Full·Partial, a nearly smooth surface, σ = 1 nm, a dim
+/// packet S0 = 10⁻³, exits far from the mirror direction) the lanes' specular lobe differs from
+/// the per-direction kernel by more than the documented bound in f32: exit 1, S0 8.40671e-10
+/// against 8.40605e-10 (relative 7.9e-5, 4.3× the bound). The same searches found an f32 case
+/// 10.9× over (S1 of the specular lobe, relative 1.6e-4) and an f64 one 1.05× over (a specular
+/// S0 of 6.8e-27), not kept. It fails with the old and the new `Cx::recip`. Kept here, ignored
+/// so that CI passes, until the cause (cancellation in the exponent, or a bound that leaves it
+/// out) is found: `cargo test --release --test integration -- --ignored
+/// lane_specular_far_from_the_mirror_known_defect`.
+#[test]
+#[ignore = "known defect (issue 15): the lanes' far specular lobe exceeds the documented bound"]
+fn lane_specular_far_from_the_mirror_known_defect() {
+    let v = Vector3::new;
+    let sc = Scene {
+        theta_i: 1.0639928351690535,
+        phi_i: 0.0,
+        normal: v(0.0, 0.0, 1.0),
+        psi: 1.5751084054974653,
+        stokes: Vector4::new(0.001, 0.0, 0.0, 0.0),
+        width: 1.0,
+        ratio: 1.6973431830843382,
+        eta: Complex::new(1.8474561085721517, 0.0),
+        components: vec![(0.001, Matrix2::new(0.05, 0.0, 0.0, 0.05))],
+        wavelength: 0.9000879778404756,
+        exits: vec![
+            v(0.9718040180581214, -0.05354618801953972, 0.4133194389904322),
+            v(-4.979877634434283, -2.8683537044908114, 3.234217332352296),
+            v(0.3956266185268583, 0.029911774607810367, 0.2950827857355123),
+            v(-0.07744905318117858, 0.3625429668709707, 0.1759912438537806),
+            v(
+                0.1371294567546671,
+                0.017858737980209972,
+                0.08969212792299529,
+            ),
+        ],
+        level: 0,
+    };
+    check_level::<f32>(&sc, "f32");
+}
