@@ -93,17 +93,20 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// kernel; the exponentials (a polynomial), the sums of the exponents and the matrix
     /// products (fused multiply–adds, another order) differ. Against the per-direction kernel,
     /// per Stokes parameter of a lobe of `S0 = L`:
-    /// `|Δ| ≤ 4 ε (4 + |ln L| + 2 |ln S0|) L̂ + MIN_POSITIVE` with `S` the packet's Stokes
-    /// vector and `L̂ = max(L, M₀₀ Σⱼ |Sⱼ|)`, `M₀₀` the lobe's in BSDF form
-    /// ([`Kernel::evaluate_mueller`]): every exponent is summed before one exponential, so the
-    /// rounding of the sum, relative to its terms, becomes a relative error of the result
-    /// (`tests` of `batch::lobes`); and the output is a sum of products `M_kj Sⱼ` (`|M_kj| ≤
-    /// M₀₀`), whose rounding is relative to `L̂` — far above `L` where the scatterer's
-    /// diattenuation cancels the packet's polarization (`tests/lobe_batch.rs`: a bound in `L`
-    /// alone failed there by 13× in f64). For unpolarized light `L̂ = L`. Known exception, not
-    /// yet understood: the specular lobe far from the mirror direction of a nearly smooth
-    /// surface, found over the bound by up to 10.9× in f32 and 1.05× in f64
-    /// (`tests/lobe_batch.rs`, the ignored `lane_specular_far_from_the_mirror_known_defect`).
+    /// `|Δ| ≤ 4 ε (4 + |ln L| + 2 |ln S0|) L̂ + MIN_POSITIVE` with `S0` the packet's and
+    /// `L̂ = max(L, (1 + √3) L₀)`, `L₀` the lobe's `S0` were its pBSDF non-polarizing (its
+    /// Mueller matrix replaced by `M₀₀ I`): every exponent is summed before one exponential, so
+    /// the rounding of the sum, relative to its terms, becomes a relative error of the result
+    /// (`tests` of `batch::lobes`); and the output is a sum of products `M_kj u_j` of the
+    /// pBSDF's matrix and the effective incident vector `u` (the coherence channels mixed, a
+    /// valid Stokes vector: `Σ|u_j| ≤ (1 + √3) u₀`, and `|M_kj| ≤ M₀₀`), whose rounding is
+    /// relative to `L̂` — far above `L` where the pBSDF's diattenuation cancels `u`'s
+    /// polarization, be it the packet's (`tests/lobe_batch.rs`: a bound in `L` alone failed by
+    /// 13× in f64) or the one the coherence channels give an unpolarized packet of two shapes
+    /// (the specular lobe far from the mirror direction near Brewster's angle, where
+    /// `K_x ≫ K_y`: a bound with the packet's polarization alone failed by 4.3× in f32). For a
+    /// non-polarizing pBSDF `L̂ ≤ (1 + √3) L`. In such a cancellation the per-direction kernel's
+    /// own `f32` error is of the same order (4.5e-5 relative to `f64` in that case).
     /// The NEON and AVX-512
     /// back-ends of pulp have never run on real hardware here (AVX-512 is off in this crate;
     /// the scalar back-ends of 1–8 lanes and AVX2 are tested).
