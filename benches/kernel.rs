@@ -12,6 +12,8 @@
 //! level at a rough glass interface, reflection against transmission, same scenes, same run.
 //! `kernel_batch_partial/{f64,f32}`: `Kernel::<Full, Partial>::evaluate_batch` (both lobes, exit
 //! frames, geometry included) against the per-direction prepared kernel, same 1024 exits.
+//! `kernel_batch_interface/{f64,f32}`: the same at a rough glass interface, exits around
+//! Snell's direction, or alternating with the mirror direction, against the per-direction one.
 //! `kernel_batch_spectral/{f64,f32}`: `evaluate_batch_spectral` on 4 wavelengths × the same
 //! 1024 exits against 4 `evaluate_batch` calls.
 //!
@@ -525,6 +527,87 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
     g.finish();
 }
 
+/// [`batch_partial_for`] at a rough glass interface (η = 1.5, `RoughDielectric`, lit from the
+/// air): 1024 exits around Snell's direction (`transmission-1024`), and the same alternating
+/// with 1024 around the mirror direction (`mixed-1024`: every vector of lanes holds both
+/// sides, the lanes compute both), against the per-direction prepared kernel on the mixed set.
+fn batch_interface_for<T: Real>(c: &mut Criterion, prec: &str) {
+    const M: usize = 1024;
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let eta = T::lit(1.5);
+    let material = RoughDielectric::new(psd, eta).unwrap();
+    let kernel = Kernel::<Full, Partial>::default();
+    let surf = surface::<T>();
+    let theta_i = 30f64.to_radians();
+    let theta_t = (theta_i.sin() / 1.5).asin();
+    let packet = scene::<T>(theta_i, theta_i, 0.0, 0.7, 5.0).packet;
+    let mut rng = Lcg(0xba7d);
+    let mut exit = |centre: f64, side: f64| {
+        let to = (centre + (rng.uniform() - 0.5) * 0.26).abs();
+        let po = (rng.uniform() - 0.5) * 0.52;
+        Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), side * to.cos()).map(T::lit)
+    };
+    let below: Vec<Vector3<T>> = (0..M).map(|_| exit(theta_t, -1.0)).collect();
+    let mixed: Vec<Vector3<T>> = (0..M)
+        .map(|i| {
+            if i % 2 == 0 {
+                exit(theta_i, 1.0)
+            } else {
+                exit(theta_t, -1.0)
+            }
+        })
+        .collect();
+    let mut buf = vec![vec![T::zero(); M]; 11];
+    let [a, b, cc, d, e, f, gg, h, sx, sy, sz] = &mut buf[..] else {
+        unreachable!()
+    };
+    let mut out = LobesSoa {
+        specular: StokesSoa { s: [a, b, cc, d] },
+        scattered: StokesSoa { s: [e, f, gg, h] },
+    };
+    let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
+    let mut g = c.benchmark_group(format!("kernel_batch_interface/{prec}"));
+    g.throughput(criterion::Throughput::Elements(M as u64));
+    for (case, exits) in [("transmission-1024", &below), ("mixed-1024", &mixed)] {
+        let columns = |k: usize| exits.iter().map(|e| e[k]).collect::<Vec<T>>();
+        let (x, y, z) = (columns(0), columns(1), columns(2));
+        g.bench_function(BenchmarkId::new("evaluate_batch", case), |bch| {
+            bch.iter(|| {
+                let dirs = DirectionsSoa {
+                    x: &x,
+                    y: &y,
+                    z: &z,
+                };
+                kernel
+                    .evaluate_batch(
+                        black_box(&material),
+                        black_box(&packet),
+                        &surf,
+                        Some(eta),
+                        dirs,
+                        &mut out,
+                        Some(&mut frames),
+                    )
+                    .unwrap();
+                black_box(out.scattered.s[0][M - 1])
+            });
+        });
+    }
+    g.bench_function(
+        BenchmarkId::new("per-direction-prepared", "mixed-1024"),
+        |bch| {
+            bch.iter(|| {
+                let prepared = kernel.prepare(black_box(&packet), &surf).unwrap();
+                for e in &mixed {
+                    let geo = Geometry::for_packet_at_interface(&packet, &surf, eta, *e).unwrap();
+                    black_box(kernel.evaluate_prepared(black_box(&material), &prepared, &geo));
+                }
+            });
+        },
+    );
+    g.finish();
+}
+
 /// Four wavelengths of one path (λ = 0.45–0.60 µm, the index and the packet's shapes per
 /// wavelength) on the 1024 exits of [`batch_partial_for`]: `evaluate_batch_spectral` (the exit
 /// geometry once per vector of exits) against four `evaluate_batch` calls, both lobes and the
@@ -735,6 +818,8 @@ fn benches(c: &mut Criterion) {
     batch_for::<f32>(c, "f32");
     batch_partial_for::<f64>(c, "f64");
     batch_partial_for::<f32>(c, "f32");
+    batch_interface_for::<f64>(c, "f64");
+    batch_interface_for::<f32>(c, "f32");
     batch_spectral_for::<f64>(c, "f64");
     batch_spectral_for::<f32>(c, "f32");
 }

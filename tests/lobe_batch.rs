@@ -26,7 +26,7 @@ use gmueller::gaussian::Gaussian;
 use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa, Wavelength};
 use gmueller::interaction::{
     CoherenceModel, CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput,
-    OneShape, Partial, Pbsdf, PolarizationModel, RoughConductor, RoughSurface,
+    OneShape, Partial, Pbsdf, PolarizationModel, RoughConductor, RoughDielectric, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
@@ -54,17 +54,13 @@ struct Scene {
     exits: Vec<Vector3<f64>>,
     /// Which of the six lane levels.
     level: usize,
+    /// A dielectric interface of index `Re η` lit from above (exits on both sides, some near
+    /// Snell's direction) instead of a conductor in reflection.
+    interface: bool,
 }
 
-/// The scene's material, packet (at `wavelength × stretch`) and surface in `T`.
-fn build<T: Real>(
-    sc: &Scene,
-    stretch: f64,
-) -> (
-    RoughConductor<T, GaussianMixturePsd<T, 2>>,
-    WavePacket<T>,
-    Frame<T>,
-) {
+/// The scene's packet (at `wavelength × stretch`) and surface in `T`.
+fn build<T: Real>(sc: &Scene, stretch: f64) -> (WavePacket<T>, Frame<T>) {
     let hint = if sc.normal.x.abs() < 0.9 {
         Vector3::x()
     } else {
@@ -99,6 +95,11 @@ fn build<T: Real>(
             Err(_) => shrink *= 0.5,
         }
     };
+    (packet, surface)
+}
+
+/// The scene's PSD.
+fn psd<T: Real>(sc: &Scene) -> GaussianMixturePsd<T, 2> {
     let comps = sc
         .components
         .iter()
@@ -107,9 +108,37 @@ fn build<T: Real>(
             GaussianPsd::from_autocorrelation(T::lit(sigma * sigma), &corr).unwrap()
         })
         .collect();
+    GaussianMixturePsd::new(comps).unwrap()
+}
+
+/// The scene's conductor at `wavelength × stretch` (its index's real part scaled by
+/// `√stretch`, a dispersion).
+fn conductor<T: Real>(sc: &Scene, stretch: f64) -> RoughConductor<T, GaussianMixturePsd<T, 2>> {
     let eta = Complex::new(T::lit(sc.eta.re * stretch.sqrt()), T::lit(sc.eta.im));
-    let material = RoughConductor::new(GaussianMixturePsd::new(comps).unwrap(), eta).unwrap();
-    (material, packet, surface)
+    RoughConductor::new(psd(sc), eta).unwrap()
+}
+
+/// The scene's dielectric interface (index `Re η √stretch`) and its relative index.
+fn dielectric<T: Real>(
+    sc: &Scene,
+    stretch: f64,
+) -> (RoughDielectric<T, GaussianMixturePsd<T, 2>>, T) {
+    let eta = T::lit(sc.eta.re * stretch.sqrt());
+    (RoughDielectric::new(psd(sc), eta).unwrap(), eta)
+}
+
+/// The geometry of `exit`: in reflection, or at the interface `Some(η)`.
+fn geometry<T: Real>(
+    packet: &WavePacket<T>,
+    surface: &Frame<T>,
+    interface: Option<T>,
+    exit: Vector3<T>,
+) -> Geometry<T> {
+    match interface {
+        Some(eta) => Geometry::for_packet_at_interface(packet, surface, eta, exit),
+        None => Geometry::for_packet(packet, surface, exit),
+    }
+    .unwrap()
 }
 
 type Columns<T> = Vec<Vec<T>>;
@@ -137,9 +166,9 @@ fn columns<T: Real>(n: usize) -> Columns<T> {
 /// cancels `u`'s polarization — the packet's, or the polarization the coherence channels give
 /// an unpolarized packet where `K_x ≫ K_y` (the specular lobe far from the mirror direction,
 /// near Brewster's angle: [`lane_specular_where_the_coherence_polarizes_and_fresnel_cancels`]).
-fn l_hat<T, Pol, Coh>(
+fn l_hat<T, Pol, Coh, Sp, Sc>(
     kernel: &Kernel<Pol, Coh>,
-    material: &RoughConductor<T, GaussianMixturePsd<T, 2>>,
+    material: &RoughSurface<GaussianMixturePsd<T, 2>, Sp, Sc>,
     packet: &WavePacket<T>,
     g: &Geometry<T>,
 ) -> [f64; 2]
@@ -147,6 +176,8 @@ where
     T: Real,
     Pol: PolarizationModel,
     Coh: CoherenceModel + CoherenceWeights<T, GaussianMixturePsd<T, 2>>,
+    Sp: Pbsdf<T> + Copy,
+    Sc: Pbsdf<T> + Copy,
 {
     let plain = RoughSurface {
         psd: material.psd.clone(),
@@ -158,15 +189,22 @@ where
 }
 
 /// The batch against one exit at a time within the documented bound, valid Stokes vectors,
-/// and the spectral batch of three wavelengths bit for bit.
-fn check<T, Pol, Coh>(sc: &Scene, what: &str)
-where
+/// and the spectral batch of three wavelengths bit for bit; `make(stretch)` is the
+/// scene's material at `wavelength × stretch` and its interface (`None` in reflection).
+fn check<T, Pol, Coh, Sp, Sc>(
+    sc: &Scene,
+    what: &str,
+    make: impl Fn(f64) -> (RoughSurface<GaussianMixturePsd<T, 2>, Sp, Sc>, Option<T>),
+) where
     T: Real,
     Pol: PolarizationModel,
     Coh: CoherenceModel + CoherenceWeights<T, GaussianMixturePsd<T, 2>> + Default + 'static,
+    Sp: Pbsdf<T> + Copy + 'static,
+    Sc: Pbsdf<T> + Copy + 'static,
 {
     let kernel = Kernel::<Pol, Coh>::default();
-    let (material, packet, surface) = build::<T>(sc, 1.0);
+    let (packet, surface) = build::<T>(sc, 1.0);
+    let (material, interface) = make(1.0);
     let n = sc.exits.len();
     let d: [Vec<T>; 3] = core::array::from_fn(|k| sc.exits.iter().map(|e| T::lit(e[k])).collect());
     let dirs = DirectionsSoa {
@@ -180,7 +218,7 @@ where
             &material,
             &packet,
             &surface,
-            None,
+            interface,
             dirs,
             &mut soa(&mut cols),
             None,
@@ -190,7 +228,7 @@ where
     let ln_s0 = packet.stokes().s0().to_f64().ln().abs();
     for (i, e) in d[0].iter().zip(&d[1]).zip(&d[2]).enumerate() {
         let exit = Vector3::new(*e.0.0, *e.0.1, *e.1);
-        let g = Geometry::for_packet(&packet, &surface, exit).unwrap();
+        let g = geometry(&packet, &surface, interface, exit);
         let r = kernel.evaluate(&material, &packet, &g);
         let l_hat = l_hat(&kernel, &material, &packet, &g);
         let wants: [Vec<f64>; 2] = match r.stokes() {
@@ -234,14 +272,14 @@ where
     // Three wavelengths of the same path through the spectral batch, against one call each.
     let built: Vec<_> = [1.0, 1.1, 1.25]
         .iter()
-        .map(|&f| build::<T>(sc, f))
+        .map(|&f| (make(f), build::<T>(sc, f).0))
         .collect();
     let ws: Vec<_> = built
         .iter()
-        .map(|(m, p, _)| Wavelength {
+        .map(|((m, interface), p)| Wavelength {
             material: m,
             packet: p,
-            interface: None,
+            interface: *interface,
         })
         .collect();
     let mut spectral: Vec<Columns<T>> = (0..3).map(|_| columns::<T>(n)).collect();
@@ -256,10 +294,10 @@ where
             .evaluate_batch_spectral(&ws, &surface, dirs, &mut outs, Some(&mut f))
             .unwrap();
     }
-    for (w, (m, p, _)) in built.iter().enumerate() {
+    for (w, ((m, interface), p)) in built.iter().enumerate() {
         let mut one = columns::<T>(n);
         kernel
-            .evaluate_batch(m, p, &surface, None, dirs, &mut soa(&mut one), None)
+            .evaluate_batch(m, p, &surface, *interface, dirs, &mut soa(&mut one), None)
             .unwrap();
         for (k, (a, b)) in spectral[w].iter().zip(&one).enumerate() {
             for i in 0..n {
@@ -272,7 +310,7 @@ where
         }
     }
     for (i, exit) in sc.exits.iter().enumerate() {
-        let g = Geometry::for_packet(&packet, &surface, exit.map(T::lit)).unwrap();
+        let g = geometry(&packet, &surface, interface, exit.map(T::lit));
         let s = g.exit_sp().x();
         for k in 0..3 {
             assert_eq!(frames[k][i], s[k], "{what}: frame of exit {i}");
@@ -280,15 +318,34 @@ where
     }
 }
 
-/// [`check`] at the scene's level.
+/// [`check`] at the scene's level, on its material.
 fn check_level<T: Real>(sc: &Scene, what: &str) {
+    if sc.interface {
+        check_material::<T, _, _>(sc, what, |f| {
+            let (m, eta) = dielectric::<T>(sc, f);
+            (m, Some(eta))
+        });
+    } else {
+        check_material::<T, _, _>(sc, what, |f| (conductor::<T>(sc, f), None));
+    }
+}
+
+/// [`check`] at the scene's level.
+fn check_material<T: Real, Sp, Sc>(
+    sc: &Scene,
+    what: &str,
+    material: impl Fn(f64) -> (RoughSurface<GaussianMixturePsd<T, 2>, Sp, Sc>, Option<T>),
+) where
+    Sp: Pbsdf<T> + Copy + 'static,
+    Sc: Pbsdf<T> + Copy + 'static,
+{
     match sc.level {
-        0 => check::<T, Full, Partial>(sc, what),
-        1 => check::<T, Full, Incoherent>(sc, what),
-        2 => check::<T, OneShape, Partial>(sc, what),
-        3 => check::<T, OneShape, Incoherent>(sc, what),
-        4 => check::<T, Intensity, Partial>(sc, what),
-        _ => check::<T, Intensity, Incoherent>(sc, what),
+        0 => check::<T, Full, Partial, _, _>(sc, what, material),
+        1 => check::<T, Full, Incoherent, _, _>(sc, what, material),
+        2 => check::<T, OneShape, Partial, _, _>(sc, what, material),
+        3 => check::<T, OneShape, Incoherent, _, _>(sc, what, material),
+        4 => check::<T, Intensity, Partial, _, _>(sc, what, material),
+        _ => check::<T, Intensity, Incoherent, _, _>(sc, what, material),
     }
 }
 
@@ -324,10 +381,15 @@ fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
     let f = Frame::from_direction_and_x(sc.normal, hint).unwrap();
     let (t1, t2, nn) = (f.x(), f.y(), f.k());
     let mut rng = Lcg(seed);
+    // At an interface, every exit of an odd pair index is transmitted (near Snell's direction
+    // or anywhere below), so that vectors of lanes hold both sides.
+    let theta_t = (sc.theta_i.sin() / sc.eta.re).min(1.0).asin();
     (0..n)
         .map(|i| {
+            let below = sc.interface && (i / 2) % 2 == 1;
+            let centre = if below { theta_t } else { sc.theta_i };
             let (cos_o, phi) = if i % 2 == 0 {
-                let to = (sc.theta_i + (rng.uniform() - 0.5) * 0.35).abs().min(1.55);
+                let to = (centre + (rng.uniform() - 0.5) * 0.35).abs().min(1.55);
                 (to.cos(), sc.phi_i + (rng.uniform() - 0.5) * 0.35)
             } else {
                 (
@@ -337,7 +399,8 @@ fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
             };
             let sin_o = (1.0 - cos_o * cos_o).sqrt();
             let scale = 0.1 * 100f64.powf(rng.uniform());
-            (t1 * (sin_o * phi.cos()) + t2 * (sin_o * phi.sin()) + nn * cos_o) * scale
+            let side = if below { -1.0 } else { 1.0 };
+            (t1 * (sin_o * phi.cos()) + t2 * (sin_o * phi.sin()) + nn * (side * cos_o)) * scale
         })
         .collect()
 }
@@ -363,7 +426,7 @@ prop_compose! {
     ) -> Scene {
         let mut sc = Scene {
             theta_i, phi_i, normal, psi, stokes, width: 10f64.powf(log_width), ratio, eta,
-            components, wavelength, exits: Vec::new(), level,
+            components, wavelength, exits: Vec::new(), level, interface: false,
         };
         sc.exits = exit_set(&sc, [1, 5, 17, 40][len], seed);
         sc
@@ -382,6 +445,31 @@ proptest! {
     fn lane_batch_matches_the_per_direction_kernel_f32(sc in scene_strategy()) {
         check_level::<f32>(&sc, "f32");
     }
+
+    #[test]
+    fn lane_batch_at_an_interface_matches_the_per_direction_kernel_f64(
+        sc in interface_strategy()
+    ) {
+        check_level::<f64>(&sc, "f64");
+    }
+
+    #[test]
+    fn lane_batch_at_an_interface_matches_the_per_direction_kernel_f32(
+        sc in interface_strategy()
+    ) {
+        check_level::<f32>(&sc, "f32");
+    }
+}
+
+/// [`scene_strategy`]'s scenes as a dielectric interface of index `Re η` (1–3 or 0.05–3: from
+/// a denser medium too, with total internal reflection), lit from above, exits on both sides.
+fn interface_strategy() -> impl Strategy<Value = Scene> {
+    (scene_strategy(), 0..4usize, any::<u64>()).prop_map(|(mut sc, len, seed)| {
+        sc.interface = true;
+        sc.eta = Complex::new(sc.eta.re, 0.0);
+        sc.exits = exit_set(&sc, [1, 5, 17, 40][len], seed);
+        sc
+    })
 }
 
 /// Found by a fresh-seed search (`GMUELLER_PROPTEST_SEARCH=50`, 2026-12-03) against the
@@ -421,9 +509,11 @@ fn lane_specular_where_the_coherence_polarizes_and_fresnel_cancels() {
             ),
         ],
         level: 0,
+        interface: false,
     };
     check_level::<f32>(&sc, "f32");
-    let (material, packet, surface) = build::<f32>(&sc, 1.0);
+    let (packet, surface) = build::<f32>(&sc, 1.0);
+    let material = conductor::<f32>(&sc, 1.0);
     let kernel = Kernel::<Full, Partial>::default();
     let g = Geometry::for_packet(&packet, &surface, sc.exits[1].map(|x| x as f32)).unwrap();
     let l = kernel.evaluate(&material, &packet, &g).specular_intensity() as f64;

@@ -5,7 +5,8 @@
 //! (reflection or, with `interface = Some(η)`, reflection and transmission at a dielectric
 //! interface) and every PSD and blur: the per-packet work once, then the exits — 4 (`f64`) or
 //! 8 (`f32`) per instruction for the partially coherent (closed-form blur) and incoherent
-//! Gaussian- or Gaussian-mixture-PSD rough conductor in reflection at every polarization level
+//! Gaussian- or Gaussian-mixture-PSD rough conductor in reflection, and rough dielectric in
+//! reflection and at its interface lit from above, at every polarization level
 //! (`super::partial`), one at a time otherwise — with no heap allocation. For several
 //! wavelengths of one path, `Kernel::evaluate_batch_spectral` (`super::spectral`) shares the
 //! exit geometry between them.
@@ -77,14 +78,18 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// level only `S0` (`s[0]`) of each lobe is written: the level does not compute `S1..S3`.
     ///
     /// # Lanes
-    /// With `interface = None`, the [`super::super::Full`], [`super::super::OneShape`] or
+    /// With the [`super::super::Full`], [`super::super::OneShape`] or
     /// [`super::super::Intensity`] level (the last as `OneShape` on the effective vector
     /// `(1, 0, 0, 0)`, `S0` written),
     /// [`super::super::Partial`]`<`[`crate::psd::ClosedForm`]`>` or
-    /// [`super::super::Incoherent`] coherence and a
-    /// [`super::super::RoughConductor`] with a [`crate::psd::GaussianPsd`] or a
-    /// [`crate::psd::GaussianMixturePsd`] of at most 8 components (Fresnel specular
-    /// reflection and Rayleigh–Rice scattering, `Complex` index), the exits run through the
+    /// [`super::super::Incoherent`] coherence and a [`crate::psd::GaussianPsd`] or a
+    /// [`crate::psd::GaussianMixturePsd`] of at most 8 components, on a
+    /// [`super::super::RoughConductor`] with `interface = None` (Fresnel specular reflection
+    /// and Rayleigh–Rice scattering, `Complex` index) or a [`super::super::RoughDielectric`]
+    /// (either `interface`; at one, lit from above — the side the surface frame's normal
+    /// points to — with a real Rayleigh–Rice permittivity: Fresnel reflection and transmission,
+    /// Germer's and Elson's factors, each exit on its side; a vector of lanes with exits on
+    /// both sides computes both), the exits run through the
     /// SIMD stages of `interaction::batch::stages`, 4 (`f64`) or 8 (`f32`) per instruction
     /// under AVX2 + FMA (pulp's run-time detection; elsewhere a scalar instantiation of the
     /// same loop). Exits within `√ε` of the normal, and lit parts whose final scale is not a
@@ -179,18 +184,16 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             None => *surface,
         };
         let prepared = self.prepare(packet, &facing)?;
-        if interface.is_none()
-            && let Some(done) = super::partial::try_evaluate(
-                self,
-                material,
-                &prepared,
-                packet,
-                surface,
-                exits,
-                out,
-                frames.as_deref_mut(),
-            )
-        {
+        if let Some(done) = super::partial::try_evaluate(
+            self,
+            material,
+            &prepared,
+            packet,
+            (surface, interface),
+            exits,
+            out,
+            frames.as_deref_mut(),
+        ) {
             return done;
         }
         for i in 0..n {
@@ -391,13 +394,17 @@ mod tests {
         use crate::interaction::polarization::PolarizationLevel as L;
         let any: &dyn core::any::Any = material;
         let coh: &dyn core::any::Any = kernel.coherence();
-        interface.is_none()
-            && matches!(Pol::LEVEL, L::Full | L::OneShape | L::Intensity)
+        let conductor = any.is::<RoughConductor<T, GaussianPsd<T, 2>>>()
+            || any
+                .downcast_ref::<RoughConductor<T, GaussianMixturePsd<T, 2>>>()
+                .is_some_and(|m| m.psd.components().len() <= 8);
+        let dielectric = any.is::<RoughDielectric<T, GaussianPsd<T, 2>>>()
+            || any
+                .downcast_ref::<RoughDielectric<T, GaussianMixturePsd<T, 2>>>()
+                .is_some_and(|m| m.psd.components().len() <= 8);
+        matches!(Pol::LEVEL, L::Full | L::OneShape | L::Intensity)
             && (coh.is::<Partial>() || coh.is::<Incoherent>())
-            && (any.is::<RoughConductor<T, GaussianPsd<T, 2>>>()
-                || any
-                    .downcast_ref::<RoughConductor<T, GaussianMixturePsd<T, 2>>>()
-                    .is_some_and(|m| m.psd.components().len() <= 8))
+            && (dielectric || (conductor && interface.is_none()))
     }
 
     macro_rules! every_level {

@@ -3,14 +3,19 @@
 //! or a mixture of at most 8 Gaussians (`ln Σⱼ Kⱼ` per channel by `channels::mixture_log`),
 //! blurred in closed form ([`Partial`]`<`[`ClosedForm`]`>`) or in the incoherent limit
 //! ([`Incoherent`]), [`FresnelReflection`] specular
-//! reflection and [`RayleighRice`] scattering, in reflection, at the [`Full`], [`OneShape`] and
+//! reflection and [`RayleighRice`] scattering in reflection (a rough conductor), or
+//! [`FresnelInterface`] and [`RayleighRice`] with a real permittivity in reflection and at the
+//! interface lit from above (a rough dielectric: per lane, reflection where `r̂·n̂ > 0` and
+//! transmission where `r̂·n̂ < 0`), at the [`Full`], [`OneShape`] and
 //! [`Intensity`] levels — both lobes and the exit frames, 4 (`f64`) or 8 (`f32`) exits per
 //! instruction. The `Intensity` level runs the `OneShape` stages on the effective vector
 //! `(1, 0, 0, 0)` and writes `S0` only.
 //!
 //! Per vector of exits, the stages in order: r̂ and `cos θ_o` ([`stages::geometry`]), the exit
 //! s vector and azimuth ([`stages::azimuth`]), `q_o` ([`stages::fresnel`]), the Rayleigh–Rice
-//! factors ([`stages::rayleigh_rice`]), `h_t` and the Debye–Waller exponent, the channel
+//! factors ([`stages::rayleigh_rice`]: Germer's in reflection, Elson's in transmission), `h_t`
+//! (`k (ŝ + η r̂)`, `η = 1` in reflection) and the Debye–Waller exponent (`v = k (cos θ_i +
+//! cos θ_o)`, or `k (cos θ_i − η cos θ_o)`), the channel
 //! weights and their mix ([`stages::channels`]), the scattered Stokes vector
 //! ([`stages::stokes`]), the specular one ([`stages::specular`]), the projection onto the cone
 //! and the final scale. The lanes the stages cannot reproduce — within `√ε` of the normal
@@ -22,6 +27,7 @@
 //! [`ClosedForm`]: crate::psd::ClosedForm
 //! [`Incoherent`]: crate::interaction::Incoherent
 //! [`FresnelReflection`]: crate::interaction::FresnelReflection
+//! [`FresnelInterface`]: crate::interaction::FresnelInterface
 //! [`RayleighRice`]: crate::interaction::RayleighRice
 //! [`Full`]: crate::interaction::Full
 //! [`OneShape`]: crate::interaction::OneShape
@@ -34,7 +40,7 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::lobes::{ExitFramesSoa, LobesSoa};
-use super::prep::{Incidence, LobePrep};
+use super::prep::{Incidence, LobePrep, TransmissionPrep};
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
@@ -42,8 +48,8 @@ use crate::frame::Frame;
 use crate::interaction::pbsdf::Pbsdf;
 use crate::interaction::polarization::{KernelOutput, PolarizationLevel};
 use crate::interaction::{
-    CoherenceWeights, Geometry, Incoherent, Kernel, Partial, PolarizationModel, PreparedPacket,
-    RoughConductor, RoughSurface,
+    CoherenceWeights, FresnelInterface, FresnelReflection, Geometry, Incoherent, Kernel, Partial,
+    PolarizationModel, PreparedPacket, RayleighRice, RoughConductor, RoughDielectric, RoughSurface,
 };
 use crate::packet::WavePacket;
 use crate::psd::{ClosedForm, GaussianMixturePsd, GaussianPsd, Psd};
@@ -89,32 +95,59 @@ fn exit_lanes<S: Simd, F: Real>(
     ExitLanes { r, cos_o, frame }
 }
 
-/// The kernel of one wavelength (`p`) on one vector of exits.
+/// The kernel of one wavelength (`p`) on one vector of exits: in reflection (`below =
+/// None`), or on the transmission side of a dielectric interface (`below = Some(t)`, `t` of
+/// `p`: `cos θ_o = |r̂·n̂|`, `h = k (ŝ + η r̂)`, `v = k (cos θ_i − η cos θ_o)`, Elson's factors,
+/// the Fresnel transmission and `ln η²` in the scale). Lanes on the other side carry values
+/// the caller discards.
 #[inline(always)]
-fn lobe_lanes<S: Simd, F: Real>(s: S, p: &LobePrep<F>, e: &ExitLanes<S, F>) -> LobeLanes<S, F> {
+fn lobe_lanes<S: Simd, F: Real>(
+    s: S,
+    p: &LobePrep<F>,
+    e: &ExitLanes<S, F>,
+    below: Option<&TransmissionPrep<F>>,
+) -> LobeLanes<S, F> {
     let c = |v: F| F::vsplat(s, v);
-    let (add, mul) = (F::vadd::<S>, F::vmul::<S>);
+    let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
     let inc = &p.inc;
-    let (r, cos_o, frame) = (e.r, e.cos_o, &e.frame);
-    let (so2, qo) = stages::fresnel::exit_q::<S, F>(s, inc, cos_o);
-    let factors = stages::rayleigh_rice::factors::<S, F>(
-        s,
-        inc,
-        cos_o,
-        so2,
-        qo,
-        (frame.cos_phi, frame.sin_phi),
-    );
-    // h_t = k (r̂ + ŝ) in the surface frame (Geometry::h_t), and ln α = −(k (cos θ_i + cos θ_o))² σ².
+    let (r, frame) = (e.r, &e.frame);
+    let azimuth = (frame.cos_phi, frame.sin_phi);
     let (sv, kk) = (stages::splat3::<S, F>(s, inc.s), c(inc.k));
-    let h = [
-        mul(s, add(s, r[0], sv[0]), kk),
-        mul(s, add(s, r[1], sv[1]), kk),
-        mul(s, add(s, r[2], sv[2]), kk),
-    ];
+    // cos θ_o, the Rayleigh–Rice factors, h_t = k (ŝ + η r̂) (Geometry::h_t: η = 1 in
+    // reflection), v (the phase factor: ln α = −v² σ²), the constant exponents and the
+    // specular pBSDF's per-packet part (None: no specular lobe on this side).
+    let (cos_o, factors, h, v, (ln_spec0, ln_scat0), spec) = match below {
+        None => {
+            let cos_o = e.cos_o;
+            let (so2, qo) = stages::fresnel::exit_q::<S, F>(s, inc, cos_o);
+            let factors = stages::rayleigh_rice::factors::<S, F>(s, inc, cos_o, so2, qo, azimuth);
+            let h = [
+                mul(s, add(s, r[0], sv[0]), kk),
+                mul(s, add(s, r[1], sv[1]), kk),
+                mul(s, add(s, r[2], sv[2]), kk),
+            ];
+            let v = mul(s, kk, add(s, c(inc.cos_i), cos_o));
+            let spec = Some((&p.fresnel, &p.spec_frame, p.flip_tol));
+            (cos_o, factors, h, v, (p.ln_spec, p.ln_scat), spec)
+        }
+        Some(t) => {
+            let cos_o = F::vabs(s, e.cos_o);
+            let factors = stages::rayleigh_rice::transmission_factors::<S, F>(
+                s, inc, &t.consts, cos_o, azimuth,
+            );
+            let eta = c(t.eta);
+            let h = [
+                mul(s, add(s, sv[0], mul(s, r[0], eta)), kk),
+                mul(s, add(s, sv[1], mul(s, r[1], eta)), kk),
+                mul(s, add(s, sv[2], mul(s, r[2], eta)), kk),
+            ];
+            let v = mul(s, kk, sub(s, c(inc.cos_i), mul(s, eta, cos_o)));
+            let spec = (!t.tir).then_some((&t.fresnel, &t.spec_frame, p.flip_tol));
+            (cos_o, factors, h, v, (t.ln_spec, t.ln_scat), spec)
+        }
+    };
     let h0 = stages::dot3::<S, F>(s, h, stages::splat3::<S, F>(s, inc.t1));
     let h1 = stages::dot3::<S, F>(s, h, stages::splat3::<S, F>(s, inc.t2));
-    let v = mul(s, kk, add(s, c(inc.cos_i), cos_o));
     let ln_alpha = F::vneg_mul_add(s, mul(s, v, v), c(p.variance), c(F::zero()));
     let lg = stages::channels::log_gaussian::<S, F>;
     let (ml, nc) = (stages::channels::mixture_log::<S, F>, p.components);
@@ -148,32 +181,80 @@ fn lobe_lanes<S: Simd, F: Real>(s: S, p: &LobePrep<F>, e: &ExitLanes<S, F>) -> L
         cos_o,
     );
     let u_scat = stages::channels::onto_cone::<S, F>(s, raw_scat);
-    let ln_scat = add(s, add(s, ln_alpha, m_scat), c(p.ln_scat));
+    let ln_scat = add(s, add(s, ln_alpha, m_scat), c(ln_scat0));
     let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
-    let ln_spec = add(s, add(s, ln_alpha, m_spec), c(p.ln_spec));
+    let ln_spec = add(s, add(s, ln_alpha, m_spec), c(ln_spec0));
     let zero = c(F::zero());
-    let (specular, redo_spec) = if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) {
-        let u = stages::specular::fresnel_stokes::<S, F>(
-            s,
-            p,
-            r,
-            frame.s_out,
-            [
-                mul(s, v_spec[0], cos_o),
-                mul(s, v_spec[1], cos_o),
-                mul(s, v_spec[2], cos_o),
-                mul(s, v_spec[3], cos_o),
-            ],
-        );
-        stages::channels::scaled::<S, F>(s, p, stages::channels::onto_cone::<S, F>(s, u), ln_spec)
-    } else {
-        ([zero; 4], F::vlt(s, zero, zero))
+    let (specular, redo_spec) = match spec {
+        Some(consts) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
+            let u = stages::specular::fresnel_stokes::<S, F>(
+                s,
+                consts,
+                r,
+                frame.s_out,
+                [
+                    mul(s, v_spec[0], cos_o),
+                    mul(s, v_spec[1], cos_o),
+                    mul(s, v_spec[2], cos_o),
+                    mul(s, v_spec[3], cos_o),
+                ],
+            );
+            let u = stages::channels::onto_cone::<S, F>(s, u);
+            stages::channels::scaled::<S, F>(s, p, u, ln_spec)
+        }
+        _ => ([zero; 4], F::vlt(s, zero, zero)),
     };
     LobeLanes {
         specular,
         scattered,
         redo: or::<S, F>(s, frame.normal, or::<S, F>(s, redo_scat, redo_spec)),
     }
+}
+
+/// [`lobe_lanes`] on each lane's side: reflection everywhere without an interface; at one,
+/// the transmission side where `r̂·n̂ < 0` (both computed, and selected lane by lane, only for a
+/// vector with exits on both sides).
+#[inline(always)]
+fn lobe_lanes_either_side<S: Simd, F: Real>(
+    s: S,
+    p: &LobePrep<F>,
+    e: &ExitLanes<S, F>,
+) -> LobeLanes<S, F> {
+    let Some(t) = p.transmission.as_ref() else {
+        return lobe_lanes::<S, F>(s, p, e, None);
+    };
+    let below = F::vlt(s, e.cos_o, F::vsplat(s, F::zero()));
+    if !F::vany(s, below) {
+        return lobe_lanes::<S, F>(s, p, e, None);
+    }
+    if !F::vany(s, F::vnot(s, below)) {
+        return lobe_lanes::<S, F>(s, p, e, Some(t));
+    }
+    let (up, down) = (
+        lobe_lanes::<S, F>(s, p, e, None),
+        lobe_lanes::<S, F>(s, p, e, Some(t)),
+    );
+    let and = F::vand::<S>;
+    LobeLanes {
+        specular: pick::<S, F>(s, below, down.specular, up.specular),
+        scattered: pick::<S, F>(s, below, down.scattered, up.scattered),
+        redo: or::<S, F>(
+            s,
+            and(s, below, down.redo),
+            and(s, F::vnot(s, below), up.redo),
+        ),
+    }
+}
+
+/// `b` where `m`, else `a`, per component.
+#[inline(always)]
+fn pick<S: Simd, F: Real>(s: S, m: F::M<S>, b: [F::V<S>; 4], a: [F::V<S>; 4]) -> [F::V<S>; 4] {
+    [
+        F::vselect(s, m, b[0], a[0]),
+        F::vselect(s, m, b[1], a[1]),
+        F::vselect(s, m, b[2], a[2]),
+        F::vselect(s, m, b[3], a[3]),
+    ]
 }
 
 /// The SIMD loop over a batch of exits and one or more wavelengths, instantiated by
@@ -287,7 +368,7 @@ impl<F: Real, G: FnMut(usize, usize) -> Result<ScalarExit<F>, Error>> WithSimd
                 }
             }
             for (w, (p, out)) in preps.iter().zip(outs.iter_mut()).enumerate() {
-                let l = lobe_lanes::<S, F>(s, p, &e);
+                let l = lobe_lanes_either_side::<S, F>(s, p, &e);
                 for k in 0..stokes_len {
                     store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
                     store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
@@ -323,13 +404,15 @@ impl<F: Real, G: FnMut(usize, usize) -> Result<ScalarExit<F>, Error>> WithSimd
 
 /// The lane constants of one wavelength: `Some` when the kernel and the material are those of
 /// the module docs and the per-packet constants are inside what the lanes reproduce (see
-/// [`LobePrep::new`]); `None` otherwise, and the caller goes exit by exit.
+/// [`LobePrep::new`], and [`LobePrep::at_interface`] with `interface = Some(η)`); `None`
+/// otherwise, and the caller goes exit by exit.
 pub(crate) fn lane_prep<T, P, Sp, Sc, Pol, Coh>(
     kernel: &Kernel<Pol, Coh>,
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
     surface: &Frame<T>,
+    interface: Option<T>,
 ) -> Option<LobePrep<T>>
 where
     T: Real,
@@ -349,41 +432,27 @@ where
     if !(incoherent || coherence.is::<Partial<ClosedForm>>()) {
         return None;
     }
-    let any: &dyn Any = material;
-    // A Gaussian PSD, or a mixture of at most MAX_COMPONENTS Gaussians (LobePrep::new).
-    let (components, variance, integral, specular, scatter) =
-        if let Some(m) = any.downcast_ref::<RoughConductor<T, GaussianPsd<T, 2>>>() {
-            let c = core::slice::from_ref(&m.psd);
-            (
-                c,
-                m.psd.variance(),
-                m.psd.integral(),
-                &m.specular,
-                &m.scatter,
-            )
-        } else {
-            let m = any.downcast_ref::<RoughConductor<T, GaussianMixturePsd<T, 2>>>()?;
-            let c = m.psd.components();
-            (
-                c,
-                m.psd.variance(),
-                m.psd.integral(),
-                &m.specular,
-                &m.scatter,
-            )
-        };
+    let parts = LaneMaterial::of(material)?;
+    // A conductor's Fresnel reflection has no transmitted lobe: its interface goes exit by exit.
+    if interface.is_some() && parts.dielectric.is_none() {
+        return None;
+    }
     let prep = LobePrep::new(
         prepared,
-        components,
-        variance,
-        specular.index(),
-        scatter.permittivity(),
+        parts.components,
+        parts.variance,
+        parts.index,
+        parts.permittivity,
         packet,
         surface,
         full,
     )?;
+    let prep = match (interface, parts.dielectric) {
+        (Some(eta), Some(d)) => prep.at_interface(eta, d)?,
+        _ => prep,
+    };
     let prep = if incoherent {
-        prep.incoherent(integral)?
+        prep.incoherent(parts.integral)?
     } else {
         prep
     };
@@ -394,13 +463,78 @@ where
     })
 }
 
-/// Exit `exit` of `packet` by the per-direction kernel in reflection, as the lanes write it.
+/// What the lanes read of a material: a [`RoughConductor`] or a [`RoughDielectric`] with a
+/// Gaussian PSD, or a mixture of at most [`super::prep::MAX_COMPONENTS`] Gaussians
+/// ([`LobePrep::new`]).
+struct LaneMaterial<'a, T: Real> {
+    components: &'a [GaussianPsd<T, 2>],
+    variance: T,
+    integral: T,
+    /// The specular reflection's index (`Complex(η, 0)` for a dielectric).
+    index: num_complex::Complex<T>,
+    permittivity: num_complex::Complex<T>,
+    /// The dielectric's specular pBSDF (`None` for a conductor).
+    dielectric: Option<&'a FresnelInterface<T>>,
+}
+
+impl<'a, T: Real> LaneMaterial<'a, T> {
+    fn of<P: 'static, Sp: 'static, Sc: 'static>(
+        material: &'a RoughSurface<P, Sp, Sc>,
+    ) -> Option<Self> {
+        let any: &dyn Any = material;
+        macro_rules! parts {
+            ($m:expr, $components:expr) => {{
+                let m = $m;
+                (
+                    $components(&m.psd),
+                    m.psd.variance(),
+                    m.psd.integral(),
+                    &m.scatter,
+                )
+            }};
+        }
+        let single = |p: &'a GaussianPsd<T, 2>| core::slice::from_ref(p);
+        let mixture = |p: &'a GaussianMixturePsd<T, 2>| p.components();
+        let conductor = |(components, variance, integral, scatter): (_, _, _, &RayleighRice<T>),
+                         specular: &FresnelReflection<T>| Self {
+            components,
+            variance,
+            integral,
+            index: specular.index(),
+            permittivity: scatter.permittivity(),
+            dielectric: None,
+        };
+        let dielectric =
+            |(components, variance, integral, scatter): (_, _, _, &RayleighRice<T>),
+             specular: &'a FresnelInterface<T>| Self {
+                components,
+                variance,
+                integral,
+                index: num_complex::Complex::new(specular.relative_index(), T::zero()),
+                permittivity: scatter.permittivity(),
+                dielectric: Some(specular),
+            };
+        if let Some(m) = any.downcast_ref::<RoughConductor<T, GaussianPsd<T, 2>>>() {
+            Some(conductor(parts!(m, single), &m.specular))
+        } else if let Some(m) = any.downcast_ref::<RoughConductor<T, GaussianMixturePsd<T, 2>>>() {
+            Some(conductor(parts!(m, mixture), &m.specular))
+        } else if let Some(m) = any.downcast_ref::<RoughDielectric<T, GaussianPsd<T, 2>>>() {
+            Some(dielectric(parts!(m, single), &m.specular))
+        } else {
+            let m = any.downcast_ref::<RoughDielectric<T, GaussianMixturePsd<T, 2>>>()?;
+            Some(dielectric(parts!(m, mixture), &m.specular))
+        }
+    }
+}
+
+/// Exit `exit` of `packet` by the per-direction kernel (in reflection, or at the interface
+/// `Some(η)`), as the lanes write it.
 pub(crate) fn scalar_exit<T, P, Sp, Sc, Pol, Coh>(
     kernel: &Kernel<Pol, Coh>,
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
-    surface: &Frame<T>,
+    (surface, interface): (&Frame<T>, Option<T>),
     exit: Vector3<T>,
 ) -> Result<ScalarExit<T>, Error>
 where
@@ -411,7 +545,10 @@ where
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P>,
 {
-    let g = Geometry::for_packet(packet, surface, exit)?;
+    let g = match interface {
+        Some(eta) => Geometry::for_packet_at_interface(packet, surface, eta, exit)?,
+        None => Geometry::for_packet(packet, surface, exit)?,
+    };
     let r = kernel.evaluate_prepared(material, prepared, &g);
     let z = T::zero();
     let (sp, sc) = match r.stokes() {
@@ -424,8 +561,8 @@ where
     Ok((sp, sc, g.exit_sp().x().into()))
 }
 
-/// The lane path of [`Kernel::evaluate_batch`] in reflection (see [`lane_prep`]); `None` when
-/// it does not apply.
+/// The lane path of [`Kernel::evaluate_batch`] (see [`lane_prep`]); `None` when it does not
+/// apply.
 #[expect(
     clippy::too_many_arguments,
     reason = "evaluate_batch's arguments and its prepared packet"
@@ -435,7 +572,7 @@ pub(crate) fn try_evaluate<T, P, Sp, Sc, Pol, Coh>(
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
-    surface: &Frame<T>,
+    (surface, interface): (&Frame<T>, Option<T>),
     exits: DirectionsSoa<'_, T>,
     out: &mut LobesSoa<'_, T>,
     frames: Option<&mut ExitFramesSoa<'_, T>>,
@@ -448,10 +585,17 @@ where
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P> + 'static,
 {
-    let prep = lane_prep(kernel, material, prepared, packet, surface)?;
+    let prep = lane_prep(kernel, material, prepared, packet, surface, interface)?;
     let scalar = |_: usize, i: usize| {
         let exit = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
-        scalar_exit(kernel, material, prepared, packet, surface, exit)
+        scalar_exit(
+            kernel,
+            material,
+            prepared,
+            packet,
+            (surface, interface),
+            exit,
+        )
     };
     Some(crate::simd::dispatch(PartialLobes {
         preps: core::slice::from_ref(&prep),
@@ -573,7 +717,10 @@ mod tests {
             scattered: super::super::StokesSoa { s: [e, f, g, h] },
         };
         macro_rules! taken {
-            ($pol:ty, $coh:ty, $m:expr) => {{
+            ($pol:ty, $coh:ty, $m:expr) => {
+                taken!($pol, $coh, $m, None)
+            };
+            ($pol:ty, $coh:ty, $m:expr, $interface:expr) => {{
                 let kernel = Kernel::<$pol, $coh>::default();
                 let prepared = kernel.prepare(&packet, &surface).unwrap();
                 let exits = DirectionsSoa {
@@ -582,7 +729,14 @@ mod tests {
                     z: &z,
                 };
                 try_evaluate(
-                    &kernel, $m, &prepared, &packet, &surface, exits, &mut out, None,
+                    &kernel,
+                    $m,
+                    &prepared,
+                    &packet,
+                    (&surface, $interface),
+                    exits,
+                    &mut out,
+                    None,
                 )
                 .map(|r| r.unwrap())
                 .is_some()
@@ -596,7 +750,20 @@ mod tests {
         assert!(taken!(Intensity, Incoherent, &gold));
         assert!(!taken!(Intensity, PlaneWave, &gold));
         assert!(!taken!(Full, PlaneWave, &gold));
-        assert!(!taken!(Full, Partial, &glass));
+        // A dielectric in reflection and at its interface; a conductor's interface one at a
+        // time (its Fresnel reflection transmits nothing); a complex Rayleigh–Rice permittivity
+        // at an interface one at a time (the transmission lanes take a real one).
+        assert!(taken!(Full, Partial, &glass));
+        assert!(taken!(Full, Partial, &glass, Some(1.5)));
+        assert!(taken!(Intensity, Incoherent, &glass, Some(1.5)));
+        assert!(!taken!(Full, Partial, &gold, Some(1.5)));
+        let lossy: RoughDielectric<f64, _> = RoughSurface {
+            psd,
+            specular: FresnelInterface::new(1.5).unwrap(),
+            scatter: RayleighRice::new(Complex::new(1.5, 0.01)).unwrap(),
+        };
+        assert!(taken!(Full, Partial, &lossy));
+        assert!(!taken!(Full, Partial, &lossy, Some(1.5)));
         let mixture = |m: usize| {
             let c = (0..m)
                 .map(|j| GaussianPsd::<f64, 2>::isotropic(0.01, 1.0 + j as f64).unwrap())
@@ -613,5 +780,102 @@ mod tests {
     fn the_bench_scene_runs_in_lanes() {
         in_lanes::<f64>();
         in_lanes::<f32>();
+    }
+
+    /// Glass (η = 1.5) lit from above at 30°: exits around the mirror and Snell's directions,
+    /// alternating sides in every vector, all in lanes (none redone one at a time), both lobes
+    /// lit on the transmission side.
+    fn transmission_in_lanes<T: Real>() {
+        use crate::interaction::FresnelInterface;
+        let theta_i = 30f64.to_radians();
+        let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos()).map(T::lit);
+        let packet = WavePacket::new(
+            Stokes::new(T::one(), T::lit(0.3), T::lit(0.2), -T::lit(0.3)).unwrap(),
+            CoherenceShape::isotropic(T::lit(5.0)).unwrap(),
+            CoherenceShape::isotropic(T::lit(6.0)).unwrap(),
+            Frame::sp(travel, Vector3::z()).unwrap(),
+            T::lit(0.5),
+        )
+        .unwrap();
+        let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let eta = T::lit(1.5);
+        let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+        let kernel = Kernel::<Full, Partial>::default();
+        let prepared = kernel.prepare(&packet, &surface).unwrap();
+        let index = Complex::new(eta, T::zero());
+        let prep = LobePrep::new(
+            &prepared,
+            core::slice::from_ref(&psd),
+            psd.variance(),
+            index,
+            index * index,
+            &packet,
+            &surface,
+            true,
+        )
+        .and_then(|p| p.at_interface(eta, &FresnelInterface::new(eta).unwrap()))
+        .expect("the lane constants");
+        let theta_t = (theta_i.sin() / 1.5).asin();
+        let n = 64;
+        let (mut x, mut y, mut z) = (vec![], vec![], vec![]);
+        for i in 0..n {
+            let (centre, side) = if i % 2 == 0 {
+                (theta_i, 1.0)
+            } else {
+                (theta_t, -1.0)
+            };
+            let to = centre + ((i / 2) as f64 / (n / 2) as f64 - 0.5) * 0.1;
+            let po = ((i * 7 % n) as f64 / n as f64 - 0.5) * 0.2;
+            x.push(T::lit(to.sin() * po.cos()));
+            y.push(T::lit(to.sin() * po.sin()));
+            z.push(T::lit(side * to.cos()));
+        }
+        let mut buf = vec![vec![T::zero(); n]; 8];
+        let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: super::super::StokesSoa { s: [a, b, c, d] },
+            scattered: super::super::StokesSoa { s: [e, f, g, h] },
+        };
+        let mut calls = 0;
+        crate::simd::dispatch(PartialLobes {
+            preps: core::slice::from_ref(&prep),
+            exits: DirectionsSoa {
+                x: &x,
+                y: &y,
+                z: &z,
+            },
+            outs: core::slice::from_mut(&mut out),
+            frames: None,
+            scalar: |_, _| {
+                calls += 1;
+                Ok(([T::zero(); 4], [T::zero(); 4], [T::zero(); 3]))
+            },
+        })
+        .unwrap();
+        assert_eq!(calls, 0, "lanes redone by the per-direction kernel");
+        let below = |col: &[T]| {
+            col.iter()
+                .skip(1)
+                .step_by(2)
+                .filter(|v| **v > T::zero())
+                .count()
+        };
+        assert_eq!(
+            below(out.scattered.s[0]),
+            n / 2,
+            "transmitted scattered lobe"
+        );
+        assert!(
+            below(out.specular.s[0]) > n / 4,
+            "transmitted specular lobe"
+        );
+    }
+
+    #[test]
+    fn transmission_runs_in_lanes() {
+        transmission_in_lanes::<f64>();
+        transmission_in_lanes::<f32>();
     }
 }

@@ -5,6 +5,7 @@
 use nalgebra::{Matrix4, Vector2, Vector3, Vector4};
 use num_complex::Complex;
 
+use super::stages::rayleigh_rice::TransmissionConsts;
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::interaction::geometry::{self, Geometry};
@@ -51,6 +52,9 @@ pub(crate) struct Incidence<T: Real> {
     pub(crate) parallel_tol: T,
     /// The incident s/p frame.
     pub(crate) incident_sp: Frame<T>,
+    /// `Some(η)` at a dielectric interface of relative index `η` (exits on either side are
+    /// valid: [`Geometry::at_interface`]); `None` in reflection ([`Geometry::new`]).
+    pub(crate) interface: Option<T>,
 }
 
 /// The per-packet constants of [`super::plane_wave_rayleigh_rice`]: the incidence and the
@@ -132,12 +136,20 @@ impl<T: Real> Incidence<T> {
             eim_half: e.im * T::lit(0.5),
             parallel_tol: T::EPSILON.sqrt(),
             incident_sp,
+            interface: None,
         })
     }
 
-    /// `Ok` when the per-direction kernel accepts `exit` (the error of [`Geometry::new`] otherwise).
+    /// `Ok` when the per-direction kernel accepts `exit` (the error of [`Geometry::new`], or
+    /// at an interface of [`Geometry::at_interface`], otherwise).
     pub(crate) fn check_exact(&self, exit: Vector3<T>) -> Result<(), Error> {
-        Geometry::new(self.k, &self.surface, self.to_source_raw, exit).map(|_| ())
+        match self.interface {
+            Some(eta) => {
+                Geometry::at_interface(self.k, &self.surface, eta, self.to_source_raw, exit)
+            }
+            None => Geometry::new(self.k, &self.surface, self.to_source_raw, exit),
+        }
+        .map(|_| ())
     }
 
     /// `(cos φ, sin φ)` of [`Geometry::exit_azimuth`] for the unit exit `r` (the scalar code,
@@ -276,6 +288,30 @@ pub(crate) struct LobePrep<T: Real> {
     pub(crate) flip_tol: T,
     /// The `Intensity` level: only `S0` of each lobe is written.
     pub(crate) intensity: bool,
+    /// At a dielectric interface lit from above, the constants of the transmission side
+    /// ([`LobePrep::at_interface`]); `None` in reflection.
+    pub(crate) transmission: Option<TransmissionPrep<T>>,
+}
+
+/// The per-packet constants of the transmission side of a dielectric interface lit from above
+/// (`FresnelInterface` specular transmission, Elson's Rayleigh–Rice transmission factors).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TransmissionPrep<T: Real> {
+    /// `η = √ε` of the Rayleigh–Rice permittivity and `sin θ_i`.
+    pub(crate) consts: TransmissionConsts<T>,
+    /// The geometry's relative index `η` (of `h = k (ŝ + η r̂)`, `v = k (cos θ_i − η cos θ_o)`,
+    /// `λ_t = λ/η` and the `√η` of the Rayleigh–Rice Jones scale).
+    pub(crate) eta: T,
+    /// `ln_spec + ln η²`, and `ln (2k cos θ_i √η)²` on top for the scattered part.
+    pub(crate) ln_spec: T,
+    pub(crate) ln_scat: T,
+    /// The Fresnel transmission Mueller matrix (incident s/p frame to the s/p frame of Snell's
+    /// direction, `√η diag(t_s, t_p)`), zero under total internal reflection.
+    pub(crate) fresnel: Matrix4<T>,
+    /// The s/p frame of Snell's direction (`Geometry::specular_sp` on the transmission side).
+    pub(crate) spec_frame: Frame<T>,
+    /// Total internal reflection: no specular transmission.
+    pub(crate) tir: bool,
 }
 
 impl<T: Real> core::ops::Deref for LobePrep<T> {
@@ -360,6 +396,7 @@ impl<T: Real> LobePrep<T> {
             spec_frame: Frame::sp_unit(r_spec, inc.n),
             flip_tol: T::lit(Frame::<T>::TOLERANCE_ULPS) * T::EPSILON,
             intensity: false,
+            transmission: None,
             inc,
         };
         let finite = out.spec.iter().all(LogGaussian::is_finite)
@@ -371,6 +408,48 @@ impl<T: Real> LobePrep<T> {
             && ln_scat.is_finite()
             && out.fresnel.iter().all(|v| v.is_finite());
         (out.inc.plain_q && finite && ln_s0.is_finite()).then_some(out)
+    }
+
+    /// The constants at a dielectric interface of relative index `eta` (the geometry's, as
+    /// `interface = Some(η)` of `Kernel::evaluate_batch`) lit from above, with the specular
+    /// pBSDF `specular`: the transmission side's from a probe geometry straight down
+    /// (`FresnelInterface::jones` and `Geometry::specular_sp` there, as the per-direction kernel
+    /// has them for every transmitted exit). `None` unless the Rayleigh–Rice permittivity is real
+    /// ([`TransmissionConsts::new`]), or where the probe geometry is rejected (`η` outside
+    /// [`Geometry::at_interface`]'s range) or a constant is not finite.
+    pub(crate) fn at_interface(
+        mut self,
+        eta: T,
+        specular: &crate::interaction::FresnelInterface<T>,
+    ) -> Option<Self> {
+        let consts = TransmissionConsts::new(&self.inc)?;
+        let inc = &self.inc;
+        let probe = Geometry::at_interface(inc.k, &inc.surface, eta, inc.to_source_raw, -inc.n)
+            .ok()
+            .filter(|g| !g.incident_from_below())?;
+        let jones = specular.jones(&probe);
+        let tir = jones.is_none();
+        let ln_spec = self.ln_spec + probe.ln_eta_sq;
+        let jones_scale = T::lit(2.0) * inc.k * inc.cos_i * eta.sqrt();
+        let ln_scat = ln_spec + (jones_scale * jones_scale).ln();
+        let t = TransmissionPrep {
+            consts,
+            eta,
+            ln_spec,
+            ln_scat,
+            fresnel: jones.map_or_else(Matrix4::zeros, |j| {
+                crate::mueller::Mueller::from_jones(&j).0
+            }),
+            spec_frame: probe.specular_sp(),
+            tir,
+        };
+        let finite = ln_spec.is_finite()
+            && ln_scat.is_finite()
+            && consts.index.re.is_finite()
+            && t.fresnel.iter().all(|v| v.is_finite());
+        self.inc.interface = Some(eta);
+        self.transmission = Some(t);
+        finite.then_some(self)
     }
 
     /// The constants for the [`crate::interaction::Intensity`] level (from those of the

@@ -187,9 +187,11 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
                 None => *surface,
             };
             let p = self.prepare(wl.packet, &facing)?;
-            preps[w] = lane_prep(self, wl.material, &p, wl.packet, surface);
+            preps[w] = lane_prep(self, wl.material, &p, wl.packet, surface, wl.interface);
             prepared[w] = Some(p);
-            lanes &= wl.interface.is_none() && preps[w].is_some();
+            // One pass validates the exits once for all: the same side rule (every wavelength
+            // at an interface, or none).
+            lanes &= wl.interface.is_some() == ws[0].interface.is_some() && preps[w].is_some();
         }
         if !lanes {
             for (w, (wl, out)) in ws.iter().zip(outs.iter_mut()).enumerate() {
@@ -216,7 +218,14 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
                 expected: "a prepared wavelength",
             })?;
             let wl = &ws[w];
-            scalar_exit(self, wl.material, p, wl.packet, surface, exit)
+            scalar_exit(
+                self,
+                wl.material,
+                p,
+                wl.packet,
+                (surface, wl.interface),
+                exit,
+            )
         };
         crate::simd::dispatch(PartialLobes {
             preps: &gathered[..ws.len()],
@@ -360,11 +369,16 @@ mod tests {
             drop(outs);
             for (j, w) in ws.iter().enumerate() {
                 // Whether this wavelength has lane constants (else the pass loops).
-                if interface.is_none() {
-                    let prepared = kernel.prepare(w.packet, &surface).unwrap();
-                    let lanes =
-                        super::lane_prep(&kernel, w.material, &prepared, w.packet, &surface)
-                            .is_some();
+                {
+                    let facing = match interface {
+                        Some(_) => surface.facing(&-w.packet.direction()),
+                        None => surface,
+                    };
+                    let prepared = kernel.prepare(w.packet, &facing).unwrap();
+                    let lanes = super::lane_prep(
+                        &kernel, w.material, &prepared, w.packet, &surface, interface,
+                    )
+                    .is_some();
                     lanes_taken += usize::from(lanes);
                 }
                 let (mut one, mut fr1) = buffers::<T>(1, n);

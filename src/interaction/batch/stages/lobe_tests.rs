@@ -1070,8 +1070,14 @@ impl<F: Real> PerWidth for Fresnel<F> {
                 let m: Vec<Matrix4<F>> = g.iter().map(|g| fresnel.mueller(g).0).collect();
                 for (vi, v) in vs.iter().enumerate() {
                     let lv: [F::V<S>; 4] = core::array::from_fn(|k| F::vsplat(s, v[k]));
-                    let got = fresnel_stokes::<S, F>(s, &c.prep, r, so, lv)
-                        .map(|x| lanes_of::<S, F>(s, x));
+                    let got = fresnel_stokes::<S, F>(
+                        s,
+                        (&c.prep.fresnel, &c.prep.spec_frame, c.prep.flip_tol),
+                        r,
+                        so,
+                        lv,
+                    )
+                    .map(|x| lanes_of::<S, F>(s, x));
                     let size: f64 = v.iter().map(|x| x.to_f64().abs()).sum();
                     for j in 0..len {
                         let want = m[j] * v;

@@ -68,19 +68,11 @@ pub(crate) fn factors<S: Simd, F: Real>(
 /// The per-packet constants of [`transmission_factors`] besides the [`Incidence`]: `η = √ε`
 /// (principal branch) and `sin θ_i`.
 #[derive(Debug, Clone, Copy)]
-#[allow(
-    dead_code,
-    reason = "a stage of the transmission lanes, tested against its scalar twin; the lane loop does not run transmission yet"
-)]
 pub(crate) struct TransmissionConsts<F: Real> {
     pub(crate) index: Complex<F>,
     pub(crate) sin_i: F,
 }
 
-#[allow(
-    dead_code,
-    reason = "a stage of the transmission lanes, tested against its scalar twin; the lane loop does not run transmission yet"
-)]
 impl<F: Real> TransmissionConsts<F> {
     /// The constants of the incidence `p` (built with the permittivity seen from the source),
     /// or `None` unless `ε` is real (a dielectric interface): the lanes take `a_o`'s square
@@ -106,10 +98,6 @@ impl<F: Real> TransmissionConsts<F> {
 /// ```
 /// in the scalar's order of operations (bit for bit).
 #[inline(always)]
-#[allow(
-    dead_code,
-    reason = "a stage of the transmission lanes, tested against its scalar twin; the lane loop does not run transmission yet"
-)]
 pub(crate) fn transmission_factors<S: Simd, F: Real>(
     s: S,
     p: &Incidence<F>,

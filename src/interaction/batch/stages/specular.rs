@@ -1,27 +1,30 @@
-//! The specular pBSDF in lanes: `FresnelReflection::mueller`, the Fresnel Mueller matrix
-//! (per packet) followed by the frame change from the specular s/p frame to each exit's s/p
+//! The specular pBSDF in lanes: `FresnelReflection::mueller` (or `FresnelInterface::mueller`
+//! on either side), the Fresnel Mueller matrix (per packet) followed by the frame change from the specular s/p frame to each exit's s/p
 //! frame (`frame_change_mueller`, S2.3–S2.4): its closest rotation (or reflection, when
 //! `r̂·r̂_spec < −256 ε`) from the four dot products of the two frames' axes.
 
 use pulp::Simd;
 
-use super::super::prep::LobePrep;
 use super::channels::mat_vec;
 use super::{dot3, splat3};
+use crate::frame::Frame;
 use crate::real::Real;
+use nalgebra::Matrix4;
 
-/// `T(F_spec → F_exit) M_F v` for the unit exits `r` with exit s vectors `s_out`.
+/// `T(F_spec → F_exit) M_F v` for the unit exits `r` with exit s vectors `s_out`: `fresnel`
+/// is `M_F`, `spec_frame` the specular s/p frame, and `r̂·r̂_spec < −flip_tol` a flipped frame
+/// change.
 #[inline(always)]
 pub(crate) fn fresnel_stokes<S: Simd, F: Real>(
     s: S,
-    p: &LobePrep<F>,
+    (fresnel, spec_frame, flip_tol): (&Matrix4<F>, &Frame<F>, F),
     r: [F::V<S>; 3],
     s_out: [F::V<S>; 3],
     v: [F::V<S>; 4],
 ) -> [F::V<S>; 4] {
     let c = |x: F| F::vsplat(s, x);
     let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
-    let w = mat_vec::<S, F>(s, &p.fresnel, v);
+    let w = mat_vec::<S, F>(s, fresnel, v);
     // p̂_out = r̂ × ŝ_out (Frame::sp_unit).
     let p_out = [
         sub(s, mul(s, r[1], s_out[2]), mul(s, r[2], s_out[1])),
@@ -29,15 +32,15 @@ pub(crate) fn fresnel_stokes<S: Simd, F: Real>(
         sub(s, mul(s, r[0], s_out[1]), mul(s, r[1], s_out[0])),
     ];
     let (fs, fp, fk) = (
-        splat3::<S, F>(s, p.spec_frame.x()),
-        splat3::<S, F>(s, p.spec_frame.y()),
-        splat3::<S, F>(s, p.spec_frame.k()),
+        splat3::<S, F>(s, spec_frame.x()),
+        splat3::<S, F>(s, spec_frame.y()),
+        splat3::<S, F>(s, spec_frame.k()),
     );
     let a = dot3::<S, F>(s, s_out, fs);
     let b = dot3::<S, F>(s, s_out, fp);
     let cc = dot3::<S, F>(s, p_out, fs);
     let d = dot3::<S, F>(s, p_out, fp);
-    let flip = F::vlt(s, dot3::<S, F>(s, fk, r), c(-p.flip_tol));
+    let flip = F::vlt(s, dot3::<S, F>(s, fk, r), c(-flip_tol));
     let x = F::vselect(s, flip, sub(s, a, d), add(s, a, d));
     let y = F::vselect(s, flip, sub(s, c(F::zero()), add(s, b, cc)), sub(s, cc, b));
     let rr = F::vsqrt(s, F::vmul_add(s, x, x, mul(s, y, y)));

@@ -1,7 +1,8 @@
 //! The fast validity test of an exit direction, scalar and in lanes: finite, of moderate size,
-//! and with `r·n̂ > 64 ε max|r_i|`, far enough from 0 that the `cos θ_o` of the normalised
-//! direction is positive whatever the rounding. Directions it does not clear go to the exact
-//! test ([`Incidence::check_exact`], i.e. `Geometry::new`).
+//! and with `r·n̂ > 64 ε max|r_i|` (at an interface `|r·n̂|`, either side), far enough from 0
+//! that the sign of the normalised direction's `cos θ_o` is that of `r·n̂` whatever the
+//! rounding. Directions it does not clear go to the exact test ([`Incidence::check_exact`],
+//! i.e. `Geometry::new` or `Geometry::at_interface`).
 
 use pulp::Simd;
 
@@ -21,6 +22,7 @@ pub(crate) fn clearly_valid<F: Real>(p: &Incidence<F>, x: F, y: F, z: F) -> bool
     let (lo, hi) = size_range::<F>();
     let m = x.abs().max(y.abs()).max(z.abs());
     let d = x * p.n.x + y * p.n.y + z * p.n.z;
+    let d = if p.interface.is_some() { d.abs() } else { d };
     x.is_finite()
         && y.is_finite()
         && z.is_finite()
@@ -48,6 +50,11 @@ pub(crate) fn clearly_valid_lanes<S: Simd, F: Real>(
         F::vadd(s, F::vmul(s, x, c(p.n.x)), F::vmul(s, y, c(p.n.y))),
         F::vmul(s, z, c(p.n.z)),
     );
+    let d = if p.interface.is_some() {
+        F::vabs(s, d)
+    } else {
+        d
+    };
     let and = F::vand::<S>;
     and(
         s,

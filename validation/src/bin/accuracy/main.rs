@@ -43,11 +43,12 @@
 //! `Kernel::evaluate_batch` (`interface = None` in reflection, `Some(1.5)` for glass
 //! transmission; no exit frames requested). Like their per-direction twins they apply to every
 //! material with a closed-form blur (not the K-correlation): on the Gaussian and brushed
-//! materials (Gaussian PSD, Fresnel reflection, Rayleigh–Rice, reflection) the call runs SIMD
-//! lanes, on the grating and glass transmission it loops the per-direction kernel inside the
-//! call — kept so that a batch row covers the same scenes as its twin. `Full·Partial·mix4` and
+//! materials (Gaussian PSD, Fresnel reflection, Rayleigh–Rice, reflection) and on glass
+//! transmission (a rough dielectric lit from the air) the call runs SIMD lanes, on the grating
+//! it loops the per-direction kernel inside the call — kept so that a batch row covers the
+//! same scenes as its twin. `Full·Partial·mix4` and
 //! `·mix8` call it on the K-correlation's Gaussian-mixture fits (lanes), `Full·Incoherent·—` on
-//! every material (lanes on the Gaussian and brushed ones). `Full·PlaneWave·—` (f64, f32) calls
+//! every material (lanes on the Gaussian, brushed and glass ones). `Full·PlaneWave·—` (f64, f32) calls
 //! `interaction::batch::plane_wave_rayleigh_rice`, the scattered lobe of the plane-wave level
 //! (its specular lobe is a delta, not compared by any row): Gaussian-PSD reflection materials
 //! only (the Gaussian and brushed ones; the function takes neither other PSDs nor transmission),
@@ -585,9 +586,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         batch_md,
         "Each batch row against the per-direction row of the same model and precision, on the \
          same scenes, split by the path the batch takes: SIMD lanes (Gaussian PSD or a mixture \
-         fit of ≤ 8 components, Fresnel reflection and Rayleigh–Rice, in reflection: the Gauss \
-         and brushed materials, the K-correlation's mix rows) or the per-direction kernel \
-         looped inside the call (grating, glass transmission, the K-correlation's own PSD). Times are \
+         fit of ≤ 8 components, Fresnel and Rayleigh–Rice in reflection and at a dielectric \
+         interface lit from above: the Gauss, brushed and glass transmission materials, the \
+         K-correlation's mix rows) or the per-direction kernel looped inside the call \
+         (grating, the K-correlation's own PSD). Times are \
          medians over scenes of the per-scene median ns per exit. “one at a time” is the \
          per-direction row (geometries precomputed, outside its timing); “+ geometry” adds the \
          per-scene median time to build one exit geometry, which the batch call does inside — \
@@ -602,11 +604,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| batch row | path | scenes | ns/eval batch | ns/eval one at a time | + geometry | speed-up vs + geometry | max Δ vs one at a time | underflow (left out of Δ) |"
     )?;
     writeln!(batch_md, "|---|---|---:|---:|---:|---:|---:|---:|---:|")?;
-    // The scenes where the batch runs SIMD lanes: a Gaussian PSD (the Gauss and brushed
-    // materials) or, on the K-correlation, its Gaussian-mixture fits (≤ 8 components), at the
-    // Partial and Incoherent levels (not the K-correlation's own PSD, the incoherent row there).
+    // The scenes where the batch runs SIMD lanes: a Gaussian PSD (the Gauss, brushed and glass
+    // transmission materials) or, on the K-correlation, its Gaussian-mixture fits (≤ 8
+    // components), at the Partial and Incoherent levels (not the K-correlation's own PSD, the
+    // incoherent row there).
     let lanes_scene = |v: &measure::Variant, mi: usize| match materials[mi] {
-        MaterialSpec::Gaussian { .. } | MaterialSpec::Brushed { .. } => true,
+        MaterialSpec::Gaussian { .. }
+        | MaterialSpec::Brushed { .. }
+        | MaterialSpec::GlassTransmission { .. } => true,
         MaterialSpec::KCorr { .. } => matches!(v.blur, Blur::Mixture(_)),
         _ => false,
     };
