@@ -54,9 +54,11 @@ struct Scene {
     exits: Vec<Vector3<f64>>,
     /// Which of the six lane levels.
     level: usize,
-    /// A dielectric interface of index `Re η` lit from above (exits on both sides, some near
-    /// Snell's direction) instead of a conductor in reflection.
+    /// A dielectric interface of index `Re η` (exits on both sides, some near Snell's
+    /// direction) instead of a conductor in reflection.
     interface: bool,
+    /// At the interface, the light comes from below (from inside the medium of index `Re η`).
+    from_below: bool,
 }
 
 /// The scene's packet (at `wavelength × stretch`) and surface in `T`.
@@ -70,7 +72,8 @@ fn build<T: Real>(sc: &Scene, stretch: f64) -> (WavePacket<T>, Frame<T>) {
     let (t1, t2, n) = (surface.x(), surface.y(), surface.k());
     let (st, ct) = (T::lit(sc.theta_i.sin()), T::lit(sc.theta_i.cos()));
     let (sp, cp) = (T::lit(sc.phi_i.sin()), T::lit(sc.phi_i.cos()));
-    let travel = -(t1 * (st * cp) + t2 * (st * sp) + n * ct);
+    let up = if sc.from_below { -T::one() } else { T::one() };
+    let travel = -(t1 * (st * cp) + t2 * (st * sp) + n * (up * ct));
     let frame = Frame::sp(travel, n).unwrap().rotated(T::lit(sc.psi));
     let shape = |w: f64| CoherenceShape::isotropic(T::lit(w)).unwrap();
     // The correlated part (S2, S3) shrunk by halves until the two shapes can carry it (the
@@ -382,8 +385,14 @@ fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
     let (t1, t2, nn) = (f.x(), f.y(), f.k());
     let mut rng = Lcg(seed);
     // At an interface, every exit of an odd pair index is transmitted (near Snell's direction
-    // or anywhere below), so that vectors of lanes hold both sides.
-    let theta_t = (sc.theta_i.sin() / sc.eta.re).min(1.0).asin();
+    // or anywhere on the far side), so that vectors of lanes hold both sides.
+    let eta_t = if sc.from_below {
+        1.0 / sc.eta.re
+    } else {
+        sc.eta.re
+    };
+    let theta_t = (sc.theta_i.sin() / eta_t).min(1.0).asin();
+    let near_side = if sc.from_below { -1.0 } else { 1.0 };
     (0..n)
         .map(|i| {
             let below = sc.interface && (i / 2) % 2 == 1;
@@ -399,7 +408,7 @@ fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
             };
             let sin_o = (1.0 - cos_o * cos_o).sqrt();
             let scale = 0.1 * 100f64.powf(rng.uniform());
-            let side = if below { -1.0 } else { 1.0 };
+            let side = if below { -near_side } else { near_side };
             (t1 * (sin_o * phi.cos()) + t2 * (sin_o * phi.sin()) + nn * (side * cos_o)) * scale
         })
         .collect()
@@ -426,7 +435,7 @@ prop_compose! {
     ) -> Scene {
         let mut sc = Scene {
             theta_i, phi_i, normal, psi, stokes, width: 10f64.powf(log_width), ratio, eta,
-            components, wavelength, exits: Vec::new(), level, interface: false,
+            components, wavelength, exits: Vec::new(), level, interface: false, from_below: false,
         };
         sc.exits = exit_set(&sc, [1, 5, 17, 40][len], seed);
         sc
@@ -461,15 +470,19 @@ proptest! {
     }
 }
 
-/// [`scene_strategy`]'s scenes as a dielectric interface of index `Re η` (1–3 or 0.05–3: from
-/// a denser medium too, with total internal reflection), lit from above, exits on both sides.
+/// [`scene_strategy`]'s scenes as a dielectric interface of index `Re η` (1–3 or 0.05–3),
+/// lit from above or from below (from the medium of index `Re η`: total internal reflection
+/// either way in part of the draws), exits on both sides.
 fn interface_strategy() -> impl Strategy<Value = Scene> {
-    (scene_strategy(), 0..4usize, any::<u64>()).prop_map(|(mut sc, len, seed)| {
-        sc.interface = true;
-        sc.eta = Complex::new(sc.eta.re, 0.0);
-        sc.exits = exit_set(&sc, [1, 5, 17, 40][len], seed);
-        sc
-    })
+    (scene_strategy(), 0..4usize, any::<u64>(), any::<bool>()).prop_map(
+        |(mut sc, len, seed, below)| {
+            sc.interface = true;
+            sc.from_below = below;
+            sc.eta = Complex::new(sc.eta.re, 0.0);
+            sc.exits = exit_set(&sc, [1, 5, 17, 40][len], seed);
+            sc
+        },
+    )
 }
 
 /// Found by a fresh-seed search (`GMUELLER_PROPTEST_SEARCH=50`, 2026-12-03) against the
@@ -510,6 +523,7 @@ fn lane_specular_where_the_coherence_polarizes_and_fresnel_cancels() {
         ],
         level: 0,
         interface: false,
+        from_below: false,
     };
     check_level::<f32>(&sc, "f32");
     let (packet, surface) = build::<f32>(&sc, 1.0);

@@ -6,7 +6,7 @@
 //! interface) and every PSD and blur: the per-packet work once, then the exits — 4 (`f64`) or
 //! 8 (`f32`) per instruction for the partially coherent (closed-form blur) and incoherent
 //! Gaussian- or Gaussian-mixture-PSD rough conductor in reflection, and rough dielectric in
-//! reflection and at its interface lit from above, at every polarization level
+//! reflection and at its interface lit from either side, at every polarization level
 //! (`super::partial`), one at a time otherwise — with no heap allocation. For several
 //! wavelengths of one path, `Kernel::evaluate_batch_spectral` (`super::spectral`) shares the
 //! exit geometry between them.
@@ -86,10 +86,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// [`crate::psd::GaussianMixturePsd`] of at most 8 components, on a
     /// [`super::super::RoughConductor`] with `interface = None` (Fresnel specular reflection
     /// and Rayleigh–Rice scattering, `Complex` index) or a [`super::super::RoughDielectric`]
-    /// (either `interface`; at one, lit from above — the side the surface frame's normal
-    /// points to — with a real Rayleigh–Rice permittivity: Fresnel reflection and transmission,
-    /// Germer's and Elson's factors, each exit on its side; a vector of lanes with exits on
-    /// both sides computes both), the exits run through the
+    /// (either `interface`; at one, lit from either side, with a real Rayleigh–Rice
+    /// permittivity: Fresnel reflection and transmission, Germer's and Elson's factors, each
+    /// exit on its side; a vector of lanes with exits on both sides computes both), the exits
+    /// run through the
     /// SIMD stages of `interaction::batch::stages`, 4 (`f64`) or 8 (`f32`) per instruction
     /// under AVX2 + FMA (pulp's run-time detection; elsewhere a scalar instantiation of the
     /// same loop). Exits within `√ε` of the normal, and lit parts whose final scale is not a

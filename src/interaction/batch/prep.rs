@@ -52,9 +52,11 @@ pub(crate) struct Incidence<T: Real> {
     pub(crate) parallel_tol: T,
     /// The incident s/p frame.
     pub(crate) incident_sp: Frame<T>,
-    /// `Some(η)` at a dielectric interface of relative index `η` (exits on either side are
-    /// valid: [`Geometry::at_interface`]); `None` in reflection ([`Geometry::new`]).
-    pub(crate) interface: Option<T>,
+    /// `Some((η, surface))` at a dielectric interface of relative index `η` and the caller's
+    /// surface frame (`surface` above is the one facing the source: reversed for light from
+    /// below; exits on either side are valid, [`Geometry::at_interface`]); `None` in reflection
+    /// ([`Geometry::new`]).
+    pub(crate) interface: Option<(T, Frame<T>)>,
 }
 
 /// The per-packet constants of [`super::plane_wave_rayleigh_rice`]: the incidence and the
@@ -144,8 +146,8 @@ impl<T: Real> Incidence<T> {
     /// at an interface of [`Geometry::at_interface`], otherwise).
     pub(crate) fn check_exact(&self, exit: Vector3<T>) -> Result<(), Error> {
         match self.interface {
-            Some(eta) => {
-                Geometry::at_interface(self.k, &self.surface, eta, self.to_source_raw, exit)
+            Some((eta, surface)) => {
+                Geometry::at_interface(self.k, &surface, eta, self.to_source_raw, exit)
             }
             None => Geometry::new(self.k, &self.surface, self.to_source_raw, exit),
         }
@@ -288,19 +290,20 @@ pub(crate) struct LobePrep<T: Real> {
     pub(crate) flip_tol: T,
     /// The `Intensity` level: only `S0` of each lobe is written.
     pub(crate) intensity: bool,
-    /// At a dielectric interface lit from above, the constants of the transmission side
+    /// At a dielectric interface, the constants of the transmission side
     /// ([`LobePrep::at_interface`]); `None` in reflection.
     pub(crate) transmission: Option<TransmissionPrep<T>>,
 }
 
-/// The per-packet constants of the transmission side of a dielectric interface lit from above
+/// The per-packet constants of the transmission side of a dielectric interface
 /// (`FresnelInterface` specular transmission, Elson's Rayleigh–Rice transmission factors).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct TransmissionPrep<T: Real> {
     /// `η = √ε` of the Rayleigh–Rice permittivity and `sin θ_i`.
     pub(crate) consts: TransmissionConsts<T>,
-    /// The geometry's relative index `η` (of `h = k (ŝ + η r̂)`, `v = k (cos θ_i − η cos θ_o)`,
-    /// `λ_t = λ/η` and the `√η` of the Rayleigh–Rice Jones scale).
+    /// The geometry's relative index `η_t = n_t/n_i` (`η`, or `1/η` from below: of
+    /// `h = k (ŝ + η_t r̂)`, `v = k (cos θ_i − η_t cos θ_o)`, `λ_t = λ/η_t` and the `√η_t` of the
+    /// Rayleigh–Rice Jones scale).
     pub(crate) eta: T,
     /// `ln_spec + ln η²`, and `ln (2k cos θ_i √η)²` on top for the scattered part.
     pub(crate) ln_spec: T,
@@ -328,18 +331,20 @@ impl<T: Real> LobePrep<T> {
     /// `variance`; `None` where the lanes would not reproduce the scalar kernel (no component or
     /// more than [`MAX_COMPONENTS`], a section that is not positive definite, a Cholesky factor
     /// of a sum that fails, an index outside the plain `hypot` range, a non-finite constant).
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "the prepared packet, the PSD's components and variance, the two indices, the packet, the surface and the level"
-    )]
+    ///
+    /// `surface` is the frame facing the source (`fresnel_eta` and `epsilon` the indices seen
+    /// from it); `mirrored` when it is the caller's reversed (light from below an interface,
+    /// t̂₂ negated): the PSD is given in the caller's frame, so each scattered channel is the
+    /// PSD blurred with the mirrored section `D Ξ D` at `(h₁, −h₂)`, as the per-direction
+    /// kernel has it (`psd_xi`, `Geometry::psd_h`) — the Cholesky factor of `Λ⁻¹ + D Ξ D` with
+    /// `ℓ₁₀` negated, which gives the same `|L⁻¹ D h|²` at `h` exactly.
     pub(crate) fn new<Pol, Coh>(
         prepared: &crate::interaction::PreparedPacket<T, Pol, Coh>,
         psd: &[GaussianPsd<T, 2>],
         variance: T,
-        fresnel_eta: Complex<T>,
-        epsilon: Complex<T>,
+        (fresnel_eta, epsilon): (Complex<T>, Complex<T>),
         packet: &WavePacket<T>,
-        surface: &Frame<T>,
+        (surface, mirrored): (&Frame<T>, bool),
         full: bool,
     ) -> Option<Self> {
         if psd.is_empty() || psd.len() > MAX_COMPONENTS {
@@ -352,9 +357,13 @@ impl<T: Real> LobePrep<T> {
         let channel = |xi: &crate::gaussian::Gaussian<T, 2>| -> Option<_> {
             let spec = LogGaussian::new(ln2pi - T::lit(0.5) * xi.log_det(), xi.cholesky_factor());
             let mut scat = [spec; MAX_COMPONENTS];
+            let xi_psd = if mirrored { xi.mirrored_y() } else { *xi };
             for (out, c) in scat.iter_mut().zip(psd) {
-                let l = crate::gaussian::cholesky_of_sum(c.spectral_shape(), xi)?;
-                *out = LogGaussian::new(ln2pi + c.log_normalized_blur(xi, &zero), &l);
+                let l = crate::gaussian::cholesky_of_sum(c.spectral_shape(), &xi_psd)?;
+                *out = LogGaussian::new(ln2pi + c.log_normalized_blur(&xi_psd, &zero), &l);
+                if mirrored {
+                    out.l10 = -out.l10;
+                }
             }
             Some((spec, scat))
         };
@@ -411,30 +420,31 @@ impl<T: Real> LobePrep<T> {
     }
 
     /// The constants at a dielectric interface of relative index `eta` (the geometry's, as
-    /// `interface = Some(η)` of `Kernel::evaluate_batch`) lit from above, with the specular
-    /// pBSDF `specular`: the transmission side's from a probe geometry straight down
-    /// (`FresnelInterface::jones` and `Geometry::specular_sp` there, as the per-direction kernel
-    /// has them for every transmitted exit). `None` unless the Rayleigh–Rice permittivity is real
+    /// `interface = Some(η)` of `Kernel::evaluate_batch`) in the caller's frame `surface`, with
+    /// the specular pBSDF `specular`, from constants built on the frame facing the source: the
+    /// transmission side's from a probe geometry on that side (`FresnelInterface::jones`,
+    /// `Geometry::specular_sp`, `η_t` and `ln η_t²` there, as the per-direction kernel has them
+    /// for every transmitted exit). `None` unless the Rayleigh–Rice permittivity is real
     /// ([`TransmissionConsts::new`]), or where the probe geometry is rejected (`η` outside
     /// [`Geometry::at_interface`]'s range) or a constant is not finite.
     pub(crate) fn at_interface(
         mut self,
         eta: T,
+        surface: &Frame<T>,
         specular: &crate::interaction::FresnelInterface<T>,
     ) -> Option<Self> {
         let consts = TransmissionConsts::new(&self.inc)?;
         let inc = &self.inc;
-        let probe = Geometry::at_interface(inc.k, &inc.surface, eta, inc.to_source_raw, -inc.n)
-            .ok()
-            .filter(|g| !g.incident_from_below())?;
+        let probe = Geometry::at_interface(inc.k, surface, eta, inc.to_source_raw, -inc.n).ok()?;
         let jones = specular.jones(&probe);
         let tir = jones.is_none();
+        let eta_t = probe.relative_index();
         let ln_spec = self.ln_spec + probe.ln_eta_sq;
-        let jones_scale = T::lit(2.0) * inc.k * inc.cos_i * eta.sqrt();
+        let jones_scale = T::lit(2.0) * inc.k * inc.cos_i * eta_t.sqrt();
         let ln_scat = ln_spec + (jones_scale * jones_scale).ln();
         let t = TransmissionPrep {
             consts,
-            eta,
+            eta: eta_t,
             ln_spec,
             ln_scat,
             fresnel: jones.map_or_else(Matrix4::zeros, |j| {
@@ -447,7 +457,7 @@ impl<T: Real> LobePrep<T> {
             && ln_scat.is_finite()
             && consts.index.re.is_finite()
             && t.fresnel.iter().all(|v| v.is_finite());
-        self.inc.interface = Some(eta);
+        self.inc.interface = Some((eta, *surface));
         self.transmission = Some(t);
         finite.then_some(self)
     }

@@ -73,6 +73,17 @@ impl<T: Real> RayleighRice<T> {
         self.epsilon
     }
 
+    /// The relative permittivity the factors see: `ε` for light from above, `1/ε` (as
+    /// [`RayleighRice::factors`] computes it) for light from below.
+    #[inline]
+    pub(crate) fn permittivity_seen(&self, from_below: bool) -> Complex<T> {
+        if from_below {
+            recip(self.epsilon)
+        } else {
+            self.epsilon
+        }
+    }
+
     /// The polarization factors `[[ss, ps], [sp, pp]]` of the geometry's side (without
     /// `2k cos θ_i`, and without `√η` in transmission).
     #[must_use]
@@ -90,7 +101,7 @@ impl<T: Real> RayleighRice<T> {
     /// `1/ε`), out of line.
     #[inline(never)]
     fn factors_from_below(&self, g: &Geometry<T>) -> Matrix2<Complex<T>> {
-        let e = recip(self.epsilon);
+        let e = self.permittivity_seen(true);
         match g.side() {
             Side::Reflection => reflection_factors(e, g),
             Side::Transmission => transmission_factors(e, g),

@@ -85,10 +85,9 @@ fn cases<F: Real>(brightness: f64) -> Vec<Case<F>> {
                 &prepared,
                 core::slice::from_ref(&sc.psd),
                 sc.psd.variance(),
-                eta,
-                epsilon,
+                (eta, epsilon),
                 &packet,
-                &sc.surface,
+                (&sc.surface, false),
                 true,
             )
             .expect("the lane constants of a fixture scene");
@@ -354,10 +353,9 @@ impl<F: Real> PerWidth for MixtureLogs<F> {
                 &c.prepared,
                 &comps,
                 variance,
-                c.eta,
-                c.epsilon,
+                (c.eta, c.epsilon),
                 &c.packet,
-                &c.surface,
+                (&c.surface, false),
                 true,
             )
             .expect("the lane constants of a mixture");

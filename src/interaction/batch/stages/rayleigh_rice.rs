@@ -244,14 +244,7 @@ mod tests {
                 (0.9, true),
             ] {
                 let scatter = RayleighRice::new(Complex::new(F::lit(eta), F::zero())).unwrap();
-                let eps = scatter.permittivity();
-                let seen = if below {
-                    // RayleighRice's 1/ε: one real division, z̄/|z|².
-                    let inv = F::one() / eps.norm_sqr();
-                    Complex::new(eps.re * inv, -eps.im * inv)
-                } else {
-                    eps
-                };
+                let seen = scatter.permittivity_seen(below);
                 let up = if below { -1.0 } else { 1.0 };
                 let to_source = Vector3::new(-theta_i.sin(), 0.0, up * theta_i.cos()).map(F::lit);
                 let oriented = if below { surface.reversed() } else { surface };
