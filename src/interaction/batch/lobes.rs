@@ -93,7 +93,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// SIMD stages of `interaction::batch::stages`, 4 (`f64`) or 8 (`f32`) per instruction
     /// under AVX2 + FMA (pulp's run-time detection; elsewhere a scalar instantiation of the
     /// same loop). Exits within `√ε` of the normal, and lit parts whose final scale is not a
-    /// normal number, are redone by the per-direction kernel. The geometry, the exit frames
+    /// normal number, are redone by the per-direction kernel, except a part whose `S0` is below
+    /// `MIN_POSITIVE/2`, written as 0 (within the bound's absolute term below). The geometry,
+    /// the exit frames
     /// (bit for bit), `q_o` and the Rayleigh–Rice factors are those of the per-direction
     /// kernel; the exponentials (a polynomial), the sums of the exponents and the matrix
     /// products (fused multiply–adds, another order) differ. Against the per-direction kernel,

@@ -23,7 +23,8 @@
 //! and the final scale. The lanes the stages cannot reproduce — within `√ε` of the normal
 //! (where `Frame::sp_unit` takes a tangent), a lit part whose scale leaves the normal range
 //! (where the scalar kernel folds `|u|` into the exponent) — are redone by the per-direction
-//! kernel, lane by lane.
+//! kernel, lane by lane; a part whose `S0` is below `MIN_POSITIVE/2` is written as 0 instead
+//! (`stages::channels::scaled`).
 //!
 //! [`Partial`]: crate::interaction::Partial
 //! [`ClosedForm`]: crate::psd::ClosedForm

@@ -196,9 +196,18 @@ pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4]
 }
 
 /// `u · e^{ln_e}` with the lanes where the part is dark (`ln_e` below the smallest subnormal
-/// number, or NaN) set to 0, and the mask of the lanes the scalar kernel must redo: not dark
-/// and `e^{ln_e}` outside the normal range (where the scalar kernel folds `|u|` into the
-/// exponent instead), or a positive `S0` of the result below the smallest normal number.
+/// number, or NaN) or negligible (its `S0` below half the smallest normal number) set to 0, and
+/// the mask of the lanes the scalar kernel must redo: lit, not negligible, and `e^{ln_e}`
+/// outside the normal range (where the scalar kernel folds `|u|` into the exponent instead),
+/// or a positive `S0` of the result below the smallest normal number.
+///
+/// A negligible part written as 0 is within the absolute term (`MIN_POSITIVE`) of the lanes'
+/// documented bound: the per-direction kernel's value is a valid Stokes vector of `S0` below
+/// `MIN_POSITIVE/2 · (1 + O(ε))`. Where `e^{ln_e}` is subnormal its `S0` is tested as
+/// `u₀ e^{ln_e + 64 ln 2} < 2⁶³ MIN_POSITIVE` (the scaled exponential normal for every lit
+/// `ln_e`, so the test is relative, not on subnormal rounding). Without it, the lit lanes whose
+/// `S0` is subnormal — a shell of exits around each lobe, wider in `f32` — went to the scalar
+/// kernel one at a time.
 #[inline(always)]
 pub(crate) fn scaled<S: Simd, F: Real>(
     s: S,
@@ -208,12 +217,32 @@ pub(crate) fn scaled<S: Simd, F: Real>(
 ) -> ([F::V<S>; 4], F::M<S>) {
     let c = |x: F| F::vsplat(s, x);
     let zero = c(F::zero());
+    let half_normal = F::MIN_POSITIVE * F::lit(0.5);
     let lit = F::vle(s, c(p.ln_dark), ln_e);
     let e = vexp::<S, F>(s, ln_e);
     let normal = F::vand(s, F::vle(s, c(F::MIN_POSITIVE), e), F::vle(s, e, c(F::MAX)));
+    let s0 = F::vmul(s, u[0], e);
+    // Negligible: S0 < MIN_POSITIVE/2, from the scaled exponential where e is subnormal.
+    let small = F::vlt(s, e, c(F::MIN_POSITIVE));
+    let negligible = if F::vany(s, F::vand(s, lit, small)) {
+        let two64 = F::lit(18446744073709551616.0);
+        let es = vexp::<S, F>(
+            s,
+            F::vadd(s, ln_e, c(F::lit(64.0 * core::f64::consts::LN_2))),
+        );
+        let scaled_s0 = F::vmul(s, u[0], es);
+        let (a, b) = (
+            F::vand(s, small, F::vlt(s, scaled_s0, c(half_normal * two64))),
+            F::vand(s, F::vnot(s, small), F::vlt(s, s0, c(half_normal))),
+        );
+        // a ∨ b
+        F::vnot(s, F::vand(s, F::vnot(s, a), F::vnot(s, b)))
+    } else {
+        F::vlt(s, s0, c(half_normal))
+    };
+    let lit = F::vand(s, lit, F::vnot(s, negligible));
     // A positive S0 below the smallest normal number: the scalar kernel moves the subnormal
     // vector back into the cone (`prepared::subnormal_onto_cone`).
-    let s0 = F::vmul(s, u[0], e);
     let tiny = F::vand(s, F::vlt(s, zero, s0), F::vlt(s, s0, c(F::MIN_POSITIVE)));
     let redo = F::vand(s, lit, F::vnot(s, F::vand(s, normal, F::vnot(s, tiny))));
     (

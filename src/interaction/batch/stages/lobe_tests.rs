@@ -879,6 +879,8 @@ struct ScaleCounts {
     early: Cell<usize>,
     /// Entries where the scalar returned `0 · ∞ = NaN` (the lanes must be 0).
     nan: Cell<usize>,
+    /// Lit lanes whose `S0` is below `MIN_POSITIVE/2` (written as 0).
+    negligible: Cell<usize>,
 }
 
 impl<F: Real> PerWidth for Scales<F> {
@@ -926,6 +928,31 @@ impl<F: Real> PerWidth for Scales<F> {
                         continue;
                     }
                     lit += 1;
+                    // Negligible (S0 below MIN_POSITIVE/2, in logarithms: e may be subnormal):
+                    // written as 0, not redone; within a few ε of the threshold either way.
+                    let u0 = u[0].to_f64();
+                    let ln_s0_ref = if u0 > 0.0 {
+                        u0.ln() + ln_e.to_f64()
+                    } else {
+                        f64::NEG_INFINITY
+                    };
+                    let ln_half = (0.5 * min).ln();
+                    let near_half = (ln_s0_ref - ln_half).abs()
+                        <= 4.0 * eps * (64.0 + ln_e.to_f64().abs() + u0.ln().abs());
+                    if near_half {
+                        self.2.edge.set(self.2.edge.get() + 1);
+                        continue;
+                    }
+                    if ln_s0_ref < ln_half {
+                        let zero = got.iter().all(|x| same(x[j], F::zero()));
+                        assert!(
+                            zero && !redo,
+                            "{}: a negligible part not 0, or redone",
+                            at()
+                        );
+                        self.2.negligible.set(self.2.negligible.get() + 1);
+                        continue;
+                    }
                     let e_ref = ln_e.to_f64().exp();
                     let normal = (min..=max).contains(&e_ref);
                     // A positive S0 of the result below the smallest normal number is redone
@@ -1011,6 +1038,10 @@ fn scaled_matches_prepared_packet_scaled_and_is_dark() {
             ScaleCounts::default(),
         );
         every_width(&t);
+        assert!(
+            t.2.negligible.get() > 0,
+            "no negligible part among the cases"
+        );
         t.1.report(&format!("scaled f64, S0 = {bright:e}"));
         println!("  {:?}", t.2);
     }
@@ -1021,6 +1052,10 @@ fn scaled_matches_prepared_packet_scaled_and_is_dark() {
             ScaleCounts::default(),
         );
         every_width(&t);
+        assert!(
+            t.2.negligible.get() > 0,
+            "no negligible part among the cases"
+        );
         t.1.report(&format!("scaled f32, S0 = {bright:e}"));
         println!("  {:?}", t.2);
     }
