@@ -156,7 +156,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// kernel.evaluate_batch(&glass, &packet, &surface, Some(1.5), exits, &mut out, None)?;
     /// let g = glass.geometry_for_packet(&packet, &surface, Vector3::new(0.3, 0.1, -0.95))?;
     /// let one = kernel.evaluate(&glass, &packet, &g).scattered;
-    /// assert_eq!(out.scattered.s[0][1], one.s0());
+    /// // The lanes against one exit at a time (the documented bound is ~3e-14 S0 here).
+    /// assert!((out.scattered.s[0][1] - one.s0()).abs() <= 1e-13 * one.s0());
     /// # Ok::<(), gmueller::Error>(())
     /// ```
     #[expect(
