@@ -90,9 +90,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// permittivity: Fresnel reflection and transmission, Germer's and Elson's factors, each
     /// exit on its side; a vector of lanes with exits on both sides computes both), the exits
     /// run through the
-    /// SIMD stages of `interaction::batch::stages`, 8 (`f64`) or 16 (`f32`) per instruction
-    /// under AVX-512, 4 or 8 under AVX2 + FMA (pulp's run-time detection; elsewhere a scalar
-    /// instantiation of the same loop). Exits within `√ε` of the normal, and lit parts whose final scale is not a
+    /// SIMD stages of `interaction::batch::stages`, 4 (`f64`) or 8 (`f32`) per instruction
+    /// under AVX2 + FMA (pulp's run-time detection; elsewhere a scalar instantiation of the
+    /// same loop). Exits within `√ε` of the normal, and lit parts whose final scale is not a
     /// normal number, are redone by the per-direction kernel, except a part whose `S0` is below
     /// `MIN_POSITIVE/2`, written as 0 (within the bound's absolute term below). The geometry,
     /// the exit frames
@@ -114,10 +114,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// `K_x ≫ K_y`: a bound with the packet's polarization alone failed by 4.3× in f32). For a
     /// non-polarizing pBSDF `L̂ ≤ (1 + √3) L`. In such a cancellation the per-direction kernel's
     /// own `f32` error is of the same order (4.5e-5 relative to `f64` in that case).
-    /// pulp's AVX-512 back-end (x86-64-v4: 8 `f64` or 16 `f32` lanes) is on and is what
-    /// dispatch picks on a CPU that has it; the stage tests run it where the machine has it
-    /// (2026-12-04: an AMD EPYC with AVX-512), besides the scalar back-ends of 1–8 lanes and
-    /// AVX2. The NEON back-end has never run on real hardware here.
+    /// The NEON and AVX-512
+    /// back-ends of pulp have never run on real hardware here (AVX-512 is off in this crate;
+    /// the scalar back-ends of 1–8 lanes and AVX2 are tested).
     ///
     /// # Errors
     /// - [`Error::OutOfRange`] when a slice of `out` or `frames` is shorter than `exits` (nothing

@@ -202,10 +202,6 @@ pub(crate) mod fixture {
         if let Some(v3) = pulp::x86::V3::try_new() {
             Simd::vectorize(v3, Run(t, "V3"));
         }
-        #[cfg(target_arch = "x86_64")]
-        if let Some(v4) = pulp::x86::V4::try_new() {
-            Simd::vectorize(v4, Run(t, "V4"));
-        }
     }
 
     /// The lanes of `xs` (1 to one vector's width of values; the last repeated on the other
