@@ -20,7 +20,8 @@
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::fresnel;
@@ -29,7 +30,7 @@ use gmueller::interaction::batch::{
 };
 use gmueller::interaction::{
     CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, Level, LevelVisitor, OneShape,
-    Partial, PlaneWave, PolarizationModel, RayleighRice, RoughDielectric, RoughSurface,
+    Partial, Pbsdf, PlaneWave, PolarizationModel, RayleighRice, RoughDielectric, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::mueller::batch::padded_stride;
@@ -478,40 +479,16 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
             Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(T::lit)
         })
         .collect();
-    let columns = |k: usize| exits.iter().map(|e| e[k]).collect::<Vec<T>>();
-    let (x, y, z) = (columns(0), columns(1), columns(2));
-    let mut buf = vec![vec![T::zero(); M]; 11];
-    let [a, b, cc, d, e, f, gg, h, sx, sy, sz] = &mut buf[..] else {
-        unreachable!()
-    };
-    let mut out = LobesSoa {
-        specular: StokesSoa { s: [a, b, cc, d] },
-        scattered: StokesSoa { s: [e, f, gg, h] },
-    };
-    let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
     let mut g = c.benchmark_group(format!("kernel_batch_partial/{prec}"));
     g.throughput(criterion::Throughput::Elements(M as u64));
-    g.bench_function(BenchmarkId::new("evaluate_batch", "lobe-1024"), |bch| {
-        bch.iter(|| {
-            let dirs = DirectionsSoa {
-                x: &x,
-                y: &y,
-                z: &z,
-            };
-            kernel
-                .evaluate_batch(
-                    black_box(&material),
-                    black_box(&packet),
-                    &surf,
-                    None,
-                    dirs,
-                    &mut out,
-                    Some(&mut frames),
-                )
-                .unwrap();
-            black_box(out.scattered.s[0][M - 1])
-        });
-    });
+    let batch = BatchScene {
+        kernel: &kernel,
+        material: &material,
+        packet: &packet,
+        surface: &surf,
+        interface: None,
+    };
+    batch.bench(&mut g, "lobe-1024", &exits);
     g.bench_function(
         BenchmarkId::new("per-direction-prepared", "lobe-1024"),
         |bch| {
@@ -525,6 +502,60 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
         },
     );
     g.finish();
+}
+
+/// One `Kernel::<Full, Partial>::evaluate_batch` scene of the batch benches.
+struct BatchScene<'a, T: Real, P, Sp, Sc> {
+    kernel: &'a Kernel<Full, Partial>,
+    material: &'a RoughSurface<P, Sp, Sc>,
+    packet: &'a WavePacket<T>,
+    surface: &'a Frame<T>,
+    interface: Option<T>,
+}
+
+impl<T: Real, P, Sp, Sc> BatchScene<'_, T, P, Sp, Sc>
+where
+    P: Psd<T, 2> + 'static,
+    Partial: CoherenceWeights<T, P>,
+    Sp: Pbsdf<T> + 'static,
+    Sc: Pbsdf<T> + 'static,
+{
+    /// Times `evaluate_batch` (both lobes and the exit frames) on `exits`, as `case`.
+    fn bench(&self, g: &mut BenchmarkGroup<'_, WallTime>, case: &str, exits: &[Vector3<T>]) {
+        let columns = |k: usize| exits.iter().map(|e| e[k]).collect::<Vec<T>>();
+        let (x, y, z) = (columns(0), columns(1), columns(2));
+        let n = exits.len();
+        let mut buf = vec![vec![T::zero(); n]; 11];
+        let [a, b, cc, d, e, f, gg, h, sx, sy, sz] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, cc, d] },
+            scattered: StokesSoa { s: [e, f, gg, h] },
+        };
+        let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
+        g.bench_function(BenchmarkId::new("evaluate_batch", case), |bch| {
+            bch.iter(|| {
+                let dirs = DirectionsSoa {
+                    x: &x,
+                    y: &y,
+                    z: &z,
+                };
+                self.kernel
+                    .evaluate_batch(
+                        black_box(self.material),
+                        black_box(self.packet),
+                        self.surface,
+                        self.interface,
+                        dirs,
+                        &mut out,
+                        Some(&mut frames),
+                    )
+                    .unwrap();
+                black_box(out.scattered.s[0][n - 1])
+            });
+        });
+    }
 }
 
 /// [`batch_partial_for`] at a rough glass interface (η = 1.5, `RoughDielectric`, lit from the
@@ -557,42 +588,17 @@ fn batch_interface_for<T: Real>(c: &mut Criterion, prec: &str) {
             }
         })
         .collect();
-    let mut buf = vec![vec![T::zero(); M]; 11];
-    let [a, b, cc, d, e, f, gg, h, sx, sy, sz] = &mut buf[..] else {
-        unreachable!()
-    };
-    let mut out = LobesSoa {
-        specular: StokesSoa { s: [a, b, cc, d] },
-        scattered: StokesSoa { s: [e, f, gg, h] },
-    };
-    let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
     let mut g = c.benchmark_group(format!("kernel_batch_interface/{prec}"));
     g.throughput(criterion::Throughput::Elements(M as u64));
-    for (case, exits) in [("transmission-1024", &below), ("mixed-1024", &mixed)] {
-        let columns = |k: usize| exits.iter().map(|e| e[k]).collect::<Vec<T>>();
-        let (x, y, z) = (columns(0), columns(1), columns(2));
-        g.bench_function(BenchmarkId::new("evaluate_batch", case), |bch| {
-            bch.iter(|| {
-                let dirs = DirectionsSoa {
-                    x: &x,
-                    y: &y,
-                    z: &z,
-                };
-                kernel
-                    .evaluate_batch(
-                        black_box(&material),
-                        black_box(&packet),
-                        &surf,
-                        Some(eta),
-                        dirs,
-                        &mut out,
-                        Some(&mut frames),
-                    )
-                    .unwrap();
-                black_box(out.scattered.s[0][M - 1])
-            });
-        });
-    }
+    let batch = BatchScene {
+        kernel: &kernel,
+        material: &material,
+        packet: &packet,
+        surface: &surf,
+        interface: Some(eta),
+    };
+    batch.bench(&mut g, "transmission-1024", &below);
+    batch.bench(&mut g, "mixed-1024", &mixed);
     g.bench_function(
         BenchmarkId::new("per-direction-prepared", "mixed-1024"),
         |bch| {

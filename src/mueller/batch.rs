@@ -124,10 +124,10 @@ impl From<LayoutError> for Error {
 /// This is [`Mueller::from_jones`](super::Mueller::from_jones) written out entry by entry.
 ///
 /// Instruction sets: for `f32` and `f64` the CPU is detected at run time ([`pulp::Arch`], no
-/// `RUSTFLAGS` needed); on x86-64 with AVX2 and FMA (x86-64-v3) the loop handles 4 (`f64`) or
-/// 8 (`f32`) matrices per instruction with fused multiply–adds, on aarch64 it uses NEON (2 / 4
-/// lanes), elsewhere (and for other [`Real`] types) it is a portable loop. AVX-512 is not
-/// used (pulp's `x86-v4` feature is off). A remainder shorter than the SIMD width goes through
+/// `RUSTFLAGS` needed); on x86-64 with AVX-512 (x86-64-v4) the loop handles 8 (`f64`) or 16
+/// (`f32`) matrices per instruction, with AVX2 and FMA (x86-64-v3) 4 or 8, with fused
+/// multiply–adds, on aarch64 it uses NEON (2 / 4 lanes), elsewhere (and for other [`Real`]
+/// types) it is a portable loop. A remainder shorter than the SIMD width goes through
 /// masked loads and stores. No heap allocation.
 ///
 /// Accuracy: the fused multiply–adds round once instead of twice, so entries can differ from
@@ -373,8 +373,8 @@ impl<F: Real> WithSimd for Kernel<'_, '_, '_, F> {
 #[cfg(test)]
 mod tests {
     //! Every instantiation of the SIMD loop (pulp's scalar back-ends of 1, 2, 4 and 8 `f64`
-    //! lanes, which exercise the remainder logic at every width, and AVX2 + FMA when the CPU has
-    //! it) against the portable loop, on seeded inputs of lengths 0–41. The scalar back-end
+    //! lanes, which exercise the remainder logic at every width, and AVX2 + FMA and AVX-512
+    //! when the CPU has them) against the portable loop, on seeded inputs of lengths 0–41. The scalar back-end
     //! rounds like the portable loop and must agree bit for bit; the others within `4 ε N`
     //! (`N = ½‖J‖²_F`, see `tests/mueller_batch.rs`).
     use super::*;
@@ -449,6 +449,13 @@ mod tests {
                 close(
                     "V3",
                     &run(&v, |j, out| Simd::vectorize(v3, Kernel { j, out })),
+                );
+            }
+            #[cfg(target_arch = "x86_64")]
+            if let Some(v4) = pulp::x86::V4::try_new() {
+                close(
+                    "V4",
+                    &run(&v, |j, out| Simd::vectorize(v4, Kernel { j, out })),
                 );
             }
         }

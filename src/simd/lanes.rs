@@ -88,8 +88,9 @@ pub trait Lanes: Copy + Send + Sync + 'static + sealed::Sealed {
     fn store_partial<S: Simd>(s: S, x: &mut [Self], v: Self::V<S>);
 }
 
-/// Runs `op` with the best instruction set of this CPU ([`pulp::Arch::dispatch`]: AVX2 + FMA
-/// on x86-64-v3, NEON on aarch64, a scalar back-end otherwise), detected at run time.
+/// Runs `op` with the best instruction set of this CPU ([`pulp::Arch::dispatch`]: AVX-512 on
+/// x86-64-v4 (pulp's `x86-v4` feature, stable since Rust 1.89), AVX2 + FMA on x86-64-v3, NEON
+/// on aarch64, a scalar back-end otherwise), detected at run time.
 #[inline]
 pub fn dispatch<Op: WithSimd>(op: Op) -> Op::Output {
     pulp::Arch::new().dispatch(op)

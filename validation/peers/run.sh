@@ -4,7 +4,7 @@
 #
 #   bash validation/peers/run.sh
 #
-# Needs PyPI (and Debian's apt repository only if no libLLVM is installed). Writes only under
+# Needs PyPI (and Debian's apt repository only if no libLLVM >= 17 is installed). Writes only under
 # the workspace's target/ (venv target/peers-venv, wheels target/peers-wheels, binaries and results
 # target/peers/). Not part of CI.
 set -uo pipefail
@@ -37,15 +37,30 @@ echo "date: $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg)"
 
 # --- LLVM for Mitsuba's llvm variants ---------------------------------------------------------
-if ! ldconfig -p | grep -q 'libLLVM'; then
-    echo "== no libLLVM found: installing libllvm15 with apt-get"
+# Dr.Jit 1.5.0's LLVM back-end needs libLLVM >= 17: with Debian bookworm's libLLVM 15 and 16 its
+# kernels fail to compile ("LLVM ERROR: Cannot select: fmaximum", seen 2026-12-04). Use the
+# newest libLLVM installed; if it is older than 17, install Debian's libllvm19 (root only).
+# Prints "major path" of the newest one (Debian names it libLLVM-15.so.1 up to 16,
+# libLLVM.so.19.1 from 19 on).
+newest_llvm() {
+    ldconfig -p | grep -oE '/[^ ]*libLLVM(-[0-9]+)?\.so[.0-9]*$' \
+        | sed -E 's/.*libLLVM(-([0-9]+)\.so|\.so\.([0-9]+)).*/\2\3 &/' \
+        | grep -E '^[0-9]+ ' | sort -n | tail -1
+}
+read -r LLVM_MAJOR LLVM_LIB <<< "$(newest_llvm)"
+if [ -z "$LLVM_LIB" ] || [ "${LLVM_MAJOR:-0}" -lt 17 ]; then
+    echo "== libLLVM ${LLVM_MAJOR:-none} is too old for Dr.Jit 1.5: installing libllvm19 with apt-get"
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-        apt-get update -qq && apt-get install -y -qq libllvm15 || echo "apt-get install libllvm15 failed"
+        apt-get install -y -qq libllvm19 >/dev/null 2>&1 \
+            || { apt-get update -qq && apt-get install -y -qq libllvm19; } \
+            || echo "apt-get install libllvm19 failed"
+        read -r LLVM_MAJOR LLVM_LIB <<< "$(newest_llvm)"
     else
-        echo "not root or no apt-get: the llvm variant will be skipped"
+        echo "not root or no apt-get: the llvm variant may fail"
     fi
 fi
-echo "libLLVM: $(ldconfig -p | grep -o 'libLLVM-[0-9.]*\.so[.0-9]*' | sort -u | tr '\n' ' ')"
+if [ -n "$LLVM_LIB" ]; then export DRJIT_LIBLLVM_PATH="$LLVM_LIB"; fi
+echo "libLLVM for Dr.Jit: ${DRJIT_LIBLLVM_PATH:-none}"
 
 # --- Python environment -----------------------------------------------------------------------
 echo "== venv $VENV"

@@ -89,14 +89,12 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// (either `interface`; at one, lit from either side, with a real Rayleigh–Rice
     /// permittivity: Fresnel reflection and transmission, Germer's and Elson's factors, each
     /// exit on its side; a vector of lanes with exits on both sides computes both), the exits
-    /// run through the
-    /// SIMD stages of `interaction::batch::stages`, 4 (`f64`) or 8 (`f32`) per instruction
-    /// under AVX2 + FMA (pulp's run-time detection; elsewhere a scalar instantiation of the
-    /// same loop). Exits within `√ε` of the normal, and lit parts whose final scale is not a
-    /// normal number, are redone by the per-direction kernel, except a part whose `S0` is below
-    /// `MIN_POSITIVE/2`, written as 0 (within the bound's absolute term below). The geometry,
-    /// the exit frames
-    /// (bit for bit), `q_o` and the Rayleigh–Rice factors are those of the per-direction
+    /// run through the SIMD stages of `interaction::batch::stages`, 8 (`f64`) or 16 (`f32`)
+    /// per instruction under AVX-512, 4 or 8 under AVX2 + FMA (pulp's run-time detection;
+    /// elsewhere a scalar instantiation of the same loop). Exits within `√ε` of the normal, and
+    /// lit parts whose final scale is not a normal number, are redone by the per-direction
+    /// kernel, except a part whose `S0` is below `MIN_POSITIVE/2`, written as 0 (within the
+    /// bound's absolute term below). The geometry, the exit frames (bit for bit), `q_o` and the Rayleigh–Rice factors are those of the per-direction
     /// kernel; the exponentials (a polynomial), the sums of the exponents and the matrix
     /// products (fused multiply–adds, another order) differ. Against the per-direction kernel,
     /// per Stokes parameter of a lobe of `S0 = L`:
@@ -114,9 +112,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// `K_x ≫ K_y`: a bound with the packet's polarization alone failed by 4.3× in f32). For a
     /// non-polarizing pBSDF `L̂ ≤ (1 + √3) L`. In such a cancellation the per-direction kernel's
     /// own `f32` error is of the same order (4.5e-5 relative to `f64` in that case).
-    /// The NEON and AVX-512
-    /// back-ends of pulp have never run on real hardware here (AVX-512 is off in this crate;
-    /// the scalar back-ends of 1–8 lanes and AVX2 are tested).
+    /// pulp's AVX-512 back-end (x86-64-v4: 8 `f64` or 16 `f32` lanes) is on and is what
+    /// dispatch picks on a CPU that has it; the stage tests run it where the machine has it
+    /// (2026-12-04: an AMD EPYC with AVX-512), besides the scalar back-ends of 1–8 lanes and
+    /// AVX2. The NEON back-end has never run on real hardware here.
     ///
     /// # Errors
     /// - [`Error::OutOfRange`] when a slice of `out` or `frames` is shorter than `exits` (nothing
@@ -140,7 +139,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// let glass = RoughDielectric::new(GaussianPsd::<f64, 2>::isotropic(0.01, 2.0)?, 1.5)?;
     /// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z())?;
     /// let travel = Vector3::new(0.5, 0.0, -(0.75_f64).sqrt());
-    /// let packet = WavePacket::from_stokes(Stokes::new(1.0, 0.3, -0.2, 0.5)?,
+    /// // Unpolarized, one shape: the effective incident vector is (S0, 0, 0, 0), so L₀ = L.
+    /// let packet = WavePacket::from_stokes(Stokes::new(1.0, 0.0, 0.0, 0.0)?,
     ///     CoherenceShape::isotropic(10.0)?, Frame::sp(travel, Vector3::z())?, 0.5)?;
     /// // One exit above (reflection), one below (transmission).
     /// let (x, y, z) = ([0.5, 0.3], [0.0, 0.1], [0.87, -0.95]);
@@ -154,9 +154,14 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// let kernel = Kernel::<Full, Partial>::default();
     /// kernel.evaluate_batch(&glass, &packet, &surface, Some(1.5), exits, &mut out, None)?;
     /// let g = glass.geometry_for_packet(&packet, &surface, Vector3::new(0.3, 0.1, -0.95))?;
-    /// let one = kernel.evaluate(&glass, &packet, &g).scattered;
-    /// // The lanes against one exit at a time (the documented bound is ~3e-14 S0 here).
-    /// assert!((out.scattered.s[0][1] - one.s0()).abs() <= 1e-13 * one.s0());
+    /// let one = kernel.evaluate(&glass, &packet, &g).scattered.vector();
+    /// // The lanes against one exit at a time, within the bound above (packet S0 = 1, so
+    /// // ln S0 = 0; L̂ = (1 + √3) L₀ = (1 + √3) L).
+    /// let l = one[0];
+    /// let bound = 4.0 * f64::EPSILON * (4.0 + l.ln().abs()) * (1.0 + 3f64.sqrt()) * l;
+    /// for k in 0..4 {
+    ///     assert!((out.scattered.s[k][1] - one[k]).abs() <= bound + f64::MIN_POSITIVE);
+    /// }
     /// # Ok::<(), gmueller::Error>(())
     /// ```
     #[expect(
@@ -618,7 +623,10 @@ mod lane_tests {
     //! The lane path (`super::super::partial`) on batches of every length and at extreme
     //! scales of the packet.
     use super::*;
-    use crate::interaction::{Full, Incoherent, Intensity, OneShape, Partial, RoughConductor};
+    use crate::interaction::{
+        FresnelInterface, FresnelReflection, Full, Incoherent, Intensity, OneShape, Partial,
+        RayleighRice, RoughConductor, RoughDielectric,
+    };
     use crate::packet::CoherenceShape;
     use crate::psd::GaussianPsd;
     use crate::stokes::Stokes;
@@ -647,8 +655,11 @@ mod lane_tests {
         d
     }
 
-    fn packet<T: Real>(s0: f64) -> WavePacket<T> {
-        let travel = Vector3::new(T::lit(0.4), T::lit(0.1), -T::lit(0.91)).normalize();
+    /// The packet at scale `s0`, travelling down (`up = false`) or up (lit from inside the
+    /// glass of [`GlassFromBelow`]).
+    fn packet<T: Real>(s0: f64, up: bool) -> WavePacket<T> {
+        let z = if up { T::lit(0.91) } else { -T::lit(0.91) };
+        let travel = Vector3::new(T::lit(0.4), T::lit(0.1), z).normalize();
         let frame = Frame::sp(travel, Vector3::z()).unwrap();
         let s = Stokes::new(1.0, 0.3, -0.2, 0.5).unwrap().vector() * s0;
         WavePacket::new(
@@ -661,42 +672,76 @@ mod lane_tests {
         .unwrap()
     }
 
-    /// A rough gold surface of the lane path: a Gaussian PSD ([`Gold`]) or a three-component
-    /// mixture ([`GoldMixture`]).
+    /// A rough surface of the lane path: gold with a Gaussian PSD ([`Gold`]) or a
+    /// three-component mixture ([`GoldMixture`]) in reflection, or glass at its interface lit
+    /// from inside ([`GlassFromBelow`]: reflection and transmission, Elson's factors, the
+    /// reversed frame).
     trait Surface<T: Real> {
         type P: Psd<T, 2> + 'static;
-        fn make() -> RoughConductor<T, Self::P>;
+        type Sp: Pbsdf<T> + 'static;
+        type Sc: Pbsdf<T> + 'static;
+        /// `Some(η)` at an interface lit from inside (the packet travels up; exits alternate
+        /// between the two sides).
+        const INTERFACE: Option<f64> = None;
+        fn make() -> RoughSurface<Self::P, Self::Sp, Self::Sc>;
     }
 
     struct Gold;
     struct GoldMixture;
+    struct GlassFromBelow;
+
+    fn gold<T: Real, P: Psd<T, 2>>(psd: P) -> RoughConductor<T, P> {
+        RoughConductor::new(psd, Complex::new(T::lit(0.2), T::lit(3.4))).unwrap()
+    }
+
+    fn gaussian<T: Real>(h: f64, l: f64) -> GaussianPsd<T, 2> {
+        GaussianPsd::<T, 2>::isotropic(T::lit(h), T::lit(l)).unwrap()
+    }
 
     impl<T: Real> Surface<T> for Gold {
         type P = GaussianPsd<T, 2>;
+        type Sp = FresnelReflection<T>;
+        type Sc = RayleighRice<T>;
         fn make() -> RoughConductor<T, Self::P> {
-            RoughConductor::new(
-                GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(1.5)).unwrap(),
-                Complex::new(T::lit(0.2), T::lit(3.4)),
-            )
-            .unwrap()
+            gold(gaussian(0.02, 1.5))
         }
     }
 
     impl<T: Real> Surface<T> for GoldMixture {
         type P = crate::psd::GaussianMixturePsd<T, 2>;
+        type Sp = FresnelReflection<T>;
+        type Sc = RayleighRice<T>;
         fn make() -> RoughConductor<T, Self::P> {
-            let c = |h: f64, l: f64| GaussianPsd::<T, 2>::isotropic(T::lit(h), T::lit(l)).unwrap();
-            RoughConductor::new(
-                crate::psd::GaussianMixturePsd::new(vec![
-                    c(0.02, 1.5),
-                    c(0.012, 0.6),
-                    c(0.006, 4.0),
-                ])
-                .unwrap(),
-                Complex::new(T::lit(0.2), T::lit(3.4)),
-            )
-            .unwrap()
+            let c = vec![
+                gaussian(0.02, 1.5),
+                gaussian(0.012, 0.6),
+                gaussian(0.006, 4.0),
+            ];
+            gold(crate::psd::GaussianMixturePsd::new(c).unwrap())
         }
+    }
+
+    impl<T: Real> Surface<T> for GlassFromBelow {
+        type P = GaussianPsd<T, 2>;
+        type Sp = FresnelInterface<T>;
+        type Sc = RayleighRice<T>;
+        const INTERFACE: Option<f64> = Some(1.5);
+        fn make() -> RoughDielectric<T, Self::P> {
+            RoughDielectric::new(gaussian(0.02, 1.5), T::lit(1.5)).unwrap()
+        }
+    }
+
+    /// [`exits`], every other one mirrored below the surface when `M` is at an interface.
+    fn exits_for<T: Real, M: Surface<T>>() -> [Vec<T>; 3] {
+        let mut d = exits::<T>();
+        if M::INTERFACE.is_some() {
+            for (j, z) in d[2].iter_mut().enumerate() {
+                if j % 2 == 1 {
+                    *z = -*z;
+                }
+            }
+        }
+        d
     }
 
     /// The first `n` exits through `evaluate_batch`: `[specular S0..S3, scattered S0..S3,
@@ -709,7 +754,7 @@ mod lane_tests {
         Coh: CoherenceWeights<T, M::P> + Default + 'static,
     {
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-        let d = exits::<T>();
+        let d = exits_for::<T, M>();
         let mut buf = vec![vec![T::lit(-7.0); n]; 11];
         let [a, b, c, e, f, g, h, i, sx, sy, sz] = &mut buf[..] else {
             unreachable!()
@@ -729,7 +774,7 @@ mod lane_tests {
                 &M::make(),
                 packet,
                 &surface,
-                None,
+                M::INTERFACE.map(T::lit),
                 dirs,
                 &mut out,
                 Some(&mut frames),
@@ -742,7 +787,7 @@ mod lane_tests {
     /// entries of the longest batch (whole vectors, overlapping tails, batches shorter than
     /// one vector padded).
     fn prefixes<T: Real, Pol: PolarizationModel>() {
-        let p = packet::<T>(1.0);
+        let p = packet::<T>(1.0, false);
         let all = batch::<T, Pol, Partial, Gold>(&p, 41);
         let mut lit = 0;
         for n in 0..=41 {
@@ -786,15 +831,19 @@ mod lane_tests {
         Coh: CoherenceWeights<T, M::P> + Default + 'static,
     {
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-        let d = exits::<T>();
+        let d = exits_for::<T, M>();
         let kernel = Kernel::<Pol, Coh>::default();
         let mut lit = 0;
         for &e in exps {
-            let p = packet::<T>(10f64.powf(e));
+            let p = packet::<T>(10f64.powf(e), M::INTERFACE.is_some());
             let got = batch::<T, Pol, Coh, M>(&p, 41);
             for j in 0..41 {
                 let exit = Vector3::new(d[0][j], d[1][j], d[2][j]);
-                let g = Geometry::for_packet(&p, &surface, exit).unwrap();
+                let g = match M::INTERFACE {
+                    Some(eta) => Geometry::for_packet_at_interface(&p, &surface, T::lit(eta), exit),
+                    None => Geometry::for_packet(&p, &surface, exit),
+                }
+                .unwrap();
                 let r = kernel.evaluate(&M::make(), &p, &g);
                 // Every Stokes parameter the level computes (S0 only at the Intensity level).
                 let wants: [Vec<f64>; 2] = match r.stokes() {
@@ -873,5 +922,10 @@ mod lane_tests {
         scales::<f32, Full, Partial, GoldMixture>(&[-36.0, 0.0, 36.0]);
         scales::<f64, OneShape, Incoherent, GoldMixture>(&[-300.0, 0.0, 300.0]);
         scales::<f32, Intensity, Partial, GoldMixture>(&[-36.0, 0.0, 36.0]);
+        // Glass lit from inside: both sides, Fresnel transmission and Elson's factors.
+        scales::<f64, Full, Partial, GlassFromBelow>(&[-300.0, -150.0, 0.0, 150.0, 300.0]);
+        scales::<f32, Full, Partial, GlassFromBelow>(&[-36.0, -20.0, 0.0, 20.0, 36.0]);
+        scales::<f64, OneShape, Incoherent, GlassFromBelow>(&[-300.0, 0.0, 300.0]);
+        scales::<f32, Intensity, Partial, GlassFromBelow>(&[-36.0, 0.0, 36.0]);
     }
 }

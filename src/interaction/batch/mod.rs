@@ -6,8 +6,8 @@
 //! Rayleigh–Rice Mueller BRDF applied to the packet's Stokes vector, with a Gaussian PSD — for
 //! every direction of a [`DirectionsSoa`], writing the four Stokes parameters into a
 //! [`StokesSoa`]. The per-packet work (incident s/p frame, the rotation `T`, `q_i`, the PSD's
-//! Cholesky factor) is done once; the per-exit work runs 4 (`f64`) or 8 (`f32`) directions per
-//! instruction under AVX2 + FMA through [`pulp`] (run-time detection, no `unsafe`, no
+//! Cholesky factor) is done once; the per-exit work runs 8 (`f64`) or 16 (`f32`) directions per
+//! instruction under AVX-512, 4 or 8 under AVX2 + FMA, through [`pulp`] (run-time detection, no `unsafe`, no
 //! `RUSTFLAGS`), with a vector exponential and a branch-free principal complex square root.
 //! Lay a batch out with [`crate::mueller::batch::padded_stride`].
 //!
@@ -180,7 +180,8 @@ impl<'a, T> StokesSoa<'a, T> {
 /// through `Geometry::for_packet` + [`Kernel::evaluate`] took 255 and 219 ns each.
 ///
 /// Instruction sets: for `f32` and `f64` the CPU is detected at run time ([`pulp::Arch`]); with
-/// AVX2 + FMA the loop handles 4 (`f64`) or 8 (`f32`) directions per instruction, elsewhere a
+/// AVX-512 the loop handles 8 (`f64`) or 16 (`f32`) directions per instruction, with AVX2 +
+/// FMA 4 or 8, elsewhere a
 /// scalar instantiation of the same loop runs. Other [`Real`] types, and indices so extreme
 /// that the scalar `hypot` would leave its fast branch (`0 < |Im ε| < 10⁻¹⁸` or
 /// `|ε| > 10¹⁸`), go through the per-direction kernel per direction. No heap allocation.

@@ -210,7 +210,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
                 *g = *p;
             }
         }
-        let scalar = |w: usize, i: usize| {
+        let mut scalar = |w: usize, i: usize| {
             let exit = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
             let p = prepared[w].as_ref().ok_or(Error::OutOfRange {
                 what: "wavelength index",
@@ -232,7 +232,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             exits,
             outs,
             frames,
-            scalar,
+            scalar: &mut scalar,
         })
     }
 }

@@ -1,6 +1,6 @@
 //! The vector exponential against the standard library's over the whole range, and the
 //! batch loop against the per-direction kernel, on every back-end: pulp's scalar ones of 1, 2, 4
-//! and 8 lanes and AVX2 + FMA when present.
+//! and 8 lanes, and AVX2 + FMA and AVX-512 when present.
 use nalgebra::Vector2;
 use num_complex::Complex;
 
@@ -59,6 +59,11 @@ fn run_all<F: Real>(xs: &[F], mut check: impl FnMut(&str, &[F])) {
         Simd::vectorize(v3, ExpAll { xs, out: &mut out });
         check("V3", &out);
     }
+    #[cfg(target_arch = "x86_64")]
+    if let Some(v4) = pulp::x86::V4::try_new() {
+        Simd::vectorize(v4, ExpAll { xs, out: &mut out });
+        check("V4", &out);
+    }
 }
 
 /// Seeded unit directions around the specular one and near the normal (every band of
@@ -72,7 +77,8 @@ fn exits<F: Real>(theta_i: f64, n: usize) -> Vec<Vector3<F>> {
 
 /// Every back-end of the batch loop (pulp's scalar ones of 1, 2, 4, 8 lanes, which exercise
 /// the remainder logic at every width and the unfused arithmetic of machines without FMA,
-/// and AVX2 + FMA when present) against the per-direction kernel, lengths 0–41, normal and oblique
+/// and AVX2 + FMA and AVX-512 when present) against the per-direction kernel, lengths 0–41,
+/// normal and oblique
 /// incidence, dielectric and metal; tolerance `4 ε (4 + |E|) S0` as in
 /// `tests/interaction_batch.rs`.
 fn back_ends<F: Real>() {
@@ -169,6 +175,10 @@ fn back_ends<F: Real>() {
             #[cfg(target_arch = "x86_64")]
             if let Some(v3) = pulp::x86::V3::try_new() {
                 check("V3", run(&|o| batch(o, &|b| Simd::vectorize(v3, b))));
+            }
+            #[cfg(target_arch = "x86_64")]
+            if let Some(v4) = pulp::x86::V4::try_new() {
+                check("V4", run(&|o| batch(o, &|b| Simd::vectorize(v4, b))));
             }
         }
     }

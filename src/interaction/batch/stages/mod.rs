@@ -190,8 +190,8 @@ pub(crate) mod fixture {
     }
 
     /// Runs `t` at every back-end: pulp's scalar ones of 1, 2, 4 and 8 `f64` lanes, the
-    /// dispatched one, and AVX2 + FMA (x86-64-v3) when the CPU has it. (pulp's `x86-v4`
-    /// feature, AVX-512, is off in this crate.)
+    /// dispatched one, and AVX2 + FMA (x86-64-v3) and AVX-512 (x86-64-v4) when the CPU has
+    /// them.
     pub(crate) fn every_width<P: PerWidth>(t: &P) {
         Run(t, "Scalar").with_simd(pulp::Scalar);
         Run(t, "Scalar128b").with_simd(pulp::Scalar128b);
@@ -201,6 +201,10 @@ pub(crate) mod fixture {
         #[cfg(target_arch = "x86_64")]
         if let Some(v3) = pulp::x86::V3::try_new() {
             Simd::vectorize(v3, Run(t, "V3"));
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v4) = pulp::x86::V4::try_new() {
+            Simd::vectorize(v4, Run(t, "V4"));
         }
     }
 
