@@ -5,7 +5,7 @@
 //! The inputs are the real and imaginary parts of the four Jones entries (eight slices), the
 //! outputs the sixteen Mueller entries (sixteen slices), one element per matrix. `f32` and `f64`
 //! run a hand-vectorised kernel through [`pulp`]: the CPU is queried once per call and the kernel
-//! is compiled for AVX2 + FMA (x86-64-v3) or NEON (aarch64) when present, with a portable
+//! is compiled for AVX-512 (x86-64-v4), AVX2 + FMA (x86-64-v3) or NEON (aarch64) when present, with a portable
 //! loop otherwise. No `unsafe` is written in this crate and no `RUSTFLAGS` are needed. Lay a
 //! batch out with [`padded_stride`] (see there why).
 

@@ -3,8 +3,8 @@
 //! [`Kernel::evaluate_batch`] is the structure-of-arrays form of
 //! [`Kernel::evaluate_prepared`] for every polarization and coherence level, every material
 //! (reflection or, with `interface = Some(η)`, reflection and transmission at a dielectric
-//! interface) and every PSD and blur: the per-packet work once, then the exits — 4 (`f64`) or
-//! 8 (`f32`) per instruction for the partially coherent (closed-form blur) and incoherent
+//! interface) and every PSD and blur: the per-packet work once, then the exits — 8 (`f64`) or
+//! 16 (`f32`) per instruction under AVX-512 (4 or 8 under AVX2 + FMA) for the partially coherent (closed-form blur) and incoherent
 //! Gaussian- or Gaussian-mixture-PSD rough conductor in reflection, and rough dielectric in
 //! reflection and at its interface lit from either side, at every polarization level
 //! (`super::partial`), one at a time otherwise — with no heap allocation. For several

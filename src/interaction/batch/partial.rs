@@ -9,8 +9,8 @@
 //! and transmission where `r̂·n̂ < 0`, `n̂` the normal facing the source; from below the
 //! constants are those of the reversed frame, the indices seen from the source and the PSD
 //! mirrored, as `Geometry::at_interface` has them), at the [`Full`], [`OneShape`] and
-//! [`Intensity`] levels — both lobes and the exit frames, 4 (`f64`) or 8 (`f32`) exits per
-//! instruction. The `Intensity` level runs the `OneShape` stages on the effective vector
+//! [`Intensity`] levels — both lobes and the exit frames, 8 (`f64`) or 16 (`f32`) exits per
+//! instruction under AVX-512, 4 or 8 under AVX2 + FMA. The `Intensity` level runs the `OneShape` stages on the effective vector
 //! `(1, 0, 0, 0)` and writes `S0` only.
 //!
 //! Per vector of exits, the stages in order: r̂ and `cos θ_o` ([`stages::geometry`]), the exit
