@@ -40,19 +40,11 @@ use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector3};
 use num_complex::Complex;
 
-const N: usize = 64;
+#[path = "../tests/common/rng.rs"]
+mod rng;
+use rng::Lcg;
 
-/// A small LCG so the inputs are reproducible without a dependency.
-struct Lcg(u64);
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+const N: usize = 64;
 
 /// One seeded scene: a packet and its geometry for an exit direction near the specular one
 /// (within ~15°), incidence up to 70°, packet frame turned from s/p, `Θ_x ≠ Θ_y`, realizable μ.

@@ -20,6 +20,7 @@
 //! the per-direction path rounds through subnormal numbers.
 
 use crate::common;
+use crate::common::Lcg;
 
 use gmueller::Real;
 use gmueller::error::Error;
@@ -191,18 +192,6 @@ fn min_positive<T: Real>() -> f64 {
         f64::MIN_POSITIVE
     } else {
         f64::from(f32::MIN_POSITIVE)
-    }
-}
-
-/// An LCG for exit directions derived from a proptest-drawn seed.
-struct Lcg(u64);
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

@@ -19,6 +19,7 @@
 //! the spectral batch equal bit for bit.
 
 use crate::common;
+use crate::common::Lcg;
 
 use gmueller::Real;
 use gmueller::frame::Frame;
@@ -358,18 +359,6 @@ struct Unpolarizing<P>(P);
 impl<T: Real, P: Pbsdf<T>> Pbsdf<T> for Unpolarizing<P> {
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
         Mueller::from_matrix(Matrix4::identity() * self.0.m00(g)).unwrap()
-    }
-}
-
-/// A small LCG for the exits.
-struct Lcg(u64);
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

@@ -294,4 +294,4 @@ pub mod rng;
 pub mod scene;
 
 #[allow(unused_imports, reason = "not every test binary uses the generator")]
-pub use rng::SplitMix64;
+pub use rng::{Lcg, SplitMix64};
