@@ -419,71 +419,24 @@ mod tests {
         ($t:ty, $material:expr, $interface:expr, $two:expr, $tol:expr) => {{
             let m = $material;
             let mut lit = 0;
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<Intensity, PlaneWave>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<Intensity, Partial>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<Intensity, Incoherent>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<OneShape, PlaneWave>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<OneShape, Partial>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<OneShape, Incoherent>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<Full, PlaneWave>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<Full, Partial>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
-            lit += check::<$t, _, _, _, _, _>(
-                Kernel::<Full, Incoherent>::default(),
-                &m,
-                $interface,
-                $two,
-                $tol,
-            );
+            every_level!(@each $t, m, $interface, $two, $tol, lit;
+                (Intensity, PlaneWave) (Intensity, Partial) (Intensity, Incoherent)
+                (OneShape, PlaneWave) (OneShape, Partial) (OneShape, Incoherent)
+                (Full, PlaneWave) (Full, Partial) (Full, Incoherent));
             lit
         }};
+        (@each $t:ty, $m:ident, $interface:expr, $two:expr, $tol:expr, $lit:ident;
+            $(($pol:ty, $coh:ty))*) => {
+            $(
+                $lit += check::<$t, _, _, _, _, _>(
+                    Kernel::<$pol, $coh>::default(),
+                    &$m,
+                    $interface,
+                    $two,
+                    $tol,
+                );
+            )*
+        };
     }
 
     #[test]
