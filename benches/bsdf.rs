@@ -27,9 +27,7 @@ use gmueller::psd::{ClosedForm, GaussianPsd};
 use gmueller::stokes::Stokes;
 use nalgebra::Vector3;
 
-#[path = "../tests/common/rng.rs"]
-mod rng;
-use rng::SplitMix64;
+use gmueller::verify::rng::SplitMix64;
 
 const N: usize = 64;
 

@@ -40,9 +40,7 @@ use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector3};
 use num_complex::Complex;
 
-#[path = "../tests/common/rng.rs"]
-mod rng;
-use rng::Lcg;
+use gmueller::verify::rng::Lcg;
 
 const N: usize = 64;
 

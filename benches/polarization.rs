@@ -19,9 +19,7 @@ use nalgebra::{Matrix2, Matrix4, Vector3};
 use num_complex::Complex;
 
 /// The tests' deterministic generator (`SplitMix64`) so every run benches the same inputs.
-#[path = "../tests/common/rng.rs"]
-mod rng;
-use rng::SplitMix64 as SplitMix;
+use gmueller::verify::rng::SplitMix64 as SplitMix;
 
 /// This bench's draw: uniform in `[-1, 1)` (the shared generator's `signed`).
 trait NextF64 {

@@ -107,6 +107,8 @@ pub mod real;
 pub mod simd;
 pub mod stack;
 pub mod stokes;
+#[cfg(feature = "verify")]
+pub mod verify;
 
 pub use error::Error;
 pub use real::Real;

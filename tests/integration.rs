@@ -44,3 +44,4 @@ mod sampling;
 mod side_invariance;
 mod stack;
 mod stokes;
+mod verify_kit;

@@ -7,91 +7,13 @@
     reason = "each test file uses a different subset of the helpers"
 )]
 
-use nalgebra::{Matrix2, Matrix4, Vector3, Vector4};
+use nalgebra::{Matrix4, Vector4};
 use num_complex::Complex;
-use proptest::prelude::*;
-use proptest::test_runner::RngSeed;
 
-/// An absolute and a relative tolerance.
-#[derive(Debug, Clone, Copy)]
-pub struct Tol {
-    pub abs: f64,
-    pub rel: f64,
-}
-
-/// For f64 results of short closed-form computations.
-pub const F64: Tol = Tol {
-    abs: 1e-12,
-    rel: 1e-12,
+// Tolerances and comparisons: the verification kit's (`gmueller::verify::tol`).
+pub use gmueller::verify::tol::{
+    F32, F64, Tol, assert_all_close, assert_close, assert_complex_close,
 };
-/// For f32 results of short closed-form computations.
-pub const F32: Tol = Tol {
-    abs: 2e-5,
-    rel: 2e-5,
-};
-
-impl Tol {
-    pub const fn new(abs: f64, rel: f64) -> Self {
-        Self { abs, rel }
-    }
-    /// `|a − b| ≤ abs + rel·max(|a|, |b|)` for finite values; a non-finite value is accepted
-    /// only against the very same value (`rel·∞` would otherwise accept ∞ against anything).
-    pub fn accepts(self, a: f64, b: f64) -> bool {
-        if !(a.is_finite() && b.is_finite()) {
-            return a == b;
-        }
-        (a - b).abs() <= self.abs + self.rel * a.abs().max(b.abs())
-    }
-}
-
-/// Panics with both values unless `a` and `b` agree within `tol`.
-#[track_caller]
-pub fn assert_close(what: &str, a: f64, b: f64, tol: Tol) {
-    assert!(
-        tol.accepts(a, b),
-        "{what}: {a:e} vs {b:e} (diff {:e}, tol abs {:e} rel {:e})",
-        (a - b).abs(),
-        tol.abs,
-        tol.rel
-    );
-}
-
-/// Element-wise [`assert_close`] over any iterable pair of real values.
-#[track_caller]
-pub fn assert_all_close(
-    what: &str,
-    a: impl IntoIterator<Item = f64>,
-    b: impl IntoIterator<Item = f64>,
-    tol: Tol,
-) {
-    let a: Vec<f64> = a.into_iter().collect();
-    let b: Vec<f64> = b.into_iter().collect();
-    assert_eq!(a.len(), b.len(), "{what}: length mismatch");
-    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
-        assert!(
-            tol.accepts(*x, *y),
-            "{what}[{i}]: {x:e} vs {y:e} (diff {:e}); whole:\n{a:?}\nvs\n{b:?}",
-            (x - y).abs()
-        );
-    }
-}
-
-/// Element-wise comparison of complex values (real and imaginary parts separately).
-#[track_caller]
-pub fn assert_complex_close(
-    what: &str,
-    a: impl IntoIterator<Item = Complex<f64>>,
-    b: impl IntoIterator<Item = Complex<f64>>,
-    tol: Tol,
-) {
-    let flat = |v: Vec<Complex<f64>>| v.into_iter().flat_map(|z| [z.re, z.im]).collect::<Vec<_>>();
-    assert_all_close(
-        what,
-        flat(a.into_iter().collect()),
-        flat(b.into_iter().collect()),
-        tol,
-    );
-}
 
 /// `Matrix4<f64>` entries, row-major, for comparisons.
 pub fn entries4(m: &Matrix4<f64>) -> Vec<f64> {
@@ -106,86 +28,14 @@ pub fn matrix4_from_rows(rows: &[Vec<f64>]) -> Matrix4<f64> {
     Matrix4::from_fn(|r, c| rows[r][c])
 }
 
-// ---------------------------------------------------------------- proptest configuration
+// ---------------------------------------------------------------- proptest configuration and strategies
 
-/// The seed every property test starts from in a normal run (`cargo test`, CI): the same inputs
-/// on every machine and every run, so a submission never passes or fails by chance.
-pub const PROPTEST_SEED: u64 = 0x6d75_656c_6c65_7221;
-
-/// The environment variable that turns every property test into a randomized search:
-/// `GMUELLER_PROPTEST_SEARCH=20 cargo test --release` runs each property with fresh random seeds
-/// and 20× its usual number of cases (any positive integer factor). A failure is shrunk and
-/// written to the test's `*.proptest-regressions` file, which every later run (CI included)
-/// replays first: commit it.
-pub const PROPTEST_SEARCH_VAR: &str = "GMUELLER_PROPTEST_SEARCH";
-
-/// The configuration of every property test: `cases` cases from [`PROPTEST_SEED`], or — when
-/// [`PROPTEST_SEARCH_VAR`] holds a factor `f` — `f · cases` cases from a random seed.
-pub fn proptest_config(cases: u32) -> ProptestConfig {
-    let factor = std::env::var(PROPTEST_SEARCH_VAR)
-        .ok()
-        .and_then(|v| v.trim().parse::<u32>().ok())
-        .filter(|&f| f > 0);
-    match factor {
-        Some(f) => ProptestConfig {
-            cases: cases.saturating_mul(f),
-            rng_seed: RngSeed::Random,
-            ..ProptestConfig::default()
-        },
-        None => ProptestConfig {
-            cases,
-            rng_seed: RngSeed::Fixed(PROPTEST_SEED),
-            ..ProptestConfig::default()
-        },
-    }
-}
-
-// ---------------------------------------------------------------- strategies
-
-/// A finite real in `[-scale, scale]`.
-pub fn real(scale: f64) -> impl Strategy<Value = f64> {
-    -scale..=scale
-}
-
-/// An angle in `[-2π, 2π]`.
-pub fn angle() -> impl Strategy<Value = f64> {
-    -std::f64::consts::TAU..=std::f64::consts::TAU
-}
-
-/// A complex number with both parts in `[-scale, scale]`.
-pub fn complex(scale: f64) -> impl Strategy<Value = Complex<f64>> {
-    (real(scale), real(scale)).prop_map(|(re, im)| Complex::new(re, im))
-}
-
-/// A general complex 2×2 matrix with entries of modulus ≲ `scale`.
-pub fn complex_matrix2(scale: f64) -> impl Strategy<Value = Matrix2<Complex<f64>>> {
-    proptest::array::uniform4(complex(scale)).prop_map(|[a, b, c, d]| Matrix2::new(a, b, c, d))
-}
-
-/// A valid Stokes vector `(S0, S1, S2, S3)`: intensity in `[1e-3, 10]`, degree of polarization in
-/// `[0, 1]`, direction uniform-ish on the Poincaré sphere.
-pub fn stokes_vector() -> impl Strategy<Value = Vector4<f64>> {
-    (1e-3..10.0f64, 0.0..=1.0f64, -1.0..=1.0f64, angle()).prop_map(|(s0, dop, z, az)| {
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let p = s0 * dop;
-        Vector4::new(s0, p * r * az.cos(), p * r * az.sin(), p * z)
-    })
-}
-
-/// A unit vector in ℝ³ (rejecting near-zero draws).
-pub fn unit_vector3() -> impl Strategy<Value = Vector3<f64>> {
-    (real(1.0), real(1.0), real(1.0))
-        .prop_filter("non-degenerate", |(x, y, z)| x * x + y * y + z * z > 1e-2)
-        .prop_map(|(x, y, z)| Vector3::new(x, y, z).normalize())
-}
-
-/// A symmetric positive-definite 2×2 matrix `XᵀX + εI` with eigenvalues in a bounded range.
-pub fn spd2() -> impl Strategy<Value = Matrix2<f64>> {
-    proptest::array::uniform4(real(2.0)).prop_map(|[a, b, c, d]| {
-        let x = Matrix2::new(a, b, c, d);
-        x.transpose() * x + Matrix2::identity() * 0.05
-    })
-}
+// The run configuration (fixed seed; `GMUELLER_PROPTEST_SEARCH=f` for fresh seeds and f× the
+// cases) and the strategies of valid objects: the verification kit's
+// (`gmueller::verify::strategy`).
+pub use gmueller::verify::strategy::{
+    angle, complex, complex_matrix2, proptest_config, real, spd2, stokes_vector, unit_vector3,
+};
 
 // ---------------------------------------------------------------- reference values
 

@@ -1,0 +1,96 @@
+//! Assertions of physical validity, with the crate's tolerances and messages that print the
+//! offending input.
+
+use nalgebra::{Matrix4, Vector4};
+
+use super::tol::Tol;
+use crate::mueller::Mueller;
+
+/// Panics unless `s` is a valid Stokes vector within `tol`: finite, `S0 ≥ −abs`, and
+/// `√(S1² + S2² + S3²) ≤ S0 + abs + rel · S0`. The test is made on ratios to `S0` (no
+/// underflow of squares near `1e-300`).
+///
+/// ```
+/// use gmueller::verify::{check::assert_valid_stokes, tol::F64};
+/// use nalgebra::Vector4;
+/// assert_valid_stokes("on the cone", Vector4::new(2.0, 0.0, 1.2, -1.6), F64);
+/// let r = std::panic::catch_unwind(|| {
+///     assert_valid_stokes("outside", Vector4::new(1.0, 0.8, 0.8, 0.0), F64)
+/// });
+/// assert!(r.is_err());
+/// ```
+///
+/// # Panics
+/// When `s` is not valid within `tol`.
+#[track_caller]
+pub fn assert_valid_stokes(what: &str, s: Vector4<f64>, tol: Tol) {
+    assert!(
+        s.iter().all(|v| v.is_finite()),
+        "{what}: {s:?} is not finite"
+    );
+    let s0 = s[0];
+    assert!(s0 >= -tol.abs, "{what}: S0 = {s0:e} < 0 in {s:?}");
+    let scale = s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let polarized = if scale > 0.0 {
+        let (a, b, c) = (s[1] / scale, s[2] / scale, s[3] / scale);
+        (a * a + b * b + c * c).sqrt() * scale
+    } else {
+        0.0
+    };
+    assert!(
+        polarized <= s0 + tol.abs + tol.rel * s0.abs(),
+        "{what}: |(S1, S2, S3)| = {polarized:e} > S0 = {s0:e} (excess {:e}) in {s:?}",
+        polarized - s0
+    );
+}
+
+/// Panics unless `m` is physically realizable in Cloude's sense within `tol`
+/// ([`Mueller::is_physically_realizable`]: every eigenvalue of the coherency matrix
+/// `≥ −tol · tr H`); the message prints the matrix and the eigenvalues.
+///
+/// ```
+/// use gmueller::verify::check::assert_realizable;
+/// use nalgebra::{Matrix4, Vector4};
+/// assert_realizable("depolarizer", &Matrix4::from_diagonal(&Vector4::new(1.0, 0.3, 0.3, 0.3)), 1e-12);
+/// // The handedness flip maps Stokes vectors to Stokes vectors but is not realizable.
+/// let flip = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, 1.0, -1.0));
+/// assert!(std::panic::catch_unwind(|| assert_realizable("flip", &flip, 1e-12)).is_err());
+/// ```
+///
+/// # Panics
+/// When `m` is not finite or not realizable within `tol`.
+#[track_caller]
+pub fn assert_realizable(what: &str, m: &Matrix4<f64>, tol: f64) {
+    let mm = Mueller::from_matrix(*m)
+        .unwrap_or_else(|e| panic!("{what}: {m} is not a Mueller matrix: {e}"));
+    assert!(
+        mm.is_physically_realizable(tol),
+        "{what}: not realizable within {tol:e}: coherency eigenvalues {:?} (trace {:e}) of{m}",
+        mm.coherency_eigenvalues().as_slice(),
+        m[(0, 0)]
+    );
+}
+
+/// Panics unless every entry of `a` and `b` agrees within `tol` relative to the larger matrix:
+/// `|a_ij − b_ij| ≤ abs + rel · max(max|a|, max|b|)` (a Mueller matrix's small entries are
+/// compared on the scale of its largest); the message prints both matrices.
+///
+/// # Panics
+/// When an entry does not agree, or one is not finite.
+#[track_caller]
+pub fn assert_mueller_close(what: &str, a: &Matrix4<f64>, b: &Matrix4<f64>, tol: Tol) {
+    let scale = a.amax().max(b.amax());
+    for r in 0..4 {
+        for c in 0..4 {
+            let (x, y) = (a[(r, c)], b[(r, c)]);
+            assert!(
+                x.is_finite() && y.is_finite() && (x - y).abs() <= tol.abs + tol.rel * scale,
+                "{what}: entry ({r}, {c}) {x:e} vs {y:e} (diff {:e}, tol abs {:e} rel {:e} of \
+                 {scale:e}); whole:{a}vs{b}",
+                (x - y).abs(),
+                tol.abs,
+                tol.rel
+            );
+        }
+    }
+}

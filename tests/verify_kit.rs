@@ -1,0 +1,178 @@
+//! The verification kit (`gmueller::verify`, feature `verify`) tested on its own: every object a
+//! strategy generates passes the crate's validation, the strategies reach the boundaries they
+//! promise (coverage counted over a fixed-seed sample and asserted), and each assertion rejects a
+//! deliberately wrong input.
+
+use gmueller::gaussian::Gaussian;
+use gmueller::jones::JonesMatrix;
+use gmueller::mueller::Mueller;
+use gmueller::stokes::Stokes;
+use gmueller::verify::proptest::strategy::{Strategy, ValueTree};
+use gmueller::verify::proptest::test_runner::TestRunner;
+use gmueller::verify::{check, strategy, tol};
+use nalgebra::{Matrix2, Matrix4, Vector4};
+use num_complex::Complex;
+
+/// `n` values of `s` from the fixed seed (a normal run's configuration).
+fn sample<S: Strategy>(s: S, n: usize) -> Vec<S::Value> {
+    let mut runner = TestRunner::new(strategy::proptest_config(1));
+    (0..n)
+        .map(|_| s.new_tree(&mut runner).unwrap().current())
+        .collect()
+}
+
+const N: usize = 2000;
+
+#[test]
+fn stokes_vectors_are_valid_and_reach_both_ends_of_the_polarization() {
+    let v = sample(strategy::stokes_vector(), N);
+    let mut near_unpolarized = 0;
+    let mut near_full = 0;
+    for s in &v {
+        Stokes::new(s[0], s[1], s[2], s[3]).expect("the crate accepts it");
+        check::assert_valid_stokes("stokes_vector", *s, tol::F64);
+        let dop = s.fixed_rows::<3>(1).norm() / s[0];
+        near_unpolarized += usize::from(dop < 0.01);
+        near_full += usize::from(dop > 0.99);
+    }
+    // DoP is uniform in [0, 1]: about 1 % of the cases at each end.
+    assert!(
+        near_unpolarized * 200 > N && near_full * 200 > N,
+        "DoP < 0.01: {near_unpolarized}/{N}, > 0.99: {near_full}/{N}"
+    );
+}
+
+#[test]
+fn stokes_on_the_cone_are_fully_polarized() {
+    for s in sample(strategy::stokes_on_cone(), N) {
+        Stokes::new(s[0], s[1], s[2], s[3]).expect("the crate accepts it");
+        check::assert_valid_stokes("stokes_on_cone", s, tol::F64);
+        let dop = s.fixed_rows::<3>(1).norm() / s[0];
+        tol::assert_close("DoP on the cone", dop, 1.0, tol::F64);
+    }
+}
+
+#[test]
+fn unitary_jones_matrices_are_unitary_and_lossless() {
+    for j in sample(strategy::unitary_jones(), N) {
+        let jj = j.adjoint() * j;
+        tol::assert_complex_close(
+            "J†J",
+            jj.iter().copied(),
+            Matrix2::<Complex<f64>>::identity().iter().copied(),
+            tol::F64,
+        );
+        let m = Mueller::from_jones(&JonesMatrix::from_matrix(j).unwrap()).matrix();
+        check::assert_realizable("unitary", &m, 1e-12);
+        // Lossless and non-depolarizing: M is 1 ⊕ a rotation of the Poincaré sphere.
+        tol::assert_close("M00", m[(0, 0)], 1.0, tol::F64);
+        let r = m.fixed_view::<3, 3>(1, 1).into_owned();
+        tol::assert_all_close(
+            "RᵀR",
+            (r.transpose() * r).iter().copied(),
+            nalgebra::Matrix3::<f64>::identity().iter().copied(),
+            tol::F64,
+        );
+    }
+}
+
+#[test]
+fn hermitian_jones_matrices_are_hermitian() {
+    for j in sample(strategy::hermitian_jones(2.0), N) {
+        tol::assert_complex_close(
+            "J − J†",
+            (j - j.adjoint()).iter().copied(),
+            [Complex::new(0.0, 0.0); 4],
+            tol::Tol::new(0.0, 0.0),
+        );
+    }
+}
+
+#[test]
+fn realizable_muellers_pass_cloude_and_reach_the_boundary() {
+    let v = sample(strategy::realizable_mueller(4), N);
+    let mut rank_one = 0;
+    let mut depolarizing = 0;
+    for m in &v {
+        check::assert_realizable("realizable_mueller", m, 1e-10);
+        let l = Mueller::from_matrix(*m).unwrap().coherency_eigenvalues();
+        // Rank 1 (one Jones matrix, on the boundary): the second eigenvalue is ~0.
+        if l[1] <= 1e-12 * l[0] {
+            rank_one += 1;
+        } else {
+            depolarizing += 1;
+        }
+        // And it maps valid Stokes vectors to valid ones.
+        let s = Vector4::new(1.0, 0.6, -0.0, 0.8);
+        check::assert_valid_stokes("M S", m * s, tol::Tol::new(1e-12, 1e-12));
+    }
+    // One to four terms, uniformly: about a quarter are single Jones matrices.
+    assert!(
+        rank_one * 10 > N && depolarizing * 10 > N,
+        "rank 1: {rank_one}/{N}, depolarizing: {depolarizing}/{N}"
+    );
+}
+
+#[test]
+fn conditioned_shapes_are_positive_definite_and_reach_their_condition() {
+    let max = 1e4;
+    let v = sample(strategy::spd2_conditioned(0.1, 10.0, max), N);
+    let (mut ill, mut round) = (0, 0);
+    for m in &v {
+        Gaussian::<f64, 2>::new(*m).expect("positive definite");
+        let e = m.symmetric_eigenvalues();
+        let cond = e.max() / e.min();
+        assert!(
+            (1.0 - 1e-9..=max * (1.0 + 1e-9)).contains(&cond),
+            "condition {cond} of {m}"
+        );
+        ill += usize::from(cond > 0.5 * max);
+        round += usize::from(cond < 2.0);
+    }
+    // Log-uniform in [1, 1e4]: ln 2 / ln 1e4 ≈ 7.5 % at each end.
+    assert!(
+        ill * 20 > N && round * 20 > N,
+        "condition > max/2: {ill}/{N}, < 2: {round}/{N}"
+    );
+}
+
+#[test]
+fn unit_vectors_have_unit_length() {
+    for u in sample(strategy::unit_vector3(), N) {
+        tol::assert_close("|u|", u.norm(), 1.0, tol::F64);
+    }
+}
+
+#[test]
+fn the_assertions_reject_wrong_inputs() {
+    let fails = |f: &(dyn Fn() + std::panic::RefUnwindSafe)| std::panic::catch_unwind(f).is_err();
+    // Outside the cone by 1e-9 relative: rejected at the f64 tolerance, accepted at 1e-6.
+    let s = Vector4::new(1.0, 1.0 + 1e-9, 0.0, 0.0);
+    assert!(fails(&|| check::assert_valid_stokes(
+        "outside",
+        s,
+        tol::F64
+    )));
+    check::assert_valid_stokes("outside, loose", s, tol::Tol::new(0.0, 1e-6));
+    assert!(fails(&|| check::assert_valid_stokes(
+        "negative",
+        Vector4::new(-1e-3, 0.0, 0.0, 0.0),
+        tol::F64
+    )));
+    // The handedness flip is not realizable; the identity is.
+    let flip = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, 1.0, -1.0));
+    assert!(fails(&|| check::assert_realizable("flip", &flip, 1e-12)));
+    check::assert_realizable("identity", &Matrix4::identity(), 1e-12);
+    // Mueller equality on the matrix's own scale.
+    let a = Matrix4::from_fn(|r, c| (r * 4 + c) as f64);
+    let mut b = a;
+    b[(3, 0)] += 1e-9 * a.amax();
+    check::assert_mueller_close("close", &a, &b, tol::Tol::new(0.0, 1e-8));
+    assert!(fails(&|| check::assert_mueller_close(
+        "apart",
+        &a,
+        &b,
+        tol::Tol::new(0.0, 1e-10)
+    )));
+    assert!(fails(&|| tol::assert_close("apart", 1.0, 1.1, tol::F64)));
+}
