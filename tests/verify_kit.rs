@@ -176,3 +176,29 @@ fn the_assertions_reject_wrong_inputs() {
     )));
     assert!(fails(&|| tol::assert_close("apart", 1.0, 1.1, tol::F64)));
 }
+
+#[test]
+fn the_s1_7_oracle_agrees_with_the_closed_form_and_rejects_the_row_stacked_one() {
+    use gmueller::verify::oracle;
+    let fails = |f: &(dyn Fn() + std::panic::RefUnwindSafe)| std::panic::catch_unwind(f).is_err();
+    let v = sample(strategy::complex_matrix2(1.0), 500);
+    let mut rejected = 0;
+    for j in &v {
+        let closed = Mueller::from_jones(&JonesMatrix::from_matrix(*j).unwrap()).matrix();
+        let literal = oracle::mueller_literal(j);
+        check::assert_mueller_close("S1.7", &literal, &closed, tol::F64);
+        // The row-stacked form A (J ⊗ J*) A⁻¹ (the wrong vec convention for S1.1).
+        let wrong = (oracle::a_mul() * oracle::kron(j, &j.map(|z| z.conj())) * oracle::a_mul_inv())
+            .map(|z| z.re);
+        if fails(&|| check::assert_mueller_close("row-stacked", &wrong, &closed, tol::F64)) {
+            rejected += 1;
+        }
+    }
+    // A deliberately wrong formula: every general draw must expose it.
+    assert_eq!(
+        rejected,
+        v.len(),
+        "row-stacked form accepted in {} cases",
+        v.len() - rejected
+    );
+}

@@ -7,6 +7,9 @@
 //!   realizable Mueller matrices, SPD 2×2 shapes of chosen condition, unit vectors) and the
 //!   run configuration ([`strategy::proptest_config`]: a fixed seed in a normal run, fresh
 //!   seeds and more cases under `GMUELLER_PROPTEST_SEARCH`);
+//! - [`oracle`]: the seed's formulas written literally (S1.3's `A_mül`, S1.7's Kronecker form,
+//!   S2.3–S2.4's τ projection, Germer's Rayleigh–Rice factors, the S2.18 section and the
+//!   closed S2.10 integral), each naming its equation;
 //! - [`tol`]: absolute-and-relative tolerances and comparisons that print both sides;
 //! - [`check`]: assertions of physical validity (Stokes vectors, Cloude realizability, Mueller
 //!   equality on the matrix's own scale);
@@ -36,6 +39,7 @@
 //! ```
 
 pub mod check;
+pub mod oracle;
 pub mod rng;
 pub mod strategy;
 pub mod tol;
