@@ -202,3 +202,47 @@ fn the_s1_7_oracle_agrees_with_the_closed_form_and_rejects_the_row_stacked_one()
         v.len() - rejected
     );
 }
+
+#[test]
+fn packets_are_realizable_and_reach_the_bochner_bound() {
+    use gmueller::frame::Frame;
+    use gmueller::packet::{CoherenceShape, WavePacket};
+    let frame = Frame::new(
+        nalgebra::Vector3::x(),
+        nalgebra::Vector3::y(),
+        nalgebra::Vector3::z(),
+    )
+    .unwrap();
+    let build = |(s, tx, ty): (Vector4<f64>, Matrix2<f64>, Matrix2<f64>)| {
+        WavePacket::new(
+            Stokes::new(s[0], s[1], s[2], s[3]).unwrap(),
+            CoherenceShape::new(tx).unwrap(),
+            CoherenceShape::new(ty).unwrap(),
+            frame,
+            0.5,
+        )
+        .unwrap_or_else(|e| panic!("{e}: S {s:?}, Θx {tx}, Θy {ty}"));
+        strategy::mu_squared(&s) / strategy::bochner_bound(&tx, &ty)
+    };
+    // Near the bound: every packet within 1 % of it, and realizable.
+    let near: Vec<f64> = sample(strategy::packet_parts(0.01), N)
+        .into_iter()
+        .map(build)
+        .collect();
+    assert!(
+        near.iter()
+            .all(|r| (0.99 - 1e-12..=1.0 + 1e-12).contains(r))
+    );
+    // Across the range: realizable, ~1 % within 1 % of the bound, ~half below half of it.
+    let all: Vec<f64> = sample(strategy::packet_parts(1.0), N)
+        .into_iter()
+        .map(build)
+        .collect();
+    let at_bound = all.iter().filter(|r| **r >= 0.99).count();
+    let low = all.iter().filter(|r| **r < 0.5).count();
+    println!("packets within 1 % of the Bochner bound: {at_bound}/{N}; below half: {low}/{N}");
+    assert!(
+        at_bound * 400 > N && low * 3 > N,
+        "{at_bound}, {low} of {N}"
+    );
+}

@@ -154,3 +154,53 @@ pub fn realizable_mueller(max_terms: usize) -> impl Strategy<Value = Matrix4<f64
         },
     )
 }
+
+/// The Bochner bound of a packet's `x`–`y` correlation, `|μ|² ≤ √(|Θx||Θy|)/|Θ½|` with
+/// `Θ½ = (Θx + Θy)/2` (≤ 1, = 1 for equal shapes): the largest `|μ|²` two channels of these
+/// shapes can have.
+#[must_use]
+pub fn bochner_bound(shape_x: &Matrix2<f64>, shape_y: &Matrix2<f64>) -> f64 {
+    let half = (shape_x + shape_y) * 0.5;
+    (shape_x.determinant() * shape_y.determinant()).sqrt() / half.determinant()
+}
+
+/// `|μ|²` of a Stokes vector, `(S2² + S3²)/(S0² − S1²)` (0 for `S0² = S1²`).
+#[must_use]
+pub fn mu_squared(s: &Vector4<f64>) -> f64 {
+    let d = s[0] * s[0] - s[1] * s[1];
+    if d > 0.0 {
+        (s[2] * s[2] + s[3] * s[3]) / d
+    } else {
+        0.0
+    }
+}
+
+/// The parts of a realizable two-shape wave packet: a Stokes vector and the coherence shapes
+/// `Θx`, `Θy` ([`spd2_conditioned`], eigenvalues in `[0.25, 100]` λ², condition ≤ 50), with
+/// `|μ|²` a fraction in `[1 − closeness, 1]` of the Bochner bound ([`bochner_bound`]):
+/// `closeness = 1` spans every realizable correlation, `closeness = 0.01` stays within 1 % of
+/// the bound. `S0` in `[1e-3, 10]`, `S1/S0` in `[−0.99, 0.99]`.
+pub fn packet_parts(
+    closeness: f64,
+) -> impl Strategy<Value = (Vector4<f64>, Matrix2<f64>, Matrix2<f64>)> {
+    let lo = (1.0 - closeness).clamp(0.0, 1.0);
+    (
+        spd2_conditioned(0.25, 100.0, 50.0),
+        spd2_conditioned(0.25, 100.0, 50.0),
+        1e-3..10.0f64,
+        -0.99..=0.99f64,
+        lo..=1.0f64,
+        angle(),
+    )
+        .prop_map(|(tx, ty, s0, q, f, phase)| {
+            let s1 = s0 * q;
+            let mu = (f * bochner_bound(&tx, &ty)).sqrt();
+            // (S2, S3) = 2 √(Sx Sy) μ (cos, sin), √(Sx Sy) = ½ √(S0² − S1²).
+            let r = (s0 * s0 - s1 * s1).sqrt() * mu;
+            (
+                Vector4::new(s0, s1, r * phase.cos(), r * phase.sin()),
+                tx,
+                ty,
+            )
+        })
+}
