@@ -33,9 +33,7 @@ use num_complex::Complex;
 use proptest::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
-    (lo.ln()..=hi.ln()).prop_map(f64::exp)
-}
+use crate::common::log_uniform;
 
 fn polar() -> impl Strategy<Value = f64> {
     prop_oneof![

@@ -36,9 +36,7 @@ use proptest::strategy::ValueTree;
 // ------------------------------------------------------------------ strategies
 
 /// Log-uniform on `[lo, hi]`.
-fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> + Clone {
-    (lo.ln()..=hi.ln()).prop_map(f64::exp)
-}
+use crate::common::log_uniform;
 
 /// An angle from the normal in degrees: exactly 0, exactly 89.99, or `90 − d` with `d`
 /// log-uniform in `[0.01, 90]` (dense near grazing).

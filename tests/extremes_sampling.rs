@@ -19,9 +19,7 @@ use gmueller::psd::{GaussianPsd, KCorrelation};
 use nalgebra::Vector3;
 use proptest::prelude::*;
 
-fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
-    (lo.ln()..=hi.ln()).prop_map(f64::exp)
-}
+use crate::common::log_uniform;
 
 fn incidence() -> impl Strategy<Value = f64> {
     prop_oneof![

@@ -128,11 +128,7 @@ fn entries2(m: &Matrix2<f64>) -> Vec<f64> {
     vec![m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]]
 }
 
-fn frame() -> impl Strategy<Value = Frame<f64>> {
-    (unit_vector3(), unit_vector3())
-        .prop_filter("hint not near k", |(k, h)| k.cross(h).norm() > 0.1)
-        .prop_map(|(k, h)| Frame::from_direction_and_x(k, h).expect("valid"))
-}
+use crate::common::frame;
 
 fn jones_vector() -> impl Strategy<Value = Vector2<Complex<f64>>> {
     (complex(1.0), complex(1.0)).prop_map(|(a, b)| Vector2::new(a, b))

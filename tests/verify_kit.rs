@@ -246,3 +246,73 @@ fn packets_are_realizable_and_reach_the_bochner_bound() {
         "{at_bound}, {low} of {N}"
     );
 }
+
+#[test]
+fn frames_are_right_handed_and_orthonormal() {
+    for f in sample(strategy::frame(), N) {
+        let (x, y, k) = (f.x(), f.y(), f.k());
+        for (what, v) in [("|x|", x.norm()), ("|y|", y.norm()), ("|k|", k.norm())] {
+            tol::assert_close(what, v, 1.0, tol::F64);
+        }
+        tol::assert_all_close(
+            "x × y = k",
+            x.cross(&y).iter().copied(),
+            k.iter().copied(),
+            tol::F64,
+        );
+    }
+}
+
+#[test]
+fn geometries_reach_normal_grazing_specular_and_back_scatter() {
+    use gmueller::frame::Frame;
+    use gmueller::verify::strategy::ExitKind;
+    let v = sample(strategy::incidence_and_exit(), N);
+    let grazing = 89.99f64.to_radians().cos();
+    let (mut normal, mut graze, mut kinds) = (0, 0, [0usize; 4]);
+    for (travel, exit, kind) in &v {
+        tol::assert_close("|travel|", travel.norm(), 1.0, tol::F64);
+        tol::assert_close("|exit|", exit.norm(), 1.0, tol::F64);
+        assert!(travel.z < 0.0 && exit.z > 0.0, "{travel:?} → {exit:?}");
+        // The crate builds the s/p frame of every incidence, normal incidence included.
+        Frame::sp(*travel, nalgebra::Vector3::z()).expect("an s/p frame");
+        normal += usize::from(travel.z == -1.0);
+        graze += usize::from((travel.z + grazing).abs() < 1e-15);
+        let k = match kind {
+            ExitKind::Specular => {
+                let mirror = travel - 2.0 * travel.z * nalgebra::Vector3::z();
+                tol::assert_all_close(
+                    "specular",
+                    exit.iter().copied(),
+                    mirror.iter().copied(),
+                    tol::F64,
+                );
+                0
+            }
+            ExitKind::BackScatter => {
+                tol::assert_all_close(
+                    "back-scatter",
+                    exit.iter().copied(),
+                    (-travel).iter().copied(),
+                    tol::F64,
+                );
+                1
+            }
+            ExitKind::Grazing => {
+                tol::assert_close("grazing exit", exit.z, grazing, tol::F64);
+                2
+            }
+            ExitKind::Any => 3,
+        };
+        kinds[k] += 1;
+    }
+    // 1/8 of the incidences exactly normal, 1/8 exactly grazing; a quarter of each exit kind.
+    assert!(
+        normal * 16 > N && graze * 16 > N,
+        "normal {normal}, grazing {graze} of {N}"
+    );
+    assert!(
+        kinds.iter().all(|k| k * 8 > N),
+        "exit kinds {kinds:?} of {N}"
+    );
+}

@@ -5,7 +5,8 @@
 //! - [`strategy`]: proptest strategies of objects that are valid by construction (Stokes
 //!   vectors inside the cone and on it, general, unitary and Hermitian Jones matrices,
 //!   realizable Mueller matrices, SPD 2×2 shapes of chosen condition, unit vectors, the parts
-//!   of realizable two-shape packets up to the Bochner bound `|μ|² = √(|Θx||Θy|)/|Θ½|`) and the
+//!   of realizable two-shape packets up to the Bochner bound `|μ|² = √(|Θx||Θy|)/|Θ½|`,
+//!   right-handed frames, polar angles and geometries with exact normal and grazing cases) and the
 //!   run configuration ([`strategy::proptest_config`]: a fixed seed in a normal run, fresh
 //!   seeds and more cases under `GMUELLER_PROPTEST_SEARCH`);
 //! - [`oracle`]: the seed's formulas written literally (S1.3's `A_mül`, S1.7's Kronecker form,

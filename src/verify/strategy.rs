@@ -204,3 +204,68 @@ pub fn packet_parts(
             )
         })
 }
+
+/// Log-uniform in `[lo, hi]`, `0 < lo ≤ hi` (every decade equally often).
+pub fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> + Clone {
+    (lo.ln()..=hi.ln()).prop_map(f64::exp)
+}
+
+/// A right-handed orthonormal frame of any orientation
+/// ([`crate::frame::Frame::from_direction_and_x`] of two unit vectors at least 0.1 apart in
+/// their cross product).
+pub fn frame() -> impl Strategy<Value = crate::frame::Frame<f64>> {
+    (unit_vector3(), unit_vector3())
+        .prop_filter("hint not near k", |(k, h)| k.cross(h).norm() > 0.1)
+        .prop_map(|(k, h)| crate::frame::Frame::from_direction_and_x(k, h).expect("valid"))
+}
+
+/// An angle from the normal in radians: exactly 0 (normal incidence, where the s/p frame falls
+/// back to its documented basis) in 1/8 of the cases, exactly 89.99° (grazing) in 1/8, else
+/// uniform in between.
+pub fn polar_angle() -> impl Strategy<Value = f64> {
+    let grazing = 89.99f64.to_radians();
+    prop_oneof![
+        1 => Just(0.0),
+        1 => Just(grazing),
+        6 => 0.0..grazing,
+    ]
+}
+
+/// The kind of an exit direction drawn by [`incidence_and_exit`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExitKind {
+    /// The mirror direction of the incidence.
+    Specular,
+    /// Straight back toward the source.
+    BackScatter,
+    /// At 89.99° from the normal, any azimuth.
+    Grazing,
+    /// Any direction of the upper hemisphere (polar angle by [`polar_angle`], any azimuth).
+    Any,
+}
+
+/// A geometry on a surface of normal `+ẑ`: the unit travel direction of the incident light
+/// (downward, polar angle by [`polar_angle`], azimuth φ ≠ 0 in general) and a unit exit
+/// direction of the upper hemisphere of each [`ExitKind`] in equal shares.
+pub fn incidence_and_exit() -> impl Strategy<Value = (Vector3<f64>, Vector3<f64>, ExitKind)> {
+    let kind = prop_oneof![
+        Just(ExitKind::Specular),
+        Just(ExitKind::BackScatter),
+        Just(ExitKind::Grazing),
+        Just(ExitKind::Any),
+    ];
+    (polar_angle(), angle(), polar_angle(), angle(), kind).prop_map(
+        |(theta_i, phi_i, theta_o, phi_o, kind)| {
+            let dir = |t: f64, p: f64| Vector3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+            let to_source = dir(theta_i, phi_i);
+            let travel = -to_source;
+            let exit = match kind {
+                ExitKind::Specular => Vector3::new(travel.x, travel.y, -travel.z),
+                ExitKind::BackScatter => to_source,
+                ExitKind::Grazing => dir(89.99f64.to_radians(), phi_o),
+                ExitKind::Any => dir(theta_o, phi_o),
+            };
+            (travel, exit, kind)
+        },
+    )
+}

@@ -34,7 +34,8 @@ pub fn matrix4_from_rows(rows: &[Vec<f64>]) -> Matrix4<f64> {
 // cases) and the strategies of valid objects: the verification kit's
 // (`gmueller::verify::strategy`).
 pub use gmueller::verify::strategy::{
-    angle, complex, complex_matrix2, proptest_config, real, spd2, stokes_vector, unit_vector3,
+    angle, complex, complex_matrix2, frame, log_uniform, proptest_config, real, spd2,
+    stokes_vector, unit_vector3,
 };
 
 // ---------------------------------------------------------------- reference values
