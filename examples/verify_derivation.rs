@@ -69,3 +69,11 @@ fn main() {
         std::process::exit(1);
     }
 }
+
+/// `cargo test` runs this (the example is declared with `test = true`): the outcomes `main`
+/// prints are asserted.
+#[test]
+fn the_right_form_holds_and_the_wrong_one_is_caught() {
+    assert!(check(column_stacked).is_ok());
+    assert!(matches!(check(row_stacked), Err(TestError::Fail(..))));
+}
