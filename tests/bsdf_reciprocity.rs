@@ -18,6 +18,7 @@
 //!   `Bsdf::sample_exit` weights equals the quadrature of the albedo `∫ M₀₀ cos θ_o/cos θ_i dω_o`.
 
 use crate::common;
+use gmueller::verify::check::reciprocal;
 
 use common::SplitMix64;
 use common::hemisphere::{Hemisphere, hemisphere_integral};
@@ -64,11 +65,6 @@ fn dir(f: &Frame<f64>, deg: f64, phi_deg: f64, side: f64) -> Vector3<f64> {
 
 fn unpolarized() -> Stokes<f64> {
     Stokes::unpolarized(1.0).unwrap()
-}
-
-/// `D = diag(1, 1, −1, 1)`.
-fn d() -> Matrix4<f64> {
-    Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, -1.0, 1.0))
 }
 
 /// The refractive index of the medium on the side of `v` (1 above, η below).
@@ -189,7 +185,7 @@ fn plane_wave_reflection_is_reciprocal() {
                 (bsdf(&bg, &c, a, b).1, bsdf(&bg, &c, b, a).1)
             };
             assert!(ab[(0, 0)] > 0.0, "{name}: f₀₀ = {}", ab[(0, 0)]);
-            let r = deviation(&(d() * ab.transpose() * d()), &ba);
+            let r = deviation(&reciprocal(&ab), &ba);
             let ulps = r / (f64::EPSILON * (1.0 + ab[(0, 0)].ln().abs()));
             worst = worst.max(r);
             worst_ulps = worst_ulps.max(ulps);
@@ -225,7 +221,7 @@ fn plane_wave_transmission_generalized_reciprocity() {
         let ab = bsdf(&b, &c, a, bb).1 / index(&f, &bb).powi(2);
         let ba = bsdf(&b, &c, bb, a).1 / index(&f, &a).powi(2);
         assert!(ab[(0, 0)] > 0.0);
-        let r = deviation(&(d() * ab.transpose() * d()), &ba);
+        let r = deviation(&reciprocal(&ab), &ba);
         worst_ulps = worst_ulps.max(r / (f64::EPSILON * (1.0 + ab[(0, 0)].ln().abs())));
         cases.push((ab, ba));
     }
@@ -279,7 +275,7 @@ fn partial_coherence_is_not_reciprocal() {
     let swapped = |s, r, packet: &dyn Fn(Vector3<f64>) -> WavePacket<f64>| {
         let (fs, fd) = total(s, r, packet);
         let (rs, rd) = total(r, s, packet);
-        let dm = |m: Matrix4<f64>| d() * m.transpose() * d();
+        let dm = |m: Matrix4<f64>| reciprocal(&m);
         (
             deviation(&(rs + rd), &dm(fs + fd)),
             deviation(&rs, &dm(fs)),

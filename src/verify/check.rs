@@ -94,3 +94,38 @@ pub fn assert_mueller_close(what: &str, a: &Matrix4<f64>, b: &Matrix4<f64>, tol:
         }
     }
 }
+
+/// The reverse-path Mueller matrix that reciprocity predicts, `D Mᵀ D` with
+/// `D = diag(1, 1, −1, 1)`, both in the s/p frames of the crate's BSDF
+/// (`docs/renderer.md`): `f(b → a) = D f(a → b)ᵀ D` for a plane-wave BSDF `f = M/cos θ_i` in
+/// reflection (`tests/bsdf_reciprocity.rs` found it the only one of the sixteen sign and
+/// transpose candidates that holds for rough glass and conductors at any azimuth).
+#[must_use]
+pub fn reciprocal(m: &Matrix4<f64>) -> Matrix4<f64> {
+    let d = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, -1.0, 1.0));
+    d * m.transpose() * d
+}
+
+/// Panics unless `reverse` equals [`reciprocal`]`(forward)` within `tol` on the matrices' scale
+/// ([`assert_mueller_close`]).
+///
+/// ```
+/// use gmueller::verify::{check, tol::F64};
+/// use nalgebra::Matrix4;
+/// let m = Matrix4::new(1.0, 0.2, 0.1, 0.0, 0.2, 0.9, 0.3, 0.1, -0.1, 0.2, 0.8, 0.2, 0.0, 0.1, -0.2, 0.7);
+/// check::assert_reciprocal("constructed", &m, &check::reciprocal(&m), F64);
+/// // A non-symmetric matrix is not its own reverse.
+/// assert!(std::panic::catch_unwind(|| check::assert_reciprocal("same", &m, &m, F64)).is_err());
+/// ```
+///
+/// # Panics
+/// When an entry does not agree.
+#[track_caller]
+pub fn assert_reciprocal(what: &str, forward: &Matrix4<f64>, reverse: &Matrix4<f64>, tol: Tol) {
+    assert_mueller_close(
+        &format!("{what} (reverse against D Mᵀ D of the forward)"),
+        reverse,
+        &reciprocal(forward),
+        tol,
+    );
+}
