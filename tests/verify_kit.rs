@@ -317,3 +317,76 @@ fn geometries_reach_normal_grazing_specular_and_back_scatter() {
         "exit kinds {kinds:?} of {N}"
     );
 }
+
+#[test]
+fn the_quadratures_reproduce_known_integrals() {
+    use gmueller::verify::quadrature::{
+        Hemisphere, cube_quad, gauss_legendre, hemisphere_integral, integrate,
+    };
+    // n-point Gauss–Legendre is exact for degree ≤ 2n − 1: ∫ x^k over [−1, 1].
+    let r = gauss_legendre(12);
+    for k in 0..24 {
+        let got: f64 = r
+            .nodes
+            .iter()
+            .zip(&r.weights)
+            .map(|(x, w)| w * x.powi(k))
+            .sum();
+        let want = if k % 2 == 0 {
+            2.0 / (k as f64 + 1.0)
+        } else {
+            0.0
+        };
+        tol::assert_close(&format!("∫ x^{k}"), got, want, tol::Tol::new(1e-14, 1e-14));
+    }
+    // Adaptive: ∫₀^π sin = 2, and a narrow peak ∫ e^{−x²/2σ²} = σ√(2π) on [−1, 1], σ = 1e-3.
+    tol::assert_close(
+        "∫ sin",
+        integrate(&mut f64::sin, 0.0, std::f64::consts::PI, 4, 1e-13),
+        2.0,
+        tol::F64,
+    );
+    let s = 1e-3;
+    // On one panel both rules miss the peak between their nodes, agree on ~0 and accept it
+    // (documented at `integrate`): the panels must resolve the integrand's features.
+    let mut f = |x: f64| (-0.5 * (x / s).powi(2)).exp();
+    assert!(integrate(&mut f, -1.0, 1.0, 1, 1e-14) < 1e-6);
+    let peak = integrate(&mut f, -1.0, 1.0, 101, 1e-14);
+    tol::assert_close(
+        "narrow peak",
+        peak,
+        s * std::f64::consts::TAU.sqrt(),
+        tol::Tol::new(0.0, 1e-10),
+    );
+    // The hemisphere in exit-tangent coordinates: ∫ d²r_t = π, ∫ cos θ_o d²r_t = 2π/3, either side.
+    for side in [Hemisphere::Above, Hemisphere::Below] {
+        let [area, cz] =
+            hemisphere_integral(nalgebra::Vector2::new(0.3, -0.2), 64, side, &mut |r| {
+                [1.0, r.z.abs()]
+            });
+        tol::assert_close(
+            "∫ d²r_t",
+            area,
+            std::f64::consts::PI,
+            tol::Tol::new(0.0, 1e-9),
+        );
+        tol::assert_close(
+            "∫ cos θ_o d²r_t",
+            cz,
+            std::f64::consts::TAU / 3.0,
+            tol::Tol::new(0.0, 1e-6),
+        );
+    }
+    // A 2-D Gaussian on the cube [−8, 8]²: 2π.
+    let g = cube_quad::<2>(
+        |x| Complex::new((-0.5 * x.norm_squared()).exp(), 0.0),
+        8.0,
+        161,
+    );
+    tol::assert_close(
+        "∫ e^{−|x|²/2}",
+        g.re,
+        std::f64::consts::TAU,
+        tol::Tol::new(0.0, 1e-10),
+    );
+}

@@ -12,6 +12,8 @@
 //! - [`oracle`]: the seed's formulas written literally (S1.3's `A_mül`, S1.7's Kronecker form,
 //!   S2.3–S2.4's τ projection, Germer's Rayleigh–Rice factors, the S2.18 section and the
 //!   closed S2.10 integral), each naming its equation;
+//! - [`quadrature`]: an adaptive Gauss–Legendre integrator (nodes computed, not tabulated),
+//!   the exit hemisphere in exit-tangent coordinates, a trapezoid rule on a cube;
 //! - [`tol`]: absolute-and-relative tolerances and comparisons that print both sides;
 //! - [`check`]: assertions of physical validity (Stokes vectors, Cloude realizability, Mueller
 //!   equality on the matrix's own scale);
@@ -42,6 +44,7 @@
 
 pub mod check;
 pub mod oracle;
+pub mod quadrature;
 pub mod rng;
 pub mod strategy;
 pub mod tol;

@@ -8,7 +8,6 @@
 )]
 
 use nalgebra::{Matrix4, Vector4};
-use num_complex::Complex;
 
 // Tolerances and comparisons: the verification kit's (`gmueller::verify::tol`).
 pub use gmueller::verify::tol::{
@@ -80,58 +79,12 @@ pub fn flip_s3(m: Matrix4<f64>) -> Matrix4<f64> {
 
 // ---------------------------------------------------------------- quadrature
 
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the three-term recurrence).
-pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut x = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    for i in 0..n {
-        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 0.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, z);
-            for j in 2..=n {
-                let p2 = ((2 * j - 1) as f64 * z * p1 - (j - 1) as f64 * p0) / j as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-            let dz = p1 / dp;
-            z -= dz;
-            if dz.abs() < 1e-16 {
-                break;
-            }
-        }
-        x[i] = z;
-        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    (x, w)
-}
+pub use gmueller::verify::quadrature::cube_quad;
 
-/// Trapezoid rule over `[−half, half]ᴺ` with `n` points per axis, of a complex integrand.
-pub fn cube_quad<const N: usize>(
-    f: impl Fn(&nalgebra::SVector<f64, N>) -> Complex<f64>,
-    half: f64,
-    n: usize,
-) -> Complex<f64> {
-    let step = 2.0 * half / (n - 1) as f64;
-    let mut idx = [0usize; N];
-    let mut sum = Complex::new(0.0, 0.0);
-    loop {
-        let x = nalgebra::SVector::<f64, N>::from_fn(|d, _| -half + step * idx[d] as f64);
-        sum += f(&x);
-        let mut d = 0;
-        loop {
-            if d == N {
-                return sum * step.powi(N as i32);
-            }
-            idx[d] += 1;
-            if idx[d] < n {
-                break;
-            }
-            idx[d] = 0;
-            d += 1;
-        }
-    }
+/// Gauss–Legendre nodes and weights on [−1, 1] (the kit's rule, as two vectors).
+pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let r = gmueller::verify::quadrature::gauss_legendre(n);
+    (r.nodes, r.weights)
 }
 
 // ---------------------------------------------------------------- test-side formulas
