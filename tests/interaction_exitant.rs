@@ -35,12 +35,9 @@ fn setup(theta_i: f64, azimuth: f64, shape: Matrix2<f64>) -> (Frame<f64>, WavePa
     (surface, packet)
 }
 
+/// Widths 1–100 λ, turned by up to ±1.5 rad.
 fn shape() -> impl Strategy<Value = Matrix2<f64>> {
-    (1.0..100.0f64, 1.0..100.0f64, -1.5..1.5f64).prop_map(|(a, b, rot)| {
-        let (s, c) = rot.sin_cos();
-        let r = Matrix2::new(c, -s, s, c);
-        r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
-    })
+    gmueller::verify::strategy::coherence_shape(1.0, 100.0, 1.5)
 }
 
 proptest! {

@@ -403,12 +403,9 @@ struct ValidityCase {
     interface: Option<(bool, bool)>,
 }
 
+/// Widths 0.3–50 λ, any orientation.
 fn shape() -> impl Strategy<Value = Matrix2<f64>> {
-    (0.3..50.0f64, 0.3..50.0f64, -PI..PI).prop_map(|(a, b, r)| {
-        let (s, c) = r.sin_cos();
-        let rot = Matrix2::new(c, -s, s, c);
-        rot * Matrix2::new(a * a, 0.0, 0.0, b * b) * rot.transpose()
-    })
+    gmueller::verify::strategy::coherence_shape(0.3, 50.0, PI)
 }
 
 fn validity_case() -> impl Strategy<Value = ValidityCase> {

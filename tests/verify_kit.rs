@@ -390,3 +390,21 @@ fn the_quadratures_reproduce_known_integrals() {
         tol::Tol::new(0.0, 1e-10),
     );
 }
+
+#[test]
+fn coherence_shapes_have_their_widths() {
+    for m in sample(
+        strategy::coherence_shape(0.3, 50.0, std::f64::consts::PI),
+        N,
+    ) {
+        Gaussian::<f64, 2>::new(m).expect("positive definite");
+        let e = m.symmetric_eigenvalues();
+        for l in e.iter() {
+            assert!(
+                (0.09 * (1.0 - 1e-12)..2500.0 * (1.0 + 1e-12)).contains(l),
+                "eigenvalue {l} of {m}"
+            );
+        }
+        tol::assert_close("symmetric", m[(0, 1)], m[(1, 0)], tol::F64);
+    }
+}

@@ -269,3 +269,13 @@ pub fn incidence_and_exit() -> impl Strategy<Value = (Vector3<f64>, Vector3<f64>
         },
     )
 }
+
+/// A coherence shape `Θ = R(ψ) diag(a², b²) R(ψ)ᵀ`: an ellipse of widths `a, b` in `[lo, hi)`
+/// (length, e.g. in λ) turned by `ψ` in `[−max_angle, max_angle)`.
+pub fn coherence_shape(lo: f64, hi: f64, max_angle: f64) -> impl Strategy<Value = Matrix2<f64>> {
+    (lo..hi, lo..hi, -max_angle..max_angle).prop_map(|(a, b, psi)| {
+        let (s, c) = psi.sin_cos();
+        let r = Matrix2::new(c, -s, s, c);
+        r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
+    })
+}
