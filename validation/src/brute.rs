@@ -94,29 +94,29 @@ use std::f64::consts::TAU;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
+use gmueller::verify::rng::SplitMix64;
 use rustfft::num_complex::Complex64 as C;
 use rustfft::{Fft, FftPlanner};
 
-/// A small deterministic generator (`SplitMix64`), so results do not depend on thread timing.
+/// A small deterministic generator (the kit's `SplitMix64`, one stream per work item), so
+/// results do not depend on thread timing.
 #[derive(Debug, Clone)]
-pub struct Rng(u64);
+pub struct Rng(SplitMix64);
 
 impl Rng {
     /// A generator for stream `stream` of run `seed`.
     #[must_use]
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Self(seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03));
+        let mut r = Self(SplitMix64(
+            seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03),
+        ));
         r.next_u64();
         r
     }
 
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
 
     /// Uniform in (0, 1).
