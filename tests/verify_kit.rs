@@ -160,6 +160,17 @@ fn the_assertions_reject_wrong_inputs() {
         Vector4::new(-1e-3, 0.0, 0.0, 0.0),
         tol::F64
     )));
+    // At extreme scales with a purely relative tolerance (the squares of 1e±300 would under-
+    // or overflow): on the cone accepted, 1e-9 outside rejected.
+    let rel = tol::Tol::new(0.0, 1e-12);
+    for scale in [1e-300, 1e300] {
+        check::assert_valid_stokes("on the cone", Vector4::new(1.0, 0.6, 0.0, 0.8) * scale, rel);
+        let out = Vector4::new(1.0, 0.6 * (1.0 + 1e-9), 0.0, 0.8 * (1.0 + 1e-9)) * scale;
+        assert!(
+            fails(&|| check::assert_valid_stokes("outside", out, rel)),
+            "scale {scale:e}"
+        );
+    }
     // The handedness flip is not realizable; the identity is.
     let flip = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, 1.0, -1.0));
     assert!(fails(&|| check::assert_realizable("flip", &flip, 1e-12)));

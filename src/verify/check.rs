@@ -7,8 +7,9 @@ use super::tol::Tol;
 use crate::mueller::Mueller;
 
 /// Panics unless `s` is a valid Stokes vector within `tol`: finite, `S0 ≥ −abs`, and
-/// `√(S1² + S2² + S3²) ≤ S0 + abs + rel · S0`. The test is made on ratios to `S0` (no
-/// underflow of squares near `1e-300`).
+/// `√(S1² + S2² + S3²) ≤ S0 + abs + rel · S0`. The norm is taken on ratios to the largest
+/// entry (no under- or overflow of squares near `1e∓300`; use `abs = 0` there, since any
+/// absolute part swamps such values).
 ///
 /// ```
 /// use gmueller::verify::{check::assert_valid_stokes, tol::F64};
