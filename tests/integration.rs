@@ -45,3 +45,5 @@ mod side_invariance;
 mod stack;
 mod stokes;
 mod verify_kit;
+mod verify_oracles;
+mod verify_strategies;

@@ -7,19 +7,11 @@ use gmueller::gaussian::Gaussian;
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
 use gmueller::stokes::Stokes;
-use gmueller::verify::proptest::strategy::{Strategy, ValueTree};
-use gmueller::verify::proptest::test_runner::TestRunner;
 use gmueller::verify::{check, strategy, tol};
 use nalgebra::{Matrix2, Matrix4, Vector4};
 use num_complex::Complex;
 
-/// `n` values of `s` from the fixed seed (a normal run's configuration).
-fn sample<S: Strategy>(s: S, n: usize) -> Vec<S::Value> {
-    let mut runner = TestRunner::new(strategy::proptest_config(1));
-    (0..n)
-        .map(|_| s.new_tree(&mut runner).unwrap().current())
-        .collect()
-}
+use gmueller::verify::strategy::sample;
 
 const N: usize = 2000;
 

@@ -130,3 +130,52 @@ pub fn assert_reciprocal(what: &str, forward: &Matrix4<f64>, reverse: &Matrix4<f
         tol,
     );
 }
+
+/// The largest fraction of the incident power that the Mueller matrix `m` passes, over all
+/// incident Stokes vectors: `max_S (m S)₀/S₀ = M₀₀ + √(M₀₁² + M₀₂² + M₀₃²)` (reached by the fully
+/// polarized state along `(M₀₁, M₀₂, M₀₃)`). For an albedo matrix
+/// ([`super::quadrature::hemisphere_albedo`]) it is the energy a surface returns at worst.
+#[must_use]
+pub fn max_transmittance(m: &Matrix4<f64>) -> f64 {
+    m[(0, 0)] + (m[(0, 1)].powi(2) + m[(0, 2)].powi(2) + m[(0, 3)].powi(2)).sqrt()
+}
+
+/// Panics unless the Mueller matrix `m` is passive within `tol`: every incident Stokes vector
+/// keeps at most its power, [`max_transmittance`]`(m) ≤ 1 + tol` (energy ≤ 1), and no state is
+/// passed with negative power, `M₀₀ − √(M₀₁² + M₀₂² + M₀₃²) ≥ −tol`. The message prints the
+/// matrix and the worst incident state.
+///
+/// ```
+/// use gmueller::verify::check::assert_passive;
+/// use nalgebra::Matrix4;
+/// // An ideal polarizer: 1/2 of unpolarized light, all of the state along its axis.
+/// let pol = Matrix4::new(0.5, 0.5, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+/// assert_passive("polarizer", &pol, 1e-12);
+/// // The same with M₀₀ = 0.6 passes 1.1 of the light along its axis: not passive.
+/// let mut gain = pol;
+/// gain[(0, 0)] = 0.6;
+/// assert!(std::panic::catch_unwind(|| assert_passive("gain", &gain, 1e-12)).is_err());
+/// ```
+///
+/// # Panics
+/// When `m` is not finite or not passive within `tol`.
+#[track_caller]
+pub fn assert_passive(what: &str, m: &Matrix4<f64>, tol: f64) {
+    assert!(m.iter().all(|v| v.is_finite()), "{what}: not finite:{m}");
+    let d = (m[(0, 1)].powi(2) + m[(0, 2)].powi(2) + m[(0, 3)].powi(2)).sqrt();
+    let worst = if d > 0.0 {
+        [1.0, m[(0, 1)] / d, m[(0, 2)] / d, m[(0, 3)] / d]
+    } else {
+        [1.0, 0.0, 0.0, 0.0]
+    };
+    assert!(
+        m[(0, 0)] + d <= 1.0 + tol,
+        "{what}: passes {:e} of the power of the state {worst:?} (energy > 1 + {tol:e}):{m}",
+        m[(0, 0)] + d
+    );
+    assert!(
+        m[(0, 0)] - d >= -tol,
+        "{what}: passes {:e} (negative) of the power of the state opposite {worst:?}:{m}",
+        m[(0, 0)] - d
+    );
+}

@@ -190,3 +190,185 @@ pub fn stokes_of_csd(m: &Matrix2<C64>) -> nalgebra::Vector4<f64> {
         2.0 * m[(1, 0)].im,
     )
 }
+
+// ---------------------------------------------------------------- S1: stacking, CSD, Mueller
+
+/// The column stack (S1.1 as the crate defines it, `DESIGN`/crate docs "Conventions"):
+/// `vec(C) = (C₁₁, C₂₁, C₁₂, C₂₂)`.
+pub fn vec_columns(m: &Matrix2<C64>) -> nalgebra::Vector4<C64> {
+    nalgebra::Vector4::new(m[(0, 0)], m[(1, 0)], m[(0, 1)], m[(1, 1)])
+}
+
+/// The row stack the seed's text describes, `(C₁₁, C₁₂, C₂₁, C₂₂)` (with which S1.1, S1.3 and
+/// S1.7 as printed do not hold: the crate's Errata 1).
+pub fn vec_rows(m: &Matrix2<C64>) -> nalgebra::Vector4<C64> {
+    nalgebra::Vector4::new(m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)])
+}
+
+/// S1.2: the generalized Stokes parameters `A_mül vec(C)` of a (one- or two-point) CSD matrix,
+/// complex in general (real for a one-point C).
+pub fn generalized_stokes(csd: &Matrix2<C64>) -> nalgebra::Vector4<C64> {
+    a_mul() * vec_columns(csd)
+}
+
+/// S1.4: the CSD after a pair of Jones matrices, `J(r₁) C(r₁, r₂) J(r₂)†`.
+pub fn csd_after(j1: &Matrix2<C64>, j2: &Matrix2<C64>, csd: &Matrix2<C64>) -> Matrix2<C64> {
+    j1 * csd * j2.adjoint()
+}
+
+/// S1.5: the same in stacked form, `[J(r₂)* ⊗ J(r₁)] vec(C)` (Lemma S1.1 with `A = J₁`,
+/// `B = J₂*`), returned as `vec` of the result.
+pub fn csd_after_stacked(
+    j1: &Matrix2<C64>,
+    j2: &Matrix2<C64>,
+    csd: &Matrix2<C64>,
+) -> nalgebra::Vector4<C64> {
+    kron(&j2.map(|z| z.conj()), j1) * vec_columns(csd)
+}
+
+/// S1.7: the generalized Mueller matrix `𝓜(p₁, p₂) = A_mül [J(p₂)* ⊗ J(p₁)] A_mül⁻¹` (complex
+/// 4×4; real when `J₁ = J₂`, see [`mueller_literal`]).
+pub fn generalized_mueller(j1: &Matrix2<C64>, j2: &Matrix2<C64>) -> Matrix4<C64> {
+    a_mul() * kron(&j2.map(|z| z.conj()), j1) * a_mul_inv()
+}
+
+// ---------------------------------------------------------------- S2.1–S2.2, S2.15–S2.17 by quadrature
+
+/// `g^Σ(x) = exp(−½ xᵀ Σ⁻¹ x)` (unnormalised), with nalgebra's general inverse.
+pub fn gaussian<const N: usize>(
+    cov: &nalgebra::SMatrix<f64, N, N>,
+    x: &nalgebra::SVector<f64, N>,
+) -> f64 {
+    let inv = cov.try_inverse().expect("Σ invertible");
+    (-0.5 * (x.transpose() * inv * x)[0]).exp()
+}
+
+/// The unitary Fourier transform `(2π)^{−N/2} ∫ f(x) e^{−i q·x} dᴺx` by the trapezoid rule on
+/// `[−half, half]ᴺ` with `n` points per axis ([`super::quadrature::cube_quad`]): spectrally
+/// accurate for smooth integrands that have decayed at the faces (Gaussians: choose `half` at
+/// ≳ 9 standard deviations, and `n` so that the step resolves both `f` and `e^{−i q·x}`).
+pub fn fourier_transform<const N: usize>(
+    f: impl Fn(&nalgebra::SVector<f64, N>) -> C64,
+    q: &nalgebra::SVector<f64, N>,
+    half: f64,
+    n: usize,
+) -> C64 {
+    super::quadrature::cube_quad(|x| f(x) * C64::from_polar(1.0, -q.dot(x)), half, n)
+        / std::f64::consts::TAU.powf(N as f64 / 2.0)
+}
+
+fn det<const N: usize>(m: &nalgebra::SMatrix<f64, N, N>) -> f64 {
+    nalgebra::DMatrix::from_iterator(N, N, m.iter().copied()).determinant()
+}
+
+/// Lemma S2.1 as printed: `F{g^Σ(Bξ)}(q) = |Σ|^{1/2}/|B| · g^{Σ⁻¹}(B⁻¹ q)`, with `|B|` read as
+/// the signed determinant. Wrong for a non-symmetric `B` (Errata 2): kept to show it fails.
+pub fn lemma_s2_1_printed<const N: usize>(
+    cov: &nalgebra::SMatrix<f64, N, N>,
+    b: &nalgebra::SMatrix<f64, N, N>,
+    q: &nalgebra::SVector<f64, N>,
+) -> f64 {
+    let arg = b.try_inverse().expect("B invertible") * q;
+    det(cov).sqrt() / det(b) * (-0.5 * (arg.transpose() * cov * arg)[0]).exp()
+}
+
+/// Lemma S2.1 corrected (Errata 2): `F{g^Σ(Bξ)}(q) = |Σ|^{1/2}/|det B| · g^{Σ⁻¹}(B⁻ᵀ q)`,
+/// written literally.
+pub fn lemma_s2_1<const N: usize>(
+    cov: &nalgebra::SMatrix<f64, N, N>,
+    b: &nalgebra::SMatrix<f64, N, N>,
+    q: &nalgebra::SVector<f64, N>,
+) -> f64 {
+    let arg = b.transpose().try_inverse().expect("B invertible") * q;
+    det(cov).sqrt() / det(b).abs() * (-0.5 * (arg.transpose() * cov * arg)[0]).exp()
+}
+
+/// The left side of Lemma S2.1, `F{g^Σ(Bξ)}(q)`, by quadrature ([`fourier_transform`]) on a
+/// cube reaching 9 standard deviations of `g^Σ(B·)` along each axis, `n` points per axis
+/// (`n ≈ 301` gives ~1e-12 in 2-D for moderate `q`; 3-D needs `n³` evaluations).
+pub fn lemma_s2_1_by_quadrature<const N: usize>(
+    cov: &nalgebra::SMatrix<f64, N, N>,
+    b: &nalgebra::SMatrix<f64, N, N>,
+    q: &nalgebra::SVector<f64, N>,
+    n: usize,
+) -> C64 {
+    let bi = b.try_inverse().expect("B invertible");
+    let c = bi * cov * bi.transpose();
+    let max_var = (0..N).map(|i| c[(i, i)]).fold(0.0, f64::max);
+    fourier_transform(
+        |x| C64::new(gaussian(cov, &(b * x)), 0.0),
+        q,
+        9.0 * max_var.sqrt(),
+        n,
+    )
+}
+
+/// Corollary S2.2 for one channel, literally: the transform of a packet term
+/// `e^{−i k ŝ·ξ} g^Θ(Qᵀ ξ)` (`Θ` in the packet's coordinates, `Q` packet → world) is
+/// `|Θ|^{1/2} g^{Θ⁻¹}(Qᵀ(q + k ŝ))`.
+pub fn corollary_s2_2<const N: usize>(
+    theta: &nalgebra::SMatrix<f64, N, N>,
+    q_frame: &nalgebra::SMatrix<f64, N, N>,
+    k_s: &nalgebra::SVector<f64, N>,
+    q: &nalgebra::SVector<f64, N>,
+) -> f64 {
+    let arg = q_frame.transpose() * (q + k_s);
+    det(theta).sqrt() * (-0.5 * (arg.transpose() * theta * arg)[0]).exp()
+}
+
+/// The left side of Corollary S2.2 by quadrature: `F{e^{−i k ŝ·ξ} g^Θ(Qᵀ ξ)}(q)` on
+/// `[−half, half]ᴺ` with `n` points per axis.
+pub fn corollary_s2_2_by_quadrature<const N: usize>(
+    theta: &nalgebra::SMatrix<f64, N, N>,
+    q_frame: &nalgebra::SMatrix<f64, N, N>,
+    k_s: &nalgebra::SVector<f64, N>,
+    q: &nalgebra::SVector<f64, N>,
+    half: f64,
+    n: usize,
+) -> C64 {
+    fourier_transform(
+        |x| gaussian(theta, &(q_frame.transpose() * x)) * C64::from_polar(1.0, -k_s.dot(x)),
+        q,
+        half,
+        n,
+    )
+}
+
+/// The PSD blur as the crate defines it (`psd::BlurMethod::blur`), by quadrature: the unitary
+/// convolution `(p * g^Σ)(h) = (2π)^{−N/2} ∫ p(ζ) g^Σ(h − ζ) dᴺζ` on `[−half, half]ᴺ` with
+/// `n` points per axis (`Σ` the covariance of the coherence Gaussian, `Ξ` in S2.17).
+pub fn blur_by_quadrature<const N: usize>(
+    psd: &dyn Fn(&nalgebra::SVector<f64, N>) -> f64,
+    cov: &nalgebra::SMatrix<f64, N, N>,
+    h: &nalgebra::SVector<f64, N>,
+    half: f64,
+    n: usize,
+) -> f64 {
+    super::quadrature::cube_quad(|z| C64::new(psd(z) * gaussian(cov, &(h - z)), 0.0), half, n).re
+        / std::f64::consts::TAU.powf(N as f64 / 2.0)
+}
+
+/// S2.15 directly, for one channel: `f(h) = ∫ e^{−i h·ξ} R(ξ) g^Θ(Qᵀ ξ) dᴺξ` (`R` the matter's
+/// stationary autocorrelation, `Θ` the channel's shape in packet coordinates, `Q` packet →
+/// world, `h = k(r̂ + ŝ)`), by quadrature on `[−half, half]ᴺ` with `n` points per axis.
+/// S2.17 says `f = (2π)^{N/2} |Θ|^{1/2} (p * g^Ξ)(h)` with `Ξ = Q Θ⁻¹ Qᵀ` (the crate's Errata 3:
+/// not the printed `8π³`).
+pub fn coherence_integral_by_quadrature<const N: usize>(
+    autocorrelation: &dyn Fn(&nalgebra::SVector<f64, N>) -> f64,
+    theta: &nalgebra::SMatrix<f64, N, N>,
+    q_frame: &nalgebra::SMatrix<f64, N, N>,
+    h: &nalgebra::SVector<f64, N>,
+    half: f64,
+    n: usize,
+) -> C64 {
+    super::quadrature::cube_quad(
+        |x| {
+            C64::from_polar(
+                autocorrelation(x) * gaussian(theta, &(q_frame.transpose() * x)),
+                -h.dot(x),
+            )
+        },
+        half,
+        n,
+    )
+}

@@ -128,13 +128,48 @@ pub fn hemisphere_integral(
     side: Hemisphere,
     f: &mut dyn FnMut(Vector3<f64>) -> [f64; 2],
 ) -> [f64; 2] {
+    hemisphere_integral_n(r0, n_angle, side, f)
+}
+
+/// The albedo of a surface lit from a direction of incidence cosine `cos_i`: the fraction of the
+/// incident power per Stokes channel that it sends into one hemisphere, as a Mueller matrix,
+/// ```text
+/// A = (1/cos θ_i) ∫ M(r̂) cos θ_o dω        (M the kernel's BSDF form: L_o = M S_i)
+/// ```
+/// by [`hemisphere_integral`]'s rule centred on the lobe's point `r0` (the tangential part of
+/// its peak direction). With the kernel's convention (`L_o` per unit incident irradiance
+/// measured across the beam, i.e. `f · cos θ_i`), the fraction of the power of an incident
+/// Stokes vector `S` is `(A S)₀ / S₀`; [`super::check::max_transmittance`] is its largest value
+/// over all `S`, which must not exceed 1 for passive matter (add the hemispheres of both sides
+/// and the coherent lobes first).
+pub fn hemisphere_albedo(
+    cos_i: f64,
+    r0: Vector2<f64>,
+    n_angle: usize,
+    side: Hemisphere,
+    m: &mut dyn FnMut(Vector3<f64>) -> nalgebra::Matrix4<f64>,
+) -> nalgebra::Matrix4<f64> {
+    let entries = hemisphere_integral_n::<16>(r0, n_angle, side, &mut |r| {
+        let v = m(r);
+        core::array::from_fn(|i| v[i])
+    });
+    nalgebra::Matrix4::from_column_slice(&entries) / cos_i
+}
+
+/// [`hemisphere_integral`] for `N` integrands at once.
+fn hemisphere_integral_n<const N: usize>(
+    r0: Vector2<f64>,
+    n_angle: usize,
+    side: Hemisphere,
+    f: &mut dyn FnMut(Vector3<f64>) -> [f64; N],
+) -> [f64; N] {
     let rule = gauss_legendre(12);
     let (gx, gw) = (&rule.nodes, &rule.weights);
     let sign = match side {
         Hemisphere::Above => 1.0,
         Hemisphere::Below => -1.0,
     };
-    let mut total = [0.0; 2];
+    let mut total = [0.0; N];
     for j in 0..n_angle {
         let psi = TAU * j as f64 / n_angle as f64;
         let u = Vector2::new(psi.cos(), psi.sin());
@@ -148,7 +183,7 @@ pub fn hemisphere_integral(
             breaks.push(rho_max * (1.0 - 0.5f64.powi(m)));
         }
         breaks.sort_by(f64::total_cmp);
-        let mut radial = [0.0; 2];
+        let mut radial = [0.0; N];
         for pair in breaks.windows(2) {
             let (a, c) = (pair[0], pair[1]);
             let (mid, half) = ((a + c) * 0.5, (c - a) * 0.5);

@@ -52,6 +52,31 @@ pub fn proptest_config(cases: u32) -> Config {
     }
 }
 
+/// `n` values drawn from `s` with the run configuration of [`proptest_config`] (the fixed seed
+/// in a normal run, a fresh one under [`PROPTEST_SEARCH_VAR`]), without shrinking: for counting
+/// how often a strategy reaches a boundary (coverage) and for sweeps outside `proptest!`.
+///
+/// ```
+/// use gmueller::verify::strategy::{polar_angle, sample};
+/// let v = sample(polar_angle(), 400);
+/// let normal = v.iter().filter(|&&t| t == 0.0).count();
+/// assert!(normal > 400 / 16, "exact normal incidence in about 1/8 of the draws: {normal}");
+/// ```
+///
+/// # Panics
+/// If `s` rejects more values than proptest allows (a filter that is too strict).
+pub fn sample<S: Strategy>(s: S, n: usize) -> Vec<S::Value> {
+    let mut runner = proptest::test_runner::TestRunner::new(proptest_config(1));
+    (0..n)
+        .map(|_| {
+            proptest::strategy::ValueTree::current(
+                &s.new_tree(&mut runner)
+                    .expect("the strategy generates a value"),
+            )
+        })
+        .collect()
+}
+
 /// A finite real in `[-scale, scale]`.
 pub fn real(scale: f64) -> impl Strategy<Value = f64> {
     -scale..=scale
@@ -75,7 +100,20 @@ pub fn complex_matrix2(scale: f64) -> impl Strategy<Value = Matrix2<Complex<f64>
 /// A valid Stokes vector `(S0, S1, S2, S3)`: intensity in `[1e-3, 10]`, degree of polarization
 /// in `[0, 1]`, direction uniform-ish on the Poincaré sphere.
 pub fn stokes_vector() -> impl Strategy<Value = Vector4<f64>> {
-    (1e-3..10.0f64, 0.0..=1.0f64, -1.0..=1.0f64, angle()).prop_map(|(s0, dop, z, az)| {
+    stokes_vector_in(1e-3, 10.0, 0.0, 1.0)
+}
+
+/// A valid Stokes vector with the intensity `S0` in `[s0_lo, s0_hi)` and the degree of
+/// polarization in `[dop_lo, dop_hi]` (`0 ≤ dop_lo ≤ dop_hi ≤ 1`: `dop_lo = dop_hi = 1` is the
+/// cone, `0` the unpolarized axis), direction uniform-ish on the Poincaré sphere.
+/// [`stokes_vector`] is `stokes_vector_in(1e-3, 10, 0, 1)`.
+pub fn stokes_vector_in(
+    s0_lo: f64,
+    s0_hi: f64,
+    dop_lo: f64,
+    dop_hi: f64,
+) -> impl Strategy<Value = Vector4<f64>> {
+    (s0_lo..s0_hi, dop_lo..=dop_hi, -1.0..=1.0f64, angle()).prop_map(|(s0, dop, z, az)| {
         let r = (1.0 - z * z).max(0.0).sqrt();
         let p = s0 * dop;
         Vector4::new(s0, p * r * az.cos(), p * r * az.sin(), p * z)
@@ -183,12 +221,56 @@ pub fn mu_squared(s: &Vector4<f64>) -> f64 {
 pub fn packet_parts(
     closeness: f64,
 ) -> impl Strategy<Value = (Vector4<f64>, Matrix2<f64>, Matrix2<f64>)> {
-    let lo = (1.0 - closeness).clamp(0.0, 1.0);
+    packet_parts_in(PacketRanges {
+        closeness,
+        ..PacketRanges::default()
+    })
+}
+
+/// The ranges of [`packet_parts_in`]; [`PacketRanges::default`] is those of [`packet_parts`]
+/// with `closeness = 1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PacketRanges {
+    /// The larger eigenvalue of each shape is drawn from `[shape_lo, shape_hi]` (area, e.g. λ²).
+    pub shape_lo: f64,
+    /// See [`PacketRanges::shape_lo`].
+    pub shape_hi: f64,
+    /// The largest condition number of a shape (≥ 1; log-uniform up to it).
+    pub max_condition: f64,
+    /// `S0` in `[s0_lo, s0_hi)`.
+    pub s0_lo: f64,
+    /// See [`PacketRanges::s0_lo`].
+    pub s0_hi: f64,
+    /// `|S1/S0| ≤ max_s1_ratio < 1` (`S1/S0 = ±1` leaves no correlated channel).
+    pub max_s1_ratio: f64,
+    /// `|μ|²` is a fraction in `[1 − closeness, 1]` of the Bochner bound.
+    pub closeness: f64,
+}
+
+impl Default for PacketRanges {
+    fn default() -> Self {
+        Self {
+            shape_lo: 0.25,
+            shape_hi: 100.0,
+            max_condition: 50.0,
+            s0_lo: 1e-3,
+            s0_hi: 10.0,
+            max_s1_ratio: 0.99,
+            closeness: 1.0,
+        }
+    }
+}
+
+/// [`packet_parts`] with every range the caller's ([`PacketRanges`]).
+pub fn packet_parts_in(
+    r: PacketRanges,
+) -> impl Strategy<Value = (Vector4<f64>, Matrix2<f64>, Matrix2<f64>)> {
+    let lo = (1.0 - r.closeness).clamp(0.0, 1.0);
     (
-        spd2_conditioned(0.25, 100.0, 50.0),
-        spd2_conditioned(0.25, 100.0, 50.0),
-        1e-3..10.0f64,
-        -0.99..=0.99f64,
+        spd2_conditioned(r.shape_lo, r.shape_hi, r.max_condition),
+        spd2_conditioned(r.shape_lo, r.shape_hi, r.max_condition),
+        r.s0_lo..r.s0_hi,
+        -r.max_s1_ratio..=r.max_s1_ratio,
         lo..=1.0f64,
         angle(),
     )
@@ -223,12 +305,56 @@ pub fn frame() -> impl Strategy<Value = crate::frame::Frame<f64>> {
 /// back to its documented basis) in 1/8 of the cases, exactly 89.99° (grazing) in 1/8, else
 /// uniform in between.
 pub fn polar_angle() -> impl Strategy<Value = f64> {
-    let grazing = 89.99f64.to_radians();
+    polar_angle_with(PolarAngles::default())
+}
+
+/// The mix of [`polar_angle_with`]: weights of the exact normal, the exact `max`, and the
+/// angles in between, which are uniform in `[0, max)` or, with `dense_near_grazing`,
+/// `π/2 − d` with `d` log-uniform in `[π/2 − max, π/2]` (every decade of the distance from
+/// grazing equally often). [`PolarAngles::default`] is [`polar_angle`]'s: 1 : 1 : 6, uniform,
+/// `max = 89.99°`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PolarAngles {
+    /// Weight of exactly 0 (normal incidence).
+    pub normal: u32,
+    /// Weight of exactly `max`.
+    pub grazing: u32,
+    /// Weight of the angles in between.
+    pub between: u32,
+    /// The largest angle in radians, `0 < max < π/2`.
+    pub max: f64,
+    /// Draw the angles in between log-uniformly in their distance from grazing.
+    pub dense_near_grazing: bool,
+}
+
+impl Default for PolarAngles {
+    fn default() -> Self {
+        Self {
+            normal: 1,
+            grazing: 1,
+            between: 6,
+            max: 89.99f64.to_radians(),
+            dense_near_grazing: false,
+        }
+    }
+}
+
+/// An angle from the normal in radians, drawn as [`PolarAngles`] says.
+pub fn polar_angle_with(p: PolarAngles) -> BoxedStrategy<f64> {
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    let between = if p.dense_near_grazing {
+        log_uniform(half_pi - p.max, half_pi)
+            .prop_map(move |d| half_pi - d)
+            .boxed()
+    } else {
+        (0.0..p.max).boxed()
+    };
     prop_oneof![
-        1 => Just(0.0),
-        1 => Just(grazing),
-        6 => 0.0..grazing,
+        p.normal => Just(0.0),
+        p.grazing => Just(p.max),
+        p.between => between,
     ]
+    .boxed()
 }
 
 /// The kind of an exit direction drawn by [`incidence_and_exit`].
@@ -278,4 +404,321 @@ pub fn coherence_shape(lo: f64, hi: f64, max_angle: f64) -> impl Strategy<Value 
         let r = Matrix2::new(c, -s, s, c);
         r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
     })
+}
+
+/// A standard Jones element drawn by [`jones_element`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JonesElement {
+    /// [`JonesMatrix::linear_polarizer`]`(θ)`.
+    LinearPolarizer {
+        /// Transmission axis (radians from x̂ toward ŷ).
+        theta: f64,
+    },
+    /// [`JonesMatrix::linear_retarder`]`(θ, δ)`.
+    LinearRetarder {
+        /// Fast axis.
+        theta: f64,
+        /// Retardance.
+        retardance: f64,
+    },
+    /// [`JonesMatrix::diattenuator`]`(tx, ty, θ)`.
+    Diattenuator {
+        /// Amplitude transmission along the axis.
+        tx: f64,
+        /// Amplitude transmission across it.
+        ty: f64,
+        /// Axis.
+        theta: f64,
+    },
+    /// [`JonesMatrix::rotator`]`(θ)`.
+    Rotator {
+        /// Rotation angle.
+        theta: f64,
+    },
+    /// [`JonesMatrix::circular_retarder`]`(δ)`.
+    CircularRetarder {
+        /// Retardance.
+        retardance: f64,
+    },
+    /// [`JonesMatrix::circular_polarizer`] passing `S3 = +1` (`true`) or `S3 = −1`.
+    CircularPolarizer {
+        /// [`crate::jones::Handedness::PositiveS3`] for `true`.
+        positive_s3: bool,
+    },
+}
+
+impl JonesElement {
+    /// The element's Jones matrix, from the crate's constructors.
+    #[must_use]
+    pub fn matrix(&self) -> Matrix2<Complex<f64>> {
+        use crate::jones::Handedness;
+        match *self {
+            Self::LinearPolarizer { theta } => JonesMatrix::linear_polarizer(theta),
+            Self::LinearRetarder { theta, retardance } => {
+                JonesMatrix::linear_retarder(theta, retardance)
+            }
+            Self::Diattenuator { tx, ty, theta } => {
+                JonesMatrix::diattenuator(tx, ty, theta).expect("tx, ty in [0, 1]")
+            }
+            Self::Rotator { theta } => JonesMatrix::rotator(theta),
+            Self::CircularRetarder { retardance } => JonesMatrix::circular_retarder(retardance),
+            Self::CircularPolarizer { positive_s3 } => {
+                JonesMatrix::circular_polarizer(if positive_s3 {
+                    Handedness::PositiveS3
+                } else {
+                    Handedness::NegativeS3
+                })
+            }
+        }
+        .matrix()
+    }
+}
+
+/// A standard element at a random angle: linear polarizer, linear retarder, diattenuator
+/// (amplitude transmissions in `[0, 1]`), rotator, circular retarder, circular polarizer, in
+/// equal shares. Its matrix is [`JonesElement::matrix`].
+pub fn jones_element() -> impl Strategy<Value = JonesElement> {
+    prop_oneof![
+        angle().prop_map(|theta| JonesElement::LinearPolarizer { theta }),
+        (angle(), angle())
+            .prop_map(|(theta, retardance)| JonesElement::LinearRetarder { theta, retardance }),
+        (0.0..=1.0f64, 0.0..=1.0f64, angle())
+            .prop_map(|(tx, ty, theta)| JonesElement::Diattenuator { tx, ty, theta }),
+        angle().prop_map(|theta| JonesElement::Rotator { theta }),
+        angle().prop_map(|retardance| JonesElement::CircularRetarder { retardance }),
+        any::<bool>().prop_map(|positive_s3| JonesElement::CircularPolarizer { positive_s3 }),
+    ]
+}
+
+/// The Mueller matrix of a Jones matrix (the crate's closed form).
+fn mueller_of(j: &Matrix2<Complex<f64>>) -> Matrix4<f64> {
+    Mueller::from_jones(&JonesMatrix(*j)).0
+}
+
+/// A depolarizer `M_u D M_v`: `D = diag(1, a, b, c)` a convex sum of the four Pauli Mueller
+/// matrices `diag(1, 1, 1, 1)`, `diag(1, 1, −1, −1)`, `diag(1, −1, 1, −1)`, `diag(1, −1, −1, 1)`
+/// (the tetrahedron of realizable diagonal depolarizers, vertices and faces included, since the
+/// weights are drawn with a zero in a quarter of the cases each), turned by the Mueller matrices
+/// of two unitary Jones matrices ([`unitary_jones`]). Realizable, `M₀₀ = 1`.
+pub fn depolarizer() -> impl Strategy<Value = Matrix4<f64>> {
+    let weight = prop_oneof![1 => Just(0.0), 3 => 0.0..1.0f64];
+    (
+        proptest::array::uniform4(weight),
+        unitary_jones(),
+        unitary_jones(),
+    )
+        .prop_map(|(w, u, v)| {
+            let total: f64 = w.iter().sum();
+            let w = if total > 0.0 {
+                w.map(|x| x / total)
+            } else {
+                [1.0, 0.0, 0.0, 0.0]
+            };
+            let d = Matrix4::from_diagonal(&Vector4::new(
+                1.0,
+                w[0] + w[1] - w[2] - w[3],
+                w[0] - w[1] + w[2] - w[3],
+                w[0] - w[1] - w[2] + w[3],
+            ));
+            mueller_of(&u) * d * mueller_of(&v)
+        })
+}
+
+/// A realizable Mueller matrix within `distance` of the realizability boundary:
+/// `(1 − t) M₁ + t M`, `M₁` non-depolarizing (its coherency matrix has rank 1, so three
+/// eigenvalues are 0), `M` from [`realizable_mueller`]`(3)`, `t` in `[0, distance]`: the
+/// smallest coherency eigenvalue is at most `t` times `M`'s share of the trace.
+pub fn realizable_mueller_near_boundary(distance: f64) -> impl Strategy<Value = Matrix4<f64>> {
+    (
+        complex_matrix2(1.0),
+        realizable_mueller(3),
+        0.0..=distance.clamp(0.0, 1.0),
+    )
+        .prop_map(|(j, m, t)| mueller_of(&j) * (1.0 - t) + m * t)
+}
+
+/// A one-point CSD (coherency) matrix `C = ⟨E E†⟩`: Hermitian positive semidefinite, the Gram
+/// matrix `X X†` of a complex 2×m `X` (m = 1: fully polarized, rank 1, on the cone; m = 2:
+/// partially polarized) with entries of modulus ≲ `scale`.
+pub fn one_point_csd(scale: f64) -> impl Strategy<Value = Matrix2<Complex<f64>>> {
+    (complex_matrix2(scale), any::<bool>()).prop_map(|(mut x, rank_one)| {
+        if rank_one {
+            x[(0, 1)] = Complex::new(0.0, 0.0);
+            x[(1, 1)] = Complex::new(0.0, 0.0);
+        }
+        x * x.adjoint()
+    })
+}
+
+/// The CSD matrices of a field at two points, `C(rᵢ, rⱼ) = ⟨E(rᵢ) E(rⱼ)†⟩`: the blocks of one
+/// positive semidefinite 4×4 matrix, so that they belong to one realizable field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TwoPointCsd {
+    /// `C(r₁, r₁)`, one-point (Hermitian, PSD).
+    pub at_1: Matrix2<Complex<f64>>,
+    /// `C(r₂, r₂)`, one-point.
+    pub at_2: Matrix2<Complex<f64>>,
+    /// `C(r₁, r₂)`, two-point (any complex matrix; `C(r₂, r₁) = C(r₁, r₂)†`).
+    pub cross: Matrix2<Complex<f64>>,
+}
+
+/// A realizable two-point CSD ([`TwoPointCsd`]): `G = Y Y†` with `Y` complex 4×m (m in
+/// `1..=4`, entries ≲ 1), the cross block scaled by a coherence `c` in
+/// `[coherence_lo, coherence_hi] ⊂ [0, 1]` (`c G + (1 − c) blockdiag(G₁₁, G₂₂)` stays PSD:
+/// `c = 1`, m = 1 is a fully coherent, fully polarized field; `c = 0` two uncorrelated points).
+pub fn two_point_csd(coherence_lo: f64, coherence_hi: f64) -> impl Strategy<Value = TwoPointCsd> {
+    let (lo, hi) = (coherence_lo.clamp(0.0, 1.0), coherence_hi.clamp(0.0, 1.0));
+    (
+        proptest::collection::vec(complex(1.0), 16),
+        1usize..=4,
+        lo..=hi.max(lo),
+    )
+        .prop_map(|(y, m, c)| {
+            let y = nalgebra::Matrix4::from_fn(|r, col| {
+                if col < m {
+                    y[4 * r + col]
+                } else {
+                    Complex::new(0.0, 0.0)
+                }
+            });
+            let g = y * y.adjoint();
+            let block = |r: usize, col: usize| g.fixed_view::<2, 2>(r, col).into_owned();
+            TwoPointCsd {
+                at_1: block(0, 0),
+                at_2: block(2, 2),
+                cross: block(0, 2) * Complex::new(c, 0.0),
+            }
+        })
+}
+
+/// A beam meeting a surface, with its s/p frame: `(d, n, Frame::sp(d, n))` for a unit travel
+/// direction `d` at a polar angle from [`polar_angle`] (exact normal incidence, where the frame
+/// falls back to its documented basis, and 89.99°, included) toward a surface of unit normal `n`
+/// in any orientation ([`unit_vector3`]), coming from either side.
+pub fn sp_frame() -> impl Strategy<Value = (Vector3<f64>, Vector3<f64>, crate::frame::Frame<f64>)> {
+    (unit_vector3(), polar_angle(), angle(), any::<bool>()).prop_map(
+        |(n, theta, phi, from_above)| {
+            let basis = crate::frame::Frame::from_normal(n).expect("unit normal");
+            let toward = if from_above { -1.0 } else { 1.0 };
+            let d = (basis.x() * phi.cos() + basis.y() * phi.sin()) * theta.sin()
+                + n * (toward * theta.cos());
+            let f = crate::frame::Frame::sp(d, n).expect("non-zero d and n");
+            (d, n, f)
+        },
+    )
+}
+
+/// A symmetric positive-definite `N × N` matrix of chosen condition: the largest eigenvalue in
+/// `[lo, hi]`, each other one smaller by a factor log-uniform in `[1, max_condition]`, the
+/// eigenvectors turned by Givens rotations of uniform angles in every coordinate plane.
+pub fn spd_conditioned<const N: usize>(
+    lo: f64,
+    hi: f64,
+    max_condition: f64,
+) -> impl Strategy<Value = nalgebra::SMatrix<f64, N, N>> {
+    let ln_c = max_condition.max(1.0).ln();
+    (
+        lo..=hi,
+        proptest::collection::vec(0.0..=ln_c, N),
+        proptest::collection::vec(angle(), N * N),
+    )
+        .prop_map(|(l1, lc, angles)| {
+            let mut d = nalgebra::SMatrix::<f64, N, N>::zeros();
+            for i in 0..N {
+                d[(i, i)] = if i == 0 { l1 } else { l1 / lc[i].exp() };
+            }
+            let mut r = nalgebra::SMatrix::<f64, N, N>::identity();
+            for i in 0..N {
+                for j in (i + 1)..N {
+                    let (s, c) = angles[i * N + j].sin_cos();
+                    let mut g = nalgebra::SMatrix::<f64, N, N>::identity();
+                    g[(i, i)] = c;
+                    g[(j, j)] = c;
+                    g[(i, j)] = -s;
+                    g[(j, i)] = s;
+                    r = g * r;
+                }
+            }
+            let m = r * d * r.transpose();
+            (m + m.transpose()) * 0.5
+        })
+}
+
+/// The ranges of the PSD strategies: rms height `σ` and correlation length `ℓ` log-uniform in
+/// their ranges, `ℓ` the largest axis of an anisotropic correlation whose other axes are
+/// shorter by up to `max_anisotropy` (1: isotropic).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PsdRanges {
+    /// `σ` in `[rms_lo, rms_hi]` (length).
+    pub rms_lo: f64,
+    /// See [`PsdRanges::rms_lo`].
+    pub rms_hi: f64,
+    /// `ℓ` in `[length_lo, length_hi]` (length).
+    pub length_lo: f64,
+    /// See [`PsdRanges::length_lo`].
+    pub length_hi: f64,
+    /// Ratio of the longest to the shortest correlation axis, ≥ 1.
+    pub max_anisotropy: f64,
+}
+
+impl Default for PsdRanges {
+    /// `σ` in 1e-4–0.05, `ℓ` in 0.05–50 (µm, at visible wavelengths: the first-order range
+    /// `kσ ≲ 0.3` at 0.5 µm and correlation lengths from 0.1 λ to 100 λ), anisotropy ≤ 10.
+    fn default() -> Self {
+        Self {
+            rms_lo: 1e-4,
+            rms_hi: 0.05,
+            length_lo: 0.05,
+            length_hi: 50.0,
+            max_anisotropy: 10.0,
+        }
+    }
+}
+
+/// A Gaussian PSD in `N` dimensions: `R(ξ) = σ² exp(−½ ξᵀ C⁻¹ ξ)` with `σ` and the correlation
+/// covariance `C` ([`spd_conditioned`] of eigenvalues `ℓ²`) drawn from `r`.
+pub fn gaussian_psd<const N: usize>(
+    r: PsdRanges,
+) -> impl Strategy<Value = crate::psd::GaussianPsd<f64, N>> {
+    (
+        log_uniform(r.rms_lo, r.rms_hi),
+        log_uniform(r.length_lo, r.length_hi),
+        spd_conditioned::<N>(1.0, 1.0, r.max_anisotropy * r.max_anisotropy),
+    )
+        .prop_map(|(sigma, ell, shape)| {
+            let c = crate::gaussian::Gaussian::new(shape * (ell * ell)).expect("SPD");
+            crate::psd::GaussianPsd::from_autocorrelation(sigma * sigma, &c).expect("valid")
+        })
+}
+
+/// A K-correlation (ABC) PSD in `N` dimensions,
+/// `p(ζ) ∝ σ² (1 + T|ζ|²)^{−(γ+1)/2}` with `σ` and `√T = ℓ` from `r` and `γ` in
+/// `(N − 1, N − 1 + max_excess]`, half the draws within 1 % of the lower bound `γ → N − 1`
+/// (where the PSD's tail is heaviest).
+pub fn kcorrelation_psd<const N: usize>(
+    r: PsdRanges,
+    max_excess: f64,
+) -> impl Strategy<Value = crate::psd::KCorrelation<f64, N>> {
+    let n1 = N as f64 - 1.0;
+    let excess = prop_oneof![
+        log_uniform(1e-4, 1e-2),
+        log_uniform(1e-2, max_excess.max(2e-2)),
+    ];
+    (
+        log_uniform(r.rms_lo, r.rms_hi),
+        log_uniform(r.length_lo, r.length_hi),
+        excess,
+    )
+        .prop_map(move |(sigma, ell, e)| {
+            crate::psd::KCorrelation::new(sigma * sigma, ell * ell, n1 + e).expect("valid")
+        })
+}
+
+/// A mixture of 1 to `max_components` Gaussian PSDs ([`gaussian_psd`]).
+pub fn mixture_psd<const N: usize>(
+    r: PsdRanges,
+    max_components: usize,
+) -> impl Strategy<Value = crate::psd::GaussianMixturePsd<f64, N>> {
+    proptest::collection::vec(gaussian_psd::<N>(r), 1..=max_components.max(1))
+        .prop_map(|c| crate::psd::GaussianMixturePsd::new(c).expect("valid"))
 }
