@@ -35,12 +35,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::common::log_uniform;
 
+/// An angle from the normal in degrees: exactly 0 and 89.99 in 1/8 of the cases each (the kit's
+/// `polar_angle`).
 fn polar() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        1 => Just(0.0),
-        1 => Just(89.99),
-        6 => 0.0..89.99f64,
-    ]
+    gmueller::verify::strategy::polar_angle().prop_map(f64::to_degrees)
 }
 
 /// One case's parameters (f64; converted to `T` per precision).

@@ -37,15 +37,19 @@ use proptest::strategy::ValueTree;
 
 /// Log-uniform on `[lo, hi]`.
 use crate::common::log_uniform;
+use gmueller::verify::strategy::{PolarAngles, polar_angle_with};
 
 /// An angle from the normal in degrees: exactly 0, exactly 89.99, or `90 − d` with `d`
-/// log-uniform in `[0.01, 90]` (dense near grazing).
+/// log-uniform in `[0.01, 90]` (dense near grazing): the kit's `polar_angle_with`.
 fn polar_deg() -> impl Strategy<Value = f64> + Clone {
-    prop_oneof![
-        1 => Just(0.0),
-        1 => Just(89.99),
-        4 => log_uniform(0.01, 90.0).prop_map(|d| 90.0 - d),
-    ]
+    polar_angle_with(PolarAngles {
+        normal: 1,
+        grazing: 1,
+        between: 4,
+        dense_near_grazing: true,
+        ..PolarAngles::default()
+    })
+    .prop_map(f64::to_degrees)
 }
 
 #[derive(Debug, Clone, Copy)]

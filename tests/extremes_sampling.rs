@@ -21,12 +21,14 @@ use proptest::prelude::*;
 
 use crate::common::log_uniform;
 
+/// Exactly normal, exactly 89.99° and in between in equal shares (the kit's `polar_angle_with`).
 fn incidence() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        Just(0.0),
-        Just(89.99f64.to_radians()),
-        0.0..89.99f64.to_radians()
-    ]
+    gmueller::verify::strategy::polar_angle_with(gmueller::verify::strategy::PolarAngles {
+        normal: 1,
+        grazing: 1,
+        between: 1,
+        ..Default::default()
+    })
 }
 
 fn check(sampler: &LobeSampler<f64>, us: &[(f64, f64)]) -> Result<(), TestCaseError> {

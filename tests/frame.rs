@@ -16,6 +16,7 @@ use gmueller::frame::{
 use gmueller::jones::{JonesMatrix, JonesVector};
 use gmueller::mueller::Mueller;
 use gmueller::stokes::Stokes;
+use gmueller::verify::oracle;
 use gmueller::{Error, Real};
 use nalgebra::{Matrix2, Matrix4, Vector2, Vector3, Vector4};
 use num_complex::Complex;
@@ -36,37 +37,10 @@ fn c(re: f64, im: f64) -> Complex<f64> {
     Complex::new(re, im)
 }
 
-/// `A_mül` exactly as printed in S1.3, typed in here so the test does not depend on `stokes`.
-fn a_mul_literal() -> Matrix4<Complex<f64>> {
-    let (o, z, i) = (c(1.0, 0.0), c(0.0, 0.0), c(0.0, 1.0));
-    Matrix4::new(o, z, z, o, o, z, z, -o, z, o, o, z, z, -i, i, z)
-}
-
-/// Kronecker product from its index formula `(A⊗B)_{2i+k, 2j+l} = A_ij B_kl`.
-fn kron2(a: &Matrix2<Complex<f64>>, b: &Matrix2<Complex<f64>>) -> Matrix4<Complex<f64>> {
-    let mut out = Matrix4::zeros();
-    for i in 0..2 {
-        for j in 0..2 {
-            for k in 0..2 {
-                for l in 0..2 {
-                    out[(2 * i + k, 2 * j + l)] = a[(i, j)] * b[(k, l)];
-                }
-            }
-        }
-    }
-    out
-}
-
-/// The literal S2.4 product `A_mül (τ⊗τ) A_mül⁻¹` for a real τ; asserts it is real.
+/// The literal S2.4 product `A_mül (τ⊗τ) A_mül⁻¹` for a real τ (the kit's oracle: S1.3 typed in,
+/// the Kronecker product by its index formula; it asserts the result is real).
 fn literal_t(tau: &Matrix2<f64>) -> Matrix4<f64> {
-    let a = a_mul_literal();
-    let a_inv = a.try_inverse().expect("A_mül is invertible");
-    let t = tau.map(|v| c(v, 0.0));
-    let m = a * kron2(&t, &t) * a_inv;
-    for z in m.iter() {
-        assert!(z.im.abs() < 1e-12, "T must be real, got {m}");
-    }
-    m.map(|z| z.re)
+    oracle::mueller_literal(&tau.map(|v| c(v, 0.0)))
 }
 
 /// Stokes parameters straight from the field components (the crate's definitions, §1).
@@ -80,20 +54,10 @@ fn stokes_of(j: &Vector2<Complex<f64>>) -> Vector4<f64> {
     )
 }
 
-/// S2.3 literally: normalized projections of the new basis on the old transverse plane, dotted.
+/// S2.3 literally: normalized projections of the new basis on the old transverse plane, dotted
+/// (the kit's oracle).
 fn literal_tau(from: &Frame<f64>, to: &Frame<f64>) -> Matrix2<f64> {
-    let k = from.k();
-    let proj = |v: Vector3<f64>| {
-        let p = v - k * v.dot(&k);
-        p / p.norm()
-    };
-    let (xp, yp) = (proj(to.x()), proj(to.y()));
-    Matrix2::new(
-        xp.dot(&from.x()),
-        xp.dot(&from.y()),
-        yp.dot(&from.x()),
-        yp.dot(&from.y()),
-    )
+    oracle::tau([from.x(), from.y()], [to.x(), to.y()])
 }
 
 /// Rodrigues: `v` turned by `theta` right-handedly about the unit `axis`.

@@ -8,32 +8,20 @@ use crate::common;
 use common::{F64, Tol, assert_close};
 use gmueller::Error;
 use gmueller::gaussian::Gaussian;
-use nalgebra::{
-    DMatrix, Matrix2, Matrix3, Rotation2, Rotation3, SMatrix, SVector, Vector2, Vector3,
-};
+use gmueller::verify::oracle;
+use nalgebra::{Matrix2, Matrix3, Rotation2, Rotation3, SVector, Vector2, Vector3};
 use num_complex::Complex;
 use proptest::prelude::*;
 
 const TAU: f64 = std::f64::consts::TAU;
 
-/// The literal `exp(−½ xᵀΣ⁻¹x)` with nalgebra's general inverse (the oracle).
-fn literal<const N: usize>(cov: &SMatrix<f64, N, N>, x: &SVector<f64, N>) -> f64 {
-    let inv = cov.try_inverse().expect("invertible");
-    (-0.5 * (x.transpose() * inv * x)[0]).exp()
-}
+/// The literal `exp(−½ xᵀΣ⁻¹x)` with nalgebra's general inverse (the kit's oracle).
+use oracle::gaussian as literal;
 
-/// Trapezoid rule over the cube `[−half, half]ᴺ` with `n` points per axis (spectrally accurate for
-/// Gaussians decayed at the boundary), including the unitary prefactor `(2π)^{−N/2}` and the kernel
-/// `e^{−i q·x}`: an independent numerical Fourier transform.
-fn fourier_quad<const N: usize>(
-    f: impl Fn(&SVector<f64, N>) -> Complex<f64>,
-    q: &SVector<f64, N>,
-    half: f64,
-    n: usize,
-) -> Complex<f64> {
-    common::cube_quad(|x| f(x) * Complex::from_polar(1.0, -q.dot(x)), half, n)
-        / TAU.powf(N as f64 / 2.0)
-}
+/// The unitary Fourier transform by the trapezoid rule over the cube `[−half, half]ᴺ` with `n`
+/// points per axis (spectrally accurate for Gaussians decayed at the boundary): an independent
+/// numerical Fourier transform (the kit's oracle).
+use oracle::fourier_transform as fourier_quad;
 
 /// `∫ f dᴺx` by the same trapezoid rule (no prefactor).
 fn integral_quad<const N: usize>(f: impl Fn(&SVector<f64, N>) -> f64, half: f64, n: usize) -> f64 {
@@ -120,25 +108,8 @@ fn density_integrates_to_one() {
     );
 }
 
-/// Printed Lemma S2.1: `|Σ|^{1/2}/|B| · g^{Σ⁻¹}(B⁻¹ q)` with `|B| = det B`.
-fn lemma_printed<const N: usize>(
-    cov: &SMatrix<f64, N, N>,
-    b: &SMatrix<f64, N, N>,
-    q: &SVector<f64, N>,
-) -> f64 {
-    let arg = b.try_inverse().unwrap() * q;
-    let det =
-        |m: &SMatrix<f64, N, N>| DMatrix::from_iterator(N, N, m.iter().copied()).determinant();
-    det(cov).sqrt() / det(b) * (-0.5 * (arg.transpose() * cov * arg)[0]).exp()
-}
-
-/// Half-width covering the composed Gaussian `g^Σ(B·)` to e^{−40}.
-fn half_width<const N: usize>(cov: &SMatrix<f64, N, N>, b: &SMatrix<f64, N, N>) -> f64 {
-    let bi = b.try_inverse().unwrap();
-    let c = bi * cov * bi.transpose();
-    let max_var = (0..N).map(|i| c[(i, i)]).fold(0.0, f64::max);
-    9.0 * max_var.sqrt()
-}
+/// Printed Lemma S2.1: `|Σ|^{1/2}/|B| · g^{Σ⁻¹}(B⁻¹ q)` with `|B| = det B` (the kit's oracle).
+use oracle::lemma_s2_1_printed as lemma_printed;
 
 #[test]
 fn lemma_s2_1_matches_quadrature_2d() {
@@ -150,12 +121,7 @@ fn lemma_s2_1_matches_quadrature_2d() {
         Vector2::new(-1.5, 2.0),
         Vector2::new(0.0, 1.1),
     ] {
-        let quad = fourier_quad(
-            |x| Complex::new(literal(&cov, &(b * x)), 0.0),
-            &q,
-            half_width(&cov, &b),
-            301,
-        );
+        let quad = oracle::lemma_s2_1_by_quadrature(&cov, &b, &q, 301);
         let lemma = g.fourier_of_linear_map(&b, &q).unwrap();
         assert_close("Lemma S2.1 (corrected) re", lemma, quad.re, QUAD);
         assert_close("Lemma S2.1 im", quad.im, 0.0, QUAD);
@@ -168,12 +134,7 @@ fn lemma_s2_1_matches_quadrature_3d() {
     let b = Matrix3::new(1.0, 0.4, 0.0, -0.3, 0.9, 0.5, 0.2, 0.0, 1.2);
     let g = Gaussian::new(cov).unwrap();
     let q = Vector3::new(0.8, -0.5, 1.1);
-    let quad = fourier_quad(
-        |x| Complex::new(literal(&cov, &(b * x)), 0.0),
-        &q,
-        half_width(&cov, &b),
-        91,
-    );
+    let quad = oracle::lemma_s2_1_by_quadrature(&cov, &b, &q, 91);
     assert_close(
         "Lemma S2.1 (corrected, 3-D)",
         g.fourier_of_linear_map(&b, &q).unwrap(),
@@ -188,13 +149,7 @@ fn lemma_s2_1_printed_form_fails() {
     let cov = sym2(1.0, 0.3, 0.5);
     let b = Matrix2::new(1.0, 0.8, 1.3, -0.2);
     let q = Vector2::new(0.9, -0.6);
-    let quad = fourier_quad(
-        |x| Complex::new(literal(&cov, &(b * x)), 0.0),
-        &q,
-        half_width(&cov, &b),
-        301,
-    )
-    .re;
+    let quad = oracle::lemma_s2_1_by_quadrature(&cov, &b, &q, 301).re;
     let printed = lemma_printed(&cov, &b, &q);
     assert!(
         (printed - quad).abs() > 0.05 * quad.abs(),
@@ -211,13 +166,7 @@ fn lemma_s2_1_printed_form_fails() {
     let b3 = Matrix3::new(1.0, 0.4, 0.0, -0.3, 0.9, 0.5, 0.2, 0.0, 1.2);
     assert!(b3.determinant() > 0.0);
     let q3 = Vector3::new(0.8, -0.5, 1.1);
-    let quad3 = fourier_quad(
-        |x| Complex::new(literal(&cov3, &(b3 * x)), 0.0),
-        &q3,
-        half_width(&cov3, &b3),
-        71,
-    )
-    .re;
+    let quad3 = oracle::lemma_s2_1_by_quadrature(&cov3, &b3, &q3, 71).re;
     let printed3 = lemma_printed(&cov3, &b3, &q3);
     assert!(
         (printed3 - quad3).abs() > 0.05 * quad3.abs(),

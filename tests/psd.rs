@@ -13,7 +13,8 @@ use gmueller::psd::{
     Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, Grating,
     KCorrelation, OrderCutoff, Psd, Smooth, bessel_j,
 };
-use nalgebra::{Matrix2, Matrix3, Rotation2, Rotation3, SMatrix, SVector, Vector2, Vector3};
+use gmueller::verify::oracle;
+use nalgebra::{Matrix2, Matrix3, Rotation2, Rotation3, Vector2, Vector3};
 use num_complex::Complex;
 
 const TAU: f64 = std::f64::consts::TAU;
@@ -35,9 +36,8 @@ fn radial_integral(n: usize, f: impl Fn(f64) -> f64) -> f64 {
     surface * s * dt
 }
 
-fn literal_gauss<const N: usize>(cov: &SMatrix<f64, N, N>, x: &SVector<f64, N>) -> f64 {
-    (-0.5 * (x.transpose() * cov.try_inverse().unwrap() * x)[0]).exp()
-}
+/// `exp(−½ xᵀΣ⁻¹x)` (the kit's oracle).
+use gmueller::verify::oracle::gaussian as literal_gauss;
 
 const QUAD: Tol = Tol::new(1e-11, 1e-9);
 
@@ -217,15 +217,15 @@ fn s2_17_constant_2d() {
     let xi = gt.inverse().unwrap().rotated(&rot).unwrap(); // Ξ = QΘ⁻¹Qᵀ
     let (k_r, k_s) = (Vector2::new(0.3, 0.4), Vector2::new(-0.8, 0.1));
     let q = rot.matrix().transpose();
-    let direct = cube_quad(
-        |x| {
-            let r = var * literal_gauss(&lambda, x);
-            Complex::from_polar(r * literal_gauss(&theta, &(q * x)), -(k_r + k_s).dot(x))
-        },
+    let h = k_r + k_s;
+    let direct = oracle::coherence_integral_by_quadrature(
+        &|x| var * literal_gauss(&lambda, x),
+        &theta,
+        &q.transpose(),
+        &h,
         12.0,
         401,
     );
-    let h = k_r + k_s;
     let blur = gt.det().sqrt() * ClosedForm.blur(&psd, &xi, &h);
     assert_close("S2.17 with (2π)^{n/2}", direct.re, TAU * blur, QUAD);
     assert_close("S2.15 is real", direct.im, 0.0, QUAD);
@@ -246,11 +246,11 @@ fn s2_17_constant_3d() {
     let xi = gt.inverse().unwrap().rotated(&rot).unwrap();
     let (k_r, k_s) = (Vector3::new(0.3, -0.2, 0.5), Vector3::new(-0.1, 0.4, -0.9));
     let q = rot.matrix().transpose();
-    let direct = cube_quad(
-        |x| {
-            let r = var * literal_gauss(&lambda, x);
-            Complex::from_polar(r * literal_gauss(&theta, &(q * x)), -(k_r + k_s).dot(x))
-        },
+    let direct = oracle::coherence_integral_by_quadrature(
+        &|x| var * literal_gauss(&lambda, x),
+        &theta,
+        &q.transpose(),
+        &(k_r + k_s),
         8.0,
         81,
     );
@@ -286,14 +286,8 @@ fn closed_form_blur_matches_quadrature() {
         Vector2::new(1.0, -0.5),
         Vector2::new(3.0, 2.0),
     ] {
-        let quad = |p: &dyn Fn(&Vector2<f64>) -> f64| {
-            cube_quad(
-                |z| Complex::new(p(z) * literal_gauss(&covm, &(h - z)), 0.0),
-                14.0,
-                401,
-            )
-            .re / TAU
-        };
+        let quad =
+            |p: &dyn Fn(&Vector2<f64>) -> f64| oracle::blur_by_quadrature(p, &covm, &h, 14.0, 401);
         assert_close(
             "Gaussian blur",
             ClosedForm.blur(&psd, &cov, &h),

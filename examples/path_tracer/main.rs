@@ -48,6 +48,7 @@ use gmueller::interaction::{
 };
 use gmueller::mueller::Mueller;
 use gmueller::stokes::Stokes;
+use gmueller::verify::rng::SplitMix64;
 use nalgebra::Vector4;
 
 use color::Pixel;
@@ -151,27 +152,21 @@ pub(crate) struct Render {
     pub(crate) seconds: f64,
 }
 
-/// `SplitMix64`: a small seeded generator for reproducible pixels.
-struct Rng(u64);
+/// A small seeded generator for reproducible pixels: the verification kit's `SplitMix64`, one
+/// stream per pixel (a renderer brings its own; the example borrows the kit's to stay short).
+struct Rng(SplitMix64);
 
 impl Rng {
     fn new(seed: u64, a: u64, b: u64) -> Self {
-        let mut r = Rng(seed
-            ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            ^ b.wrapping_mul(0xC2B2_AE3D_27D4_EB4F));
-        r.next();
+        let mut r = Rng(SplitMix64(
+            seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
+        ));
+        r.0.next_u64();
         r
-    }
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
     }
     /// Uniform in [0, 1).
     fn f(&mut self) -> f32 {
-        (self.next() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        (self.0.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 }
 

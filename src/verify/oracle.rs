@@ -74,10 +74,17 @@ pub fn mueller_literal(j: &Matrix2<C64>) -> Matrix4<f64> {
     m.map(|z| z.re)
 }
 
-/// S2.3: `τ_ij = ê′_i · ê_j` (rows: the new basis `to`, columns: the old basis `from`) — the
-/// map from field components in `from` to components in `to` (both bases orthonormal, sharing
-/// their propagation direction, so no normalisation of the projections is needed).
+/// S2.3 literally: `τ_ij = ê′_{i⊥} · ê_j` (rows: the new basis `to`, columns: the old basis
+/// `from`), `ê′_⊥` the normalised projection of the new basis vector onto the old transverse
+/// plane (normal `k̂ = ê₁ × ê₂`) — the map from field components in `from` to components in `to`.
+/// For bases that share their propagation direction the projections are the vectors themselves.
 pub fn tau(from: [Vector3<f64>; 2], to: [Vector3<f64>; 2]) -> Matrix2<f64> {
+    let k = from[0].cross(&from[1]);
+    let proj = |v: Vector3<f64>| {
+        let p = v - k * v.dot(&k);
+        p / p.norm()
+    };
+    let to = [proj(to[0]), proj(to[1])];
     Matrix2::from_fn(|i, j| to[i].dot(&from[j]))
 }
 
