@@ -4,6 +4,11 @@
 //! the column-stacked Kronecker form, and proptest finds and shrinks a counterexample for the
 //! row-stacked one, `A_mül (J ⊗ J*) A_mül⁻¹` — an erratum-sized slip in a derivation.
 //!
+//! Then a claim with no closed form to lean on: Lemma S2.1, `F{g^Σ(Bξ)}(q)`, against the
+//! Fourier transform computed by quadrature (`oracle::lemma_s2_1_by_quadrature`), over 32 random
+//! SPD `Σ`, non-singular `B` and `q`. The corrected form (`B⁻ᵀ q`, `|det B|`) holds; the
+//! printed one (`B⁻¹ q`) fails, and proptest shrinks the counterexample toward a small `B`.
+//!
 //! Run: `cargo run --example verify_derivation`. It exits with status 1 unless the right form
 //! passes and the wrong one fails.
 //! See `docs/verifying.md`.
@@ -13,7 +18,7 @@ use gmueller::mueller::Mueller;
 use gmueller::verify::proptest::prelude::*;
 use gmueller::verify::proptest::test_runner::{TestError, TestRunner};
 use gmueller::verify::{oracle, strategy};
-use nalgebra::{Matrix2, Matrix4};
+use nalgebra::{Matrix2, Matrix4, Vector2};
 use num_complex::Complex;
 
 type Jones = Matrix2<Complex<f64>>;
@@ -46,6 +51,35 @@ fn row_stacked(j: &Jones) -> Matrix4<f64> {
     (oracle::a_mul() * k * oracle::a_mul_inv()).map(|z| z.re)
 }
 
+/// A Lemma S2.1 case: the covariance Σ, the map B (|det B| ≥ 0.2) and the frequency q.
+type LemmaCase = (Matrix2<f64>, Matrix2<f64>, Vector2<f64>);
+
+/// "`form(Σ, B, q)` is the Fourier transform of `g^Σ(Bξ)` at q", against quadrature, 32 cases.
+fn check_lemma(form: fn(&LemmaCase) -> f64) -> Result<(), TestError<LemmaCase>> {
+    let config = strategy::proptest_config(32);
+    let mut runner = TestRunner::new(gmueller::verify::proptest::test_runner::Config {
+        failure_persistence: None,
+        ..config
+    });
+    let b = proptest::array::uniform4(-1.5..1.5f64)
+        .prop_map(|[a, b, c, d]| Matrix2::new(a, b, c, d))
+        .prop_filter("non-singular", |b: &Matrix2<f64>| {
+            b.determinant().abs() >= 0.2
+        });
+    let q = (-1.5..1.5f64, -1.5..1.5f64).prop_map(|(x, y)| Vector2::new(x, y));
+    let cases = (strategy::spd2_conditioned(0.3, 2.0, 5.0), b, q);
+    runner.run(&cases, |case| {
+        let (cov, b, q) = case;
+        let quadrature = oracle::lemma_s2_1_by_quadrature(&cov, &b, &q, 241).re;
+        let d = (form(&case) - quadrature).abs();
+        prop_assert!(
+            d <= 1e-7 + 1e-6 * quadrature.abs(),
+            "off by {d:e} (quadrature {quadrature:e})"
+        );
+        Ok(())
+    })
+}
+
 fn main() {
     let mut ok = true;
     match check(column_stacked) {
@@ -65,6 +99,25 @@ fn main() {
             ok = false;
         }
     }
+    match check_lemma(|(cov, b, q)| oracle::lemma_s2_1(cov, b, q)) {
+        Ok(()) => println!("Lemma S2.1 with B⁻ᵀq: holds in 32 cases"),
+        Err(e) => {
+            println!("Lemma S2.1 with B⁻ᵀq: FAILED (unexpected): {e}");
+            ok = false;
+        }
+    }
+    match check_lemma(|(cov, b, q)| oracle::lemma_s2_1_printed(cov, b, q)) {
+        Err(TestError::Fail(why, (cov, b, q))) => {
+            println!(
+                "Lemma S2.1 as printed (B⁻¹q): fails, as it should; shrunk counterexample ({why}):"
+            );
+            println!("Σ = {cov}B = {b}q = {q}");
+        }
+        other => {
+            println!("Lemma S2.1 as printed: not rejected (unexpected): {other:?}");
+            ok = false;
+        }
+    }
     if !ok {
         std::process::exit(1);
     }
@@ -76,4 +129,9 @@ fn main() {
 fn the_right_form_holds_and_the_wrong_one_is_caught() {
     assert!(check(column_stacked).is_ok());
     assert!(matches!(check(row_stacked), Err(TestError::Fail(..))));
+    assert!(check_lemma(|(cov, b, q)| oracle::lemma_s2_1(cov, b, q)).is_ok());
+    assert!(matches!(
+        check_lemma(|(cov, b, q)| oracle::lemma_s2_1_printed(cov, b, q)),
+        Err(TestError::Fail(..))
+    ));
 }

@@ -359,14 +359,9 @@ fn pdf_integrates_to_one_over_the_hemisphere() {
 
 // ------------------------------------------------------------------ chi-square
 
-const Z_999: f64 = 3.090232306167814; // standard normal 99.9 % quantile
-
-/// The 99.9 % quantile of χ² with `dof` degrees of freedom, Wilson & Hilferty (1931):
-/// `χ²_p ≈ k (1 − 2/(9k) + z_p √(2/(9k)))³` (relative error < 1e-3 for k ≥ 10).
-fn chi2_quantile_999(dof: usize) -> f64 {
-    let k = dof as f64;
-    k * (1.0 - 2.0 / (9.0 * k) + Z_999 * (2.0 / (9.0 * k)).sqrt()).powi(3)
-}
+/// Pearson's statistic (bins of expected count < 5 pooled) and the 99.9 % quantile of χ²
+/// (Wilson & Hilferty): the kit's.
+use gmueller::verify::chi2::{chi_square, chi2_quantile_999};
 
 /// Bins: rings at radii `scale·{½, 1, 2, 4}` about c (the last ring extends to the disk edge) ×
 /// 8 sectors. Returns the bin of `u`.
@@ -434,32 +429,6 @@ fn bin_probabilities(
         }
     }
     probs
-}
-
-/// Pearson's statistic with bins of expected count < 5 pooled; returns (χ², dof).
-fn chi_square(counts: &[usize], probs: &[f64], n: usize) -> (f64, usize) {
-    let (mut chi2, mut bins) = (0.0, 0);
-    let (mut pool_o, mut pool_e) = (0.0, 0.0);
-    for (&o, &p) in counts.iter().zip(probs) {
-        let e = p * n as f64;
-        if e < 5.0 {
-            pool_o += o as f64;
-            pool_e += e;
-        } else {
-            chi2 += (o as f64 - e).powi(2) / e;
-            bins += 1;
-        }
-    }
-    if pool_e > 0.0 || pool_o > 0.0 {
-        // An empty expectation with observed draws is an infinite discrepancy.
-        chi2 += if pool_e > 0.0 {
-            (pool_o - pool_e).powi(2) / pool_e
-        } else {
-            f64::INFINITY
-        };
-        bins += 1;
-    }
-    (chi2, bins - 1)
 }
 
 fn draw_counts(

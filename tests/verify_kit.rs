@@ -411,3 +411,49 @@ fn coherence_shapes_have_their_widths() {
         tol::assert_close("symmetric", m[(0, 1)], m[(1, 0)], tol::F64);
     }
 }
+
+/// The chi-square quantile against tables (NIST/SEMATECH e-Handbook, Table 1.3.6.7.4, upper
+/// critical values at α = 0.001), and the test's pooling: a bin with draws but no expectation
+/// is an infinite discrepancy.
+#[test]
+fn chi_square_quantiles_match_the_tables() {
+    use gmueller::verify::chi2::{chi_square, chi2_quantile_999};
+    for (dof, table) in [(10, 29.588), (20, 45.315), (50, 86.661), (100, 149.449)] {
+        // The tables give three decimals: agreement to half a unit of the last one.
+        tol::assert_close(
+            "χ²₀.₉₉₉",
+            chi2_quantile_999(dof),
+            table,
+            tol::Tol::new(5e-4, 0.0),
+        );
+    }
+    // Counts equal to their expectations: χ² = 0 with bins − 1 degrees of freedom.
+    let (chi2, dof) = chi_square(&[50, 30, 20], &[0.5, 0.3, 0.2], 100);
+    assert!(chi2.abs() < 1e-12 && dof == 2, "{chi2}, {dof}");
+    // A draw where the pdf says nothing can fall.
+    let (chi2, _) = chi_square(&[99, 1], &[1.0, 0.0], 100);
+    assert!(chi2.is_infinite());
+}
+
+/// The exact chi-square quantile at other levels (NIST/SEMATECH Table 1.3.6.7.4: α = 0.05,
+/// 0.01; and the median of χ²₁, 0.454936, Abramowitz & Stegun 26.4) and small `dof`.
+#[test]
+fn chi_square_quantiles_at_other_levels() {
+    use gmueller::verify::chi2::chi2_quantile;
+    for (dof, p, table) in [
+        (1, 0.95, 3.841),
+        (2, 0.99, 9.210),
+        (5, 0.95, 11.070),
+        (30, 0.99, 50.892),
+        (1, 0.5, 0.454936),
+        (1, 0.999, 10.828),
+        (3, 0.999, 16.266),
+    ] {
+        tol::assert_close(
+            "χ²_p",
+            chi2_quantile(dof, p),
+            table,
+            tol::Tol::new(0.0, 2e-4),
+        );
+    }
+}

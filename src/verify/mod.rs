@@ -43,6 +43,7 @@
 //! ```
 
 pub mod check;
+pub mod chi2;
 pub mod oracle;
 pub mod quadrature;
 pub mod rng;
