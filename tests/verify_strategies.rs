@@ -63,6 +63,10 @@ fn packets_with_the_callers_ranges_are_realizable() {
         WavePacket::new(stokes, shape(tx), shape(ty), frame, 0.5)
             .expect("the crate accepts the packet");
     }
+    println!(
+        "coverage: shapes of condition > 1e3 (max 1e4): {high_condition}/{}",
+        2 * N
+    );
     // The condition is log-uniform in [1, 1e4]: a quarter of the shapes above 1e3.
     assert!(
         high_condition * 16 > 2 * N,
@@ -93,6 +97,9 @@ fn polar_angles_dense_near_grazing_reach_it() {
     );
     let normal = v.iter().filter(|&&t| t == 0.0).count();
     let grazing = v.iter().filter(|&&t| t == max).count();
+    println!(
+        "coverage: polar angles (dense near grazing) within 0.1° of grazing {within_a_tenth_degree}/{N}, exactly 0 {normal}/{N}, exactly 89.99° {grazing}/{N}"
+    );
     assert!(normal * 32 > N && grazing * 32 > N, "{normal}, {grazing}");
 }
 
@@ -134,6 +141,9 @@ fn standard_jones_elements_have_their_defining_properties() {
             }
         }
     }
+    println!(
+        "coverage: Jones elements (polarizer, circular polarizer, retarder, rotator, circular retarder, diattenuator) {kinds:?} of {N}"
+    );
     assert!(kinds.iter().all(|&k| k * 12 > N), "shares {kinds:?}");
 }
 
@@ -149,6 +159,9 @@ fn depolarizers_are_realizable_and_reach_the_tetrahedrons_boundary() {
         on_boundary += usize::from(eig.min() < 1e-9 * eig.sum());
         strongly_depolarizing += usize::from(mm.depolarization_index() < 0.3);
     }
+    println!(
+        "coverage: depolarizers on the realizability boundary {on_boundary}/{N}, depolarization index < 0.3 {strongly_depolarizing}/{N}"
+    );
     // A zero weight in each of the four slots with probability 1/4: some zero in 68 %.
     assert!(on_boundary * 4 > N, "on the boundary: {on_boundary}/{N}");
     assert!(
@@ -181,6 +194,7 @@ fn csd_matrices_are_realizable() {
         );
         rank_one += usize::from(s.degree_of_polarization() > 1.0 - 1e-9);
     }
+    println!("coverage: one-point CSDs fully polarized (rank 1) {rank_one}/{N}");
     assert!(rank_one * 4 > N, "fully polarized: {rank_one}/{N}");
 
     let mut two_point_rank_one = 0;
@@ -216,6 +230,9 @@ fn csd_matrices_are_realizable() {
         .into_iter()
         .filter(|c| tsf_coherence(c) > 1.0 - 1e-9)
         .count();
+    println!(
+        "coverage: two-point CSDs fully polarized at r₁ {two_point_rank_one}/{N}; at c = 1 fully coherent {coherent}/200"
+    );
     // With c = 1, the rank-1 draws (a quarter) are fully coherent (μ = 1).
     assert!(
         coherent * 16 > 200,
@@ -250,6 +267,9 @@ fn sp_frames_are_right_handed_and_reach_normal_incidence() {
         normal += usize::from(cos > 1.0 - 1e-15);
         grazing += usize::from(cos < 2e-4);
     }
+    println!(
+        "coverage: s/p frames at exact normal incidence {normal}/{N}, within 2e-4 of grazing {grazing}/{N}"
+    );
     assert!(normal * 32 > N && grazing * 32 > N, "{normal}, {grazing}");
 }
 
@@ -274,6 +294,7 @@ fn n_dimensional_shapes_have_their_condition() {
         let _: Matrix3<f64> = m;
         m.cholesky().expect("SPD");
     }
+    println!("coverage: 3-D shapes of condition > 500 (max 1e3): {near_max}/{N}");
     assert!(near_max * 40 > N, "condition > 500: {near_max}/{N}");
 }
 
@@ -302,6 +323,7 @@ fn psds_are_valid_in_their_ranges() {
         let v = p.value(&Vector2::new(10.0, 0.0));
         assert!(v.is_finite() && v > 0.0);
     }
+    println!("coverage: K-correlation PSDs with γ within 0.01 of its bound 1: {near_bound}/{N}");
     assert!(near_bound * 8 > N, "γ within 0.01 of 1: {near_bound}/{N}");
     for p in sample(strategy::kcorrelation_psd::<3>(r, 3.0), 500) {
         assert!(p.gamma() > 2.0);

@@ -2,21 +2,31 @@
 //! `verify`; renderers leave it off and pay nothing).
 //!
 //! The crate's own tests are built on it. It gives:
-//! - [`strategy`]: proptest strategies of objects that are valid by construction (Stokes
-//!   vectors inside the cone and on it, general, unitary and Hermitian Jones matrices,
-//!   realizable Mueller matrices, SPD 2×2 shapes of chosen condition, unit vectors, the parts
-//!   of realizable two-shape packets up to the Bochner bound `|μ|² = √(|Θx||Θy|)/|Θ½|`,
-//!   right-handed frames, polar angles and geometries with exact normal and grazing cases) and the
-//!   run configuration ([`strategy::proptest_config`]: a fixed seed in a normal run, fresh
-//!   seeds and more cases under `GMUELLER_PROPTEST_SEARCH`);
-//! - [`oracle`]: the seed's formulas written literally (S1.3's `A_mül`, S1.7's Kronecker form,
-//!   S2.3–S2.4's τ projection, Germer's Rayleigh–Rice factors, the S2.18 section and the
-//!   closed S2.10 integral), each naming its equation;
+//! - [`strategy`]: proptest strategies of objects that are valid by construction, with ranges
+//!   the caller sets — Stokes vectors inside the cone and on it ([`strategy::stokes_vector_in`]);
+//!   general, unitary and Hermitian Jones matrices and the standard elements at random angles;
+//!   realizable Mueller matrices, depolarizers and matrices within a chosen distance of the
+//!   realizability boundary; one- and two-point CSD matrices; SPD shapes of chosen condition in
+//!   2 and N dimensions; the parts of realizable two-shape packets up to the Bochner bound
+//!   `|μ|² = √(|Θx||Θy|)/|Θ½|` ([`strategy::PacketRanges`]); unit vectors, right-handed frames
+//!   and s/p frames; polar angles and geometries with exact normal and grazing cases; Gaussian,
+//!   K-correlation and mixture PSDs ([`strategy::PsdRanges`]) — and the run configuration
+//!   ([`strategy::proptest_config`]: a fixed seed in a normal run, fresh seeds and more cases
+//!   under `GMUELLER_PROPTEST_SEARCH`) and [`strategy::sample`] for counting coverage;
+//! - [`oracle`]: the seed's formulas written literally, each naming its equation: S1.1's
+//!   stacks, S1.2's `A_mül vec(C)`, S1.4–S1.7 (the CSD after a Jones pair, its stacked form, the
+//!   generalized Mueller matrix), S2.3–S2.4's τ projection and `T`, Germer's Rayleigh–Rice
+//!   factors, Lemma S2.1 (printed, corrected and by Fourier quadrature), Corollary S2.2 (literal
+//!   and by quadrature), the PSD blur and S2.15 by quadrature, the S2.18 section and the closed
+//!   S2.10 integral;
 //! - [`quadrature`]: an adaptive Gauss–Legendre integrator (nodes computed, not tabulated),
-//!   the exit hemisphere in exit-tangent coordinates, a trapezoid rule on a cube;
+//!   the exit hemisphere in exit-tangent coordinates and a surface's albedo Mueller matrix, a
+//!   trapezoid rule on a cube;
+//! - [`chi2`]: Pearson's chi-square test of a direction sampler against its pdf, with exact
+//!   quantiles;
 //! - [`tol`]: absolute-and-relative tolerances and comparisons that print both sides;
 //! - [`check`]: assertions of physical validity (Stokes vectors, Cloude realizability, Mueller
-//!   equality on the matrix's own scale);
+//!   equality on the matrix's own scale, energy ≤ 1, reciprocity in the `D Mᵀ D` form);
 //! - [`rng`]: small seeded generators for inputs outside proptest.
 //!
 //! [`proptest`] is re-exported, so a test needs no dependency of its own beyond this crate with

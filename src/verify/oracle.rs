@@ -1,9 +1,15 @@
 //! Oracles: the seed's formulas written literally from the papers, deliberately slow and
-//! obvious, never calling the crate's closed forms: S1.3's `A_mül`, the
-//! literal S1.7 Jones → Mueller `A_mül (J* ⊗ J) A_mül⁻¹` (column stacking), S2.3's τ from dot
-//! products and S2.4's `T = A_mül (τ ⊗ τ) A_mül⁻¹`, s/p bases, the exit azimuth, Germer's
-//! Rayleigh–Rice polarization factors (SCATMECH's form), the surface section `Ξ` of a packet
-//! channel (S2.18 restricted to the surface) and the closed-form coherence integral of S2.10.
+//! obvious, never calling the crate's closed forms:
+//! - S1: the column and row stacks ([`vec_columns`], [`vec_rows`]), S1.3's `A_mül`, the
+//!   Kronecker product, S1.2's `A_mül vec(C)` ([`generalized_stokes`]), S1.4–S1.5 (the CSD after
+//!   a Jones pair, [`csd_after`], [`csd_after_stacked`]), S1.7 ([`generalized_mueller`], and
+//!   its real one-point case [`mueller_literal`]), Stokes of a CSD;
+//! - S2.3's τ from projections and dot products and S2.4's `T = A_mül (τ ⊗ τ) A_mül⁻¹`, s/p
+//!   bases, the exit azimuth, Germer's Rayleigh–Rice polarization factors (SCATMECH's form);
+//! - Lemma S2.1 as printed, corrected and by Fourier quadrature; Corollary S2.2 literally and by
+//!   quadrature; the PSD blur `p * g^Σ` and S2.15's coherence integral by quadrature (which
+//!   decide S2.17's constant); the surface section `Ξ` of a packet channel (S2.18) and the
+//!   closed-form coherence integral of S2.10.
 //!
 //! Conventions are the crate's (see the crate docs, "Conventions"): column stacking,
 //! `e^{−iωt}`, `g^Σ(x) = exp(−½ xᵀΣ⁻¹x)`. An oracle panics on an input outside its formula
