@@ -370,3 +370,118 @@ fn the_energy_assertion_on_a_conductor() {
         std::panic::catch_unwind(|| check::assert_passive("× 1/cos θ_i", &wrong, 1e-6)).is_err()
     );
 }
+
+/// The remaining oracles against the crate and an independent computation, each rejecting a
+/// deliberately wrong variant:
+/// - S2.18's surface section (`oracle::section`) against the crate's Cholesky-minor form
+///   `surface_inverse_coherence` for an oblique, anisotropic packet with finite `σ_zz`; the
+///   marginal (the inverse of the projected covariance, `(Bᵀ Q Θ Qᵀ B)⁻¹`) is rejected — the
+///   crate's Errata 5;
+/// - the closed S2.10 integral (`oracle::coherence_integral`) against S2.15 by quadrature; adding
+///   covariances instead of precisions (`G = C + Ξ⁻¹`) is rejected;
+/// - the Gaussian PSD (`oracle::gaussian_psd`) against the crate's `GaussianPsd::value` and the
+///   Fourier transform of `R` by quadrature; without `|C|^{1/2}` it is rejected;
+/// - S2.3's τ (`oracle::tau`) against the crate's `frame::tau`; its transpose is rejected.
+#[test]
+fn the_section_integral_psd_and_tau_oracles() {
+    use gmueller::frame::tau;
+    use gmueller::interaction::surface_inverse_coherence;
+    use gmueller::packet::Channel;
+    use nalgebra::Matrix3;
+
+    // An oblique (50°, φ = 0.4), anisotropic packet with finite longitudinal coherence.
+    let (t, p) = (50f64.to_radians(), 0.4f64);
+    let travel = Vector3::new(t.sin() * p.cos(), t.sin() * p.sin(), -t.cos());
+    let frame = Frame::sp(travel, Vector3::z()).unwrap().rotated(0.3);
+    let theta = Matrix2::new(2.0, 0.6, 0.6, 0.8);
+    let sigma_zz = 1.7;
+    let packet = WavePacket::from_stokes(
+        Stokes::unpolarized(1.0).unwrap(),
+        CoherenceShape::new(theta).unwrap(),
+        frame,
+        0.5,
+    )
+    .unwrap()
+    .with_longitudinal_coherence(sigma_zz)
+    .unwrap();
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let q = Matrix3::from_columns(&[frame.x(), frame.y(), frame.k()]);
+    let xi = oracle::section(
+        &q,
+        &theta,
+        1.0 / (sigma_zz * sigma_zz),
+        &Vector3::x(),
+        &Vector3::y(),
+    );
+    let crate_xi = *surface_inverse_coherence(&packet, Channel::X, &surface)
+        .unwrap()
+        .covariance();
+    tol::assert_all_close(
+        "S2.18 section",
+        xi.iter().copied(),
+        crate_xi.iter().copied(),
+        tol::F64,
+    );
+    let mut theta3 = Matrix3::<f64>::zeros();
+    theta3.fixed_view_mut::<2, 2>(0, 0).copy_from(&theta);
+    theta3[(2, 2)] = sigma_zz * sigma_zz;
+    let b = nalgebra::Matrix3x2::<f64>::from_columns(&[Vector3::x(), Vector3::y()]);
+    let projected: Matrix2<f64> = b.transpose() * q * theta3 * q.transpose() * b;
+    let marginal = projected.try_inverse().unwrap();
+    assert!(
+        (marginal - xi).amax() > 0.05 * xi.amax(),
+        "marginal {marginal} vs section {xi}"
+    );
+
+    // S2.10 closed, against S2.15 by quadrature on the surface (Q = I, Θ = Ξ⁻¹).
+    let (sigma2, c) = (0.03, Matrix2::new(0.7, 0.2, 0.2, 1.1));
+    let c_inv = c.try_inverse().unwrap();
+    let sigma_surface = xi.try_inverse().unwrap();
+    let quad = tol::Tol::new(1e-12, 1e-8);
+    for h in [Vector2::new(0.0, 0.0), Vector2::new(0.9, -0.5)] {
+        let closed = oracle::coherence_integral(sigma2, &c_inv, &xi, &h);
+        let direct = oracle::coherence_integral_by_quadrature(
+            &|x| sigma2 * oracle::gaussian(&c, x),
+            &sigma_surface,
+            &Matrix2::identity(),
+            &h,
+            14.0,
+            281,
+        );
+        tol::assert_close("S2.10 closed form", closed, direct.re, quad);
+        let wrong = oracle::coherence_integral(sigma2, &c, &sigma_surface, &h);
+        assert!(
+            (wrong - direct.re).abs() > 1e-3 * direct.re,
+            "{wrong} vs {}",
+            direct.re
+        );
+    }
+
+    // The Gaussian PSD, p = F{R} (unitary, n = 2).
+    let psd = GaussianPsd::from_autocorrelation(sigma2, &Gaussian::new(c).unwrap()).unwrap();
+    for z in [Vector2::new(0.0, 0.0), Vector2::new(1.1, 0.4)] {
+        let lit = oracle::gaussian_psd(sigma2, &c, &z);
+        tol::assert_close("Gaussian PSD", psd.value(&z), lit, tol::F64);
+        let ft = oracle::fourier_transform(
+            |x| Complex::new(sigma2 * oracle::gaussian(&c, x), 0.0),
+            &z,
+            12.0,
+            241,
+        );
+        tol::assert_close("p = F{R}", ft.re, lit, quad);
+        let without_det = sigma2 * (-0.5 * z.dot(&(c * z))).exp();
+        assert!((without_det - ft.re).abs() > 1e-3 * ft.re);
+    }
+
+    // τ against the crate, and its transpose rejected (a rotation by 0.3 about k̂).
+    let turned = frame.rotated(0.3);
+    let lit = oracle::tau([frame.x(), frame.y()], [turned.x(), turned.y()]);
+    let crate_tau = tau(&frame, &turned);
+    tol::assert_all_close(
+        "S2.3 τ",
+        lit.iter().copied(),
+        crate_tau.iter().copied(),
+        tol::F64,
+    );
+    assert!((lit.transpose() - crate_tau).amax() > 0.5);
+}
