@@ -46,4 +46,5 @@ mod sampling;
 mod side_invariance;
 mod stack;
 mod stokes;
+mod verification_table;
 mod verify_kit;
