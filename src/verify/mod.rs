@@ -27,7 +27,8 @@
 //! - [`tol`]: absolute-and-relative tolerances and comparisons that print both sides;
 //! - [`check`]: assertions of physical validity (Stokes vectors, Cloude realizability, Mueller
 //!   equality on the matrix's own scale, energy ≤ 1, reciprocity in the `D Mᵀ D` form);
-//! - [`rng`]: small seeded generators for inputs outside proptest.
+//! - [`rng`]: small seeded generators for inputs outside proptest;
+//! - [`stats`]: Monte Carlo estimates with standard errors, and agreement within a number of them.
 //!
 //! [`proptest`] is re-exported, so a test needs no dependency of its own beyond this crate with
 //! the feature on.
@@ -57,6 +58,7 @@ pub mod chi2;
 pub mod oracle;
 pub mod quadrature;
 pub mod rng;
+pub mod stats;
 pub mod strategy;
 pub mod tol;
 
