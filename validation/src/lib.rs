@@ -17,7 +17,10 @@
 //! ([`kernel_side`]).
 
 pub mod brute;
+pub mod brute_volume;
 pub mod kernel_side;
+pub mod kernel_side_volume;
+pub mod volume_cases;
 
 use std::path::PathBuf;
 
