@@ -46,6 +46,12 @@
 //!   `B(ξ) = exp(−|ξ|²/(4w_b²))` exactly. The light is therefore synthesised with the precision
 //!   `Ξ − I/(2w_b²)` (the axes the window covers), so that light × B is exactly the target
 //!   coherence: the finite window then weighs pairs of points as an unbounded medium does.
+//!   For `θ_x ≠ θ_y` the compensated cross-spectral matrix is not positive semidefinite in its
+//!   far tails (`Θ ↦ (Θ⁻¹ − cI)⁻¹` is convex, so the compensated `Θ_½` falls below the mean of
+//!   the compensated `Θ_x`, `Θ_y` and Bochner's bound fails at large q): the compensated source
+//!   is then not a realizable random field. The light average is linear in the cross-spectra,
+//!   so it still gives the double sum with the target coherence exactly; the explicit-field
+//!   test below runs uncompensated.
 //!
 //! # Numerics
 //! - A periodic grid of `n_x × n_y × n_z` voxels of sides `d` (centred at index `n/2`). δε is
@@ -62,7 +68,7 @@
 //!   ([`VolumeEstimate::stokes`]); `tests::light_average_is_the_mean_over_random_fields` checks
 //!   this against explicit random vector fields pushed through the literal `(I − r̂r̂ᵀ)` sum.
 //! - Exit directions are arbitrary: `G(h − q) = FFT(f e^{−ih·r})` at `−q` (one 3-D FFT per
-//!   direction and realization).
+//!   direction and realization, pruned to the block of x- and y-indices the modes use).
 //! - Statistics: the matter is sampled; per realization the Stokes vector of every input;
 //!   standard errors are the sample standard deviation over realizations divided by √K, and the
 //!   degree of polarization's by the jackknife.
@@ -492,6 +498,9 @@ struct Plan {
     matter_amp: Vec<f64>,
     /// Light modes: flat index of `−q` and the weights `λ_q/N` of the channels xx, yy, xy.
     modes: Vec<(usize, [f64; 3])>,
+    /// The x- and y-indices of `−q` over the modes (the pruned FFT's outputs).
+    mode_xs: Vec<usize>,
+    mode_ys: Vec<usize>,
     /// Per direction: the demodulation phases `e^{−i h_a x_a} d_a` per axis.
     phases: Vec<[Vec<C>; 3]>,
     /// `(k²/4π)²/V`.
@@ -557,6 +566,12 @@ fn plan(scene: &VolumeScene, grid: &VolumeGrid, exits: &[V3]) -> Plan {
             }
         }
     }
+    let mut mode_xs: Vec<usize> = modes.iter().map(|m| m.0 % nx).collect();
+    let mut mode_ys: Vec<usize> = modes.iter().map(|m| (m.0 / nx) % ny).collect();
+    for v in [&mut mode_xs, &mut mode_ys] {
+        v.sort_unstable();
+        v.dedup();
+    }
     let k = light.k();
     let d = light.travel();
     let c = [coords(grid, 0), coords(grid, 1), coords(grid, 2)];
@@ -581,6 +596,8 @@ fn plan(scene: &VolumeScene, grid: &VolumeGrid, exits: &[V3]) -> Plan {
         window,
         matter_amp,
         modes,
+        mode_xs,
+        mode_ys,
         phases,
         constant: born * born / volume,
     }
@@ -634,11 +651,17 @@ impl Worker {
         p.phases
             .iter()
             .map(|[px, py, pz]| {
-                for (i, b) in self.buf.iter_mut().enumerate() {
-                    let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
-                    *b = px[x] * py[y] * pz[z] * f[i];
+                for (z, pz) in pz.iter().enumerate() {
+                    for (y, py) in py.iter().enumerate() {
+                        let pyz = pz * py;
+                        let row = (z * ny + y) * nx;
+                        let out = &mut self.buf[row..row + nx];
+                        for ((b, px), f) in out.iter_mut().zip(px).zip(&f[row..row + nx]) {
+                            *b = pyz * px * *f;
+                        }
+                    }
                 }
-                self.fwd.run(&mut self.buf);
+                self.fwd.run_pruned(&mut self.buf, &p.mode_xs, &p.mode_ys);
                 let mut acc = [0.0; 3];
                 for &(idx, w) in &p.modes {
                     let g2 = self.buf[idx].norm_sqr();

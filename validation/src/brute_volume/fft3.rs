@@ -42,41 +42,49 @@ impl Fft3 {
 
     /// Transforms `buf` (`n_x n_y n_z` values) in place.
     pub fn run(&mut self, buf: &mut [C]) {
+        let all: Vec<usize> = (0..self.n[0].max(self.n[1])).collect();
+        self.run_pruned(buf, &all[..self.n[0]], &all[..self.n[1]]);
+    }
+
+    /// Transforms `buf` in place, but only the outputs with x-index in `xs` and y-index in `ys`
+    /// (every z) are valid: the y-pass runs on the columns `xs` only, the z-pass on `xs × ys`.
+    /// The brute force reads the transform only at its light modes, a small block around 0.
+    pub fn run_pruned(&mut self, buf: &mut [C], xs: &[usize], ys: &[usize]) {
         let [nx, ny, nz] = self.n;
         if nx > 1 {
             self.ffts[0].process_with_scratch(buf, &mut self.scratch);
         }
         if ny > 1 {
-            // Per z-plane: gather the y-lines (one per x), transform, scatter.
-            let lines = &mut self.lines[..nx * ny];
+            // Per z-plane: gather the y-lines of the kept columns, transform, scatter.
+            let lines = &mut self.lines[..xs.len() * ny];
             for z in 0..nz {
                 let plane = &mut buf[z * nx * ny..(z + 1) * nx * ny];
                 for y in 0..ny {
-                    for x in 0..nx {
-                        lines[x * ny + y] = plane[y * nx + x];
+                    for (j, &x) in xs.iter().enumerate() {
+                        lines[j * ny + y] = plane[y * nx + x];
                     }
                 }
                 self.ffts[1].process_with_scratch(lines, &mut self.scratch);
                 for y in 0..ny {
-                    for x in 0..nx {
-                        plane[y * nx + x] = lines[x * ny + y];
+                    for (j, &x) in xs.iter().enumerate() {
+                        plane[y * nx + x] = lines[j * ny + y];
                     }
                 }
             }
         }
         if nz > 1 {
-            // Per y: gather the z-lines (one per x).
-            let lines = &mut self.lines[..nx * nz];
-            for y in 0..ny {
+            // Per kept y: gather the z-lines of the kept columns.
+            let lines = &mut self.lines[..xs.len() * nz];
+            for &y in ys {
                 for z in 0..nz {
-                    for x in 0..nx {
-                        lines[x * nz + z] = buf[(z * ny + y) * nx + x];
+                    for (j, &x) in xs.iter().enumerate() {
+                        lines[j * nz + z] = buf[(z * ny + y) * nx + x];
                     }
                 }
                 self.ffts[2].process_with_scratch(lines, &mut self.scratch);
                 for z in 0..nz {
-                    for x in 0..nx {
-                        buf[(z * ny + y) * nx + x] = lines[x * nz + z];
+                    for (j, &x) in xs.iter().enumerate() {
+                        buf[(z * ny + y) * nx + x] = lines[j * nz + z];
                     }
                 }
             }

@@ -60,6 +60,8 @@ fn single_voxel_is_a_rayleigh_dipole() {
         window: vec![1.0; grid.len()],
         matter_amp: vec![0.0; grid.len()],
         modes: vec![(0, [1.0; 3])],
+        mode_xs: vec![0],
+        mode_ys: vec![0],
         phases,
         constant: born * born,
     };
