@@ -4,7 +4,7 @@
 //! polarizations, with the issue's acceptance (within 3 standard errors or 2 %) and wrong
 //! predictions that the same comparison must reject.
 //!
-//! The configurations (λ = 0.5 µm, Gaussian δε with ℓ = 0.1 µm, σ = 0.01):
+//! The configurations (λ = 0.5 µm, δε with σ = 0.01, Gaussian with ℓ = 0.1 µm unless stated):
 //! - `volume_cube`: a bulk region (Gaussian window `w_b = 0.6 µm`), `θ_i = 30°`, anisotropic GSM
 //!   light with `θ_x ≠ θ_y` (so the three light channels differ) and `σ_zz = 0.2 µm`; exits
 //!   from 15° to 165° of scattering angle, in the plane of incidence on both sides and out of
@@ -13,6 +13,9 @@
 //! - `volume_backscatter`: a bulk region, `σ_zz = 0.15 µm`: at and around the backscatter
 //!   direction `h = 2kŝ` lies along the packet's axis, where `σ_zz` blurs the PSD; the
 //!   prediction with `σ_zz → ∞` (10³ µm) must be rejected there.
+//! - `volume_exponential`: a second R, exponential (`R = σ² e^{−r/ℓ}`, ℓ = 0.15 µm, the 3-D
+//!   K-correlation with γ = 3; the kernel blurs its Gaussian-mixture fit); a Gaussian R of the
+//!   same σ and ℓ must be rejected.
 //! - `volume_thin_slab`: one layer of thickness 5 nm, δε fully correlated across it
 //!   (the thin-slab limit), `θ_i` = 40°, `θ_x ≠ θ_y`, `σ_zz = 0.25 µm` (which enters the section
 //!   of the coherence by the slab); exits above and below. The prediction is the 2-D surface
@@ -45,6 +48,8 @@ pub enum Wrong {
     FlipS3,
     /// S2 of the prediction negated (a mirrored frame).
     FlipS2,
+    /// The kernel with a Gaussian R of the same variance and ℓ (the wrong PSD shape).
+    GaussianR,
 }
 
 impl Wrong {
@@ -55,6 +60,7 @@ impl Wrong {
             Self::SigmaZz(s) => format!("σ_zz → {s:.0e} µm (∞)"),
             Self::FlipS3 => "S3 negated (handedness)".into(),
             Self::FlipS2 => "S2 negated (mirrored frame)".into(),
+            Self::GaussianR => "Gaussian R of the same σ, ℓ".into(),
         }
     }
 }
@@ -223,7 +229,58 @@ pub fn cases(size: Size) -> Vec<Case> {
         wrong: vec![Wrong::SigmaZz(1e3)],
     });
 
-    // 3. The thin-slab limit.
+    // 3. A second R: exponential correlation (3-D K-correlation, γ = 3), ℓ = 0.15 µm sampled at
+    // ℓ/4 (the cusp of R at 0 makes the aliasing of the voxel sum decay only as (ℓκ)⁻⁴: below
+    // 0.3 % up to ψ = 140°, (1 + ℓ²h²)² · 6 (1 + (2πℓ/d)²)⁻²).
+    let light = Light {
+        wavelength: LAMBDA,
+        theta_i: 30f64.to_radians(),
+        theta_x: [[0.05, 0.01], [0.01, 0.04]],
+        theta_y: [[0.05, 0.01], [0.01, 0.04]],
+        sigma_zz: 0.2,
+    };
+    let scene = VolumeScene {
+        light,
+        matter: Permittivity::Exponential {
+            sigma: 0.01,
+            ell: 0.15,
+        },
+        region: Region::Bulk {
+            window: if test { 0.45 } else { 0.6 },
+        },
+    };
+    let list: &[[f64; 2]] = if test {
+        &[[15.0, 0.0], [60.0, 90.0], [120.0, 180.0]]
+    } else {
+        &[
+            [10.0, 0.0],
+            [25.0, 0.0],
+            [45.0, 0.0],
+            [70.0, 0.0],
+            [100.0, 0.0],
+            [140.0, 0.0],
+            [45.0, 180.0],
+            [20.0, 90.0],
+            [60.0, 90.0],
+            [120.0, -90.0],
+        ]
+    };
+    let all = inputs(&light, 1.0);
+    out.push(Case {
+        name: "volume_exponential",
+        title:
+            "A second R: bulk exponential δε (3-D K-correlation γ = 3, ℓ = 0.15 µm, voxels ℓ/4); \
+                GSM light θ_i = 30°, σ_zz = 0.2 µm; kernel via the mixture fit"
+                .into(),
+        grid: brute_volume::auto_grid(&scene, 4.0, 6.0),
+        exits: exits(&light, list),
+        inputs: vec![all[0], all[1], all[4]],
+        scene,
+        realizations: scale(192, 96),
+        wrong: vec![Wrong::GaussianR],
+    });
+
+    // 4. The thin-slab limit.
     let light = Light {
         wavelength: LAMBDA,
         theta_i: 40f64.to_radians(),
@@ -416,6 +473,13 @@ pub fn compare(case: &Case, est: &VolumeEstimate) -> Comparison {
                     }
                     Wrong::FlipS3 => [k[0], k[1], k[2], -k[3]],
                     Wrong::FlipS2 => [k[0], k[1], -k[2], k[3]],
+                    Wrong::GaussianR => {
+                        let mut sc = case.scene;
+                        let (Permittivity::Gaussian { sigma, ell }
+                        | Permittivity::Exponential { sigma, ell }) = sc.matter;
+                        sc.matter = Permittivity::Gaussian { sigma, ell };
+                        predict(&sc, input, exit)
+                    }
                 })
                 .collect();
             rows.push(Row {

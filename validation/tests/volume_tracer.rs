@@ -11,6 +11,8 @@
 //!   component keeps 10 % of S0;
 //! - `volume_backscatter`: the prediction with `σ_zz → ∞` (10³ µm) at the backscatter
 //!   direction itself and around it;
+//! - `volume_exponential` (a second R: exponential, the 3-D K-correlation with γ = 3, blurred
+//!   through its Gaussian-mixture fit): a Gaussian R of the same σ and ℓ;
 //! - `volume_thin_slab` (the 2-D `surface_coherence_term` × t as the thin-slab limit): the
 //!   section of the coherence without `σ_zz`.
 
@@ -144,6 +146,14 @@ fn volume_backscatter_sees_the_longitudinal_coherence() {
             );
         }
     }
+}
+
+#[test]
+fn volume_exponential_matches_through_the_mixture_fit() {
+    let c = case("volume_exponential");
+    let cmp = run(&c);
+    assert_informative(&c, &cmp, 0.04);
+    assert!(cmp.ok(), "{}", cmp.verdict());
 }
 
 #[test]
