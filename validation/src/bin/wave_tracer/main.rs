@@ -33,6 +33,7 @@
 mod energy;
 mod plot;
 mod volume;
+mod volume_plot;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;

@@ -1,7 +1,8 @@
 //! The volumetric configurations of the wave tracer (`gmueller_validation::volume_cases`): the
 //! brute-force 3-D first-Born vector field sum (`gmueller_validation::brute_volume`) against
 //! the n = 3 kernel (`gmueller_validation::kernel_side_volume`), with a table per
-//! configuration, a verdict, and a CSV (`wave_tracer_volume.csv`).
+//! configuration, a verdict, a PNG per configuration (`volume_plot.rs`) and a CSV
+//! (`wave_tracer_volume.csv`).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -31,6 +32,7 @@ pub fn run(
     if cases.is_empty() {
         return report;
     }
+    let wall = Instant::now();
     let total: u64 = cases.iter().map(|c| c.realizations as u64).sum();
     let bar = ProgressBar::new(total);
     bar.set_style(
@@ -81,11 +83,20 @@ pub fn run(
                 cmp.failures(r)
             );
         }
+        let png = out.join(format!("{}.png", case.name));
+        if let Err(e) = super::volume_plot::draw(&png, case, &cmp) {
+            bar.println(format!("plot {} failed: {e}", png.display()));
+        }
         let text = case_report(case, &est, &cmp, brute_time, kernel_time, threads);
         bar.println(&text);
         report += &text;
     }
     bar.finish_and_clear();
+    let _ = writeln!(
+        report,
+        "\nvolumetric configurations: {:.1} s wall",
+        wall.elapsed().as_secs_f64()
+    );
     let path = out.join("wave_tracer_volume.csv");
     if let Err(e) = std::fs::write(&path, &csv) {
         eprintln!("cannot write {}: {e}", path.display());
