@@ -15,6 +15,9 @@
 //!   through its Gaussian-mixture fit): a Gaussian R of the same σ and ℓ;
 //! - `volume_thin_slab` (the 2-D `surface_coherence_term` × t as the thin-slab limit): the
 //!   section of the coherence without `σ_zz`.
+//!
+//! The fixed seed is not a lucky one: with seeds 1–12 instead, all 48 reduced comparisons
+//! passed (`ok()`: every check, every rejection). About 5–11 s on 2 cores.
 
 use gmueller_validation::volume_cases::{self, Case, Comparison, Row, Size, Wrong};
 
