@@ -88,7 +88,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rustfft::num_complex::Complex64 as C;
 
-use crate::brute::Rng;
+use crate::brute::{Rng, inverse2, sandwich};
 
 mod fft3;
 pub use fft3::{Fft3, circulant_spectrum};
@@ -200,22 +200,11 @@ impl Light {
     /// packet frame as columns): `⟨a(r₁)a*(r₂)⟩ ∝ exp(−½ ξᵀ Ξ ξ)`.
     #[must_use]
     pub fn precision(&self, c: usize) -> M3 {
-        let t = self.shape(c);
-        let det = t[0][0] * t[1][1] - t[0][1] * t[1][0];
-        let inv = [
-            [t[1][1] / det, -t[0][1] / det],
-            [-t[1][0] / det, t[0][0] / det],
-        ];
         let f = self.packet_frame();
         let inv_zz = 1.0 / (self.sigma_zz * self.sigma_zz);
-        let mut xi = [[0.0; 3]; 3];
+        let mut xi = sandwich([f[0], f[1]], inverse2(self.shape(c)));
         for (i, row) in xi.iter_mut().enumerate() {
             for (j, v) in row.iter_mut().enumerate() {
-                for p in 0..2 {
-                    for q in 0..2 {
-                        *v += f[p][i] * inv[p][q] * f[q][j];
-                    }
-                }
                 *v += f[2][i] * inv_zz * f[2][j];
             }
         }
@@ -572,10 +561,29 @@ fn plan(scene: &VolumeScene, grid: &VolumeGrid, exits: &[V3]) -> Plan {
         v.sort_unstable();
         v.dedup();
     }
-    let k = light.k();
-    let d = light.travel();
+    let phases = demodulation(light, grid, exits);
+    let born = light.k().powi(2) / (4.0 * PI);
+    Plan {
+        grid: *grid,
+        window,
+        matter_amp,
+        modes,
+        mode_xs,
+        mode_ys,
+        phases,
+        constant: born * born / volume,
+    }
+}
+
+/// Per exit r̂, the per-axis demodulation factors `e^{−i h_a x_a} d_a`, `h = k(r̂ − d̂)`, whose
+/// product over the axes times the source gives the sum `G(h − q) = Σ f e^{−i(h − q)·r} d³r`.
+///
+/// # Panics
+/// If an exit is not a unit vector.
+fn demodulation(light: &Light, grid: &VolumeGrid, exits: &[V3]) -> Vec<[Vec<C>; 3]> {
+    let (k, d) = (light.k(), light.travel());
     let c = [coords(grid, 0), coords(grid, 1), coords(grid, 2)];
-    let phases = exits
+    exits
         .iter()
         .map(|r| {
             assert!(
@@ -589,18 +597,7 @@ fn plan(scene: &VolumeScene, grid: &VolumeGrid, exits: &[V3]) -> Plan {
                     .collect()
             })
         })
-        .collect();
-    let born = k * k / (4.0 * PI);
-    Plan {
-        grid: *grid,
-        window,
-        matter_amp,
-        modes,
-        mode_xs,
-        mode_ys,
-        phases,
-        constant: born * born / volume,
-    }
+        .collect()
 }
 
 /// Panics unless the light's precision (the sampled block: 3×3 in bulk, the tangent 2×2 block

@@ -41,19 +41,7 @@ fn single_voxel_is_a_rayleigh_dipole() {
         }
     }
     let k = l.k();
-    let c = [coords(&grid, 0), coords(&grid, 1), coords(&grid, 2)];
-    let d = l.travel();
-    let phases = exits
-        .iter()
-        .map(|r| {
-            let h: V3 = std::array::from_fn(|a| k * (r[a] - d[a]));
-            std::array::from_fn(|a| {
-                c[a].iter()
-                    .map(|&x| C::from_polar(grid.d[a], -h[a] * x))
-                    .collect()
-            })
-        })
-        .collect();
+    let phases = demodulation(&l, &grid, &exits);
     let born = k * k / (4.0 * PI);
     let p = Plan {
         grid,
