@@ -28,7 +28,7 @@
 //!   field is radiated by the polarization density `ε₀ δε E`. To first order in δε the source is
 //!   `ε₀ δε E_in`, and the far field of a dipole `p` at `r'` is
 //!   `(k²/4πε₀) (e^{ik|r−r'|}/|r−r'|) (r̂ × p) × r̂` (Jackson, *Classical Electrodynamics*, 3rd ed.,
-//!   Eq. 9.19), with `(r̂ × p) × r̂ = (I − r̂r̂ᵀ) p = −r̂ × (r̂ × p)` and
+//!   §9.2), with `(r̂ × p) × r̂ = (I − r̂r̂ᵀ) p = −r̂ × (r̂ × p)` and
 //!   `|r − r'| ≈ r − r̂·r'`: the line `E_s` above. A small sphere of volume `v` and contrast
 //!   `δε ≪ 1` then scatters the cross-section `k⁴ v² δε²/(6π)`, Rayleigh's
 //!   `(8π/3) k⁴ a⁶ ((ε − 1)/(ε + 2))²` to first order (`tests::single_voxel_is_a_rayleigh_dipole`
@@ -315,7 +315,7 @@ pub struct VolumeEstimate {
     pub sums: Vec<Vec<ChannelSums>>,
     /// Light modes kept in the exact light average.
     pub light_modes: usize,
-    /// The scene (for the frames).
+    /// The light (for the frames).
     pub light: Light,
 }
 
