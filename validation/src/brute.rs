@@ -225,6 +225,33 @@ impl Grid {
     }
 }
 
+/// The inverse of a 2×2 matrix, by its adjugate.
+#[must_use]
+pub fn inverse2(t: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+    let det = t[0][0] * t[1][1] - t[0][1] * t[1][0];
+    [
+        [t[1][1] / det, -t[0][1] / det],
+        [-t[1][0] / det, t[0][0] / det],
+    ]
+}
+
+/// `Aᵀ M A` for the 2×N matrix `A` with rows `rows` (`(Aᵀ M A)_ij = Σ_pq A_pi M_pq A_qj`): the
+/// precision `M` of packet-frame coordinates seen in the N coordinates `A` maps from.
+#[must_use]
+pub fn sandwich<const N: usize>(rows: [[f64; N]; 2], m: [[f64; 2]; 2]) -> [[f64; N]; N] {
+    let mut out = [[0.0; N]; N];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            for p in 0..2 {
+                for q in 0..2 {
+                    *v += rows[p][i] * m[p][q] * rows[q][j];
+                }
+            }
+        }
+    }
+    out
+}
+
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
@@ -270,24 +297,10 @@ impl Scene {
     #[must_use]
     pub fn surface_precision(&self) -> [[f64; 2]; 2] {
         let f = self.packet_frame();
-        let a = [[f[0][0], f[0][1]], [f[1][0], f[1][1]]];
-        let t = self.theta;
-        let det = t[0][0] * t[1][1] - t[0][1] * t[1][0];
-        let inv = [
-            [t[1][1] / det, -t[0][1] / det],
-            [-t[1][0] / det, t[0][0] / det],
-        ];
-        let mut xi = [[0.0; 2]; 2];
-        for (i, row) in xi.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                for p in 0..2 {
-                    for q in 0..2 {
-                        *v += a[p][i] * inv[p][q] * a[q][j];
-                    }
-                }
-            }
-        }
-        xi
+        sandwich(
+            [[f[0][0], f[0][1]], [f[1][0], f[1][1]]],
+            inverse2(self.theta),
+        )
     }
 
     /// The exit direction r̂ whose `h_t` is `h`, or `None` beyond the horizon: in reflection

@@ -9,15 +9,21 @@
 //!   harness (see `src/bin/accuracy/main.rs`).
 //! - `tests/tracer.rs`: a reduced, fixed-seed version of the tracer's comparison (part of
 //!   `cargo test --workspace`).
+//! - `tests/volume_tracer.rs`: the same for the tracer's volumetric configurations.
 //! - `peers/`: the scripts that measure the peer libraries and regenerate the library's
 //!   `tests/data/peer_values.json` (not part of CI).
 //!
 //! This library holds what the tracer program and the tracer test share: the brute force
 //! ([`brute`], no gmueller code) and the kernel's prediction for the same scene
-//! ([`kernel_side`]).
+//! ([`kernel_side`]). Volumes likewise: the 3-D first-Born vector brute force
+//! ([`brute_volume`]), the n = 3 kernel's prediction ([`kernel_side_volume`]) and the
+//! configurations with their comparison ([`volume_cases`]).
 
 pub mod brute;
+pub mod brute_volume;
 pub mod kernel_side;
+pub mod kernel_side_volume;
+pub mod volume_cases;
 
 use std::path::PathBuf;
 

@@ -20,9 +20,20 @@
 //! The brute force (`validation/src/brute.rs`, `gmueller_validation::brute`) uses no gmueller
 //! code; `validation/src/kernel_side.rs` calls the kernel for its prediction only. Units: µm.
 //! Output radiance `L` is per unit incident irradiance across the beam.
+//!
+//! After the surfaces, three volumetric configurations (`volume.rs`,
+//! `gmueller_validation::volume_cases`): a random permittivity field lit by GSM light with
+//! finite longitudinal coherence `σ_zz`, the first-Born vector far field (dipole pattern
+//! `(I − r̂r̂ᵀ)E`) summed over voxels (`validation/src/brute_volume.rs`, no gmueller physics)
+//! against the n = 3 kernel (`validation/src/kernel_side_volume.rs`) for several input
+//! polarizations — `volume_cube` (a bulk region, `θ_x ≠ θ_y`), `volume_backscatter` (`σ_zz`
+//! matters; the `σ_zz → ∞` prediction is rejected) and `volume_thin_slab` (the 2-D surface term
+//! recovered as the thin-slab limit). `--only volume_cube` etc. runs one of them.
 
 mod energy;
 mod plot;
+mod volume;
+mod volume_plot;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -557,8 +568,18 @@ fn main() {
     if let Err(e) = std::fs::write(&csv_path, &csv) {
         eprintln!("cannot write {}: {e}", csv_path.display());
     }
+    // The volumetric configurations (3-D first-Born vector field sum vs the n = 3 kernel).
+    let volume_report = volume::run(
+        args.realizations,
+        args.quick,
+        args.threads,
+        args.seed,
+        args.only.as_deref(),
+        &args.out,
+    );
     println!("\n===== summary =====");
     print!("{report}");
+    print!("{volume_report}");
     println!(
         "\ntotal {:.1} s. Wrote {} and one PNG per configuration to {}",
         wall.elapsed().as_secs_f64(),

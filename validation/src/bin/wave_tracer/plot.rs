@@ -10,7 +10,8 @@ use super::{Config, Row, Summary, kernel_side, verdict};
 
 static FONT: Once = Once::new();
 
-fn ensure_font() {
+/// Registers the plots' font once.
+pub fn ensure_font() {
     FONT.call_once(|| {
         // DejaVu Sans (Bitstream Vera licence), shipped by the `dejavu` crate.
         let _ = register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
