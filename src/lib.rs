@@ -99,6 +99,7 @@ pub mod fresnel;
 pub mod gaussian;
 pub mod interaction;
 pub mod jones;
+pub mod medium;
 pub mod mueller;
 mod numerics;
 pub mod packet;

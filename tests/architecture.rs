@@ -24,6 +24,7 @@ const LAYERS: &[&str] = &[
     "psd",
     "interaction",
     "bsdf",
+    "medium",
     "verify",
 ];
 

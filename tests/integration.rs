@@ -34,6 +34,7 @@ mod interaction_s2_10;
 mod interaction_transmission;
 mod jones;
 mod lobe_batch;
+mod medium;
 mod mueller;
 mod mueller_batch;
 mod packet;
