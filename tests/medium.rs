@@ -616,13 +616,13 @@ where
     let k = packet.wavenumber();
     let sigma = inc.scattering_coefficient();
     // The reference: the differential scattering, integrated adaptively.
-    let reference = sphere_integral(packet.frame(), k, scale, 1e-12 * sigma, &|r| {
+    let reference = sphere_integral(packet.frame(), k, scale, 1e-11 * sigma, &|r| {
         let l = phase.differential_scattering(&inc, *r).unwrap().light;
         <Pol::Throughput<f64> as Throughput<f64>>::intensity(&l) / s0
     });
     // The phase matrix's normalisation on the packet's own Stokes vector.
     let light = <Pol::Throughput<f64> as Throughput<f64>>::light(&packet.stokes());
-    let norm = sphere_integral(packet.frame(), k, scale, 1e-12, &|r| {
+    let norm = sphere_integral(packet.frame(), k, scale, 1e-11, &|r| {
         let f = phase.eval(&inc, *r).unwrap().phase;
         <Pol::Throughput<f64> as Throughput<f64>>::intensity(&f.apply(&light)) / s0
     });
@@ -707,9 +707,9 @@ fn scattering_coefficient_against_adaptive_quadrature() {
             1e-9,
         );
         check_coefficient(
-            "K-correlation Partial (adaptive blur)",
+            "K-correlation Partial (Gauss–Hermite blur)",
             &kc,
-            Kernel::<Full, _>::new(Partial(gmueller::psd::GaussHermite::new(12).unwrap())),
+            Kernel::<Full, _>::new(Partial(gmueller::psd::GaussHermite::new(6).unwrap())),
             &packet,
             1.0 / t.sqrt(),
             1e-7,

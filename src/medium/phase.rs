@@ -294,7 +294,9 @@ where
         let (f, k) = (&incident.channels.frame, incident.channels.k);
         let direction = incident.sampler.sample(f, k, u_part, u);
         let pdf = incident.sampler.pdf(f, k, &direction);
-        let g = incident.channels.geometry(direction);
+        // The geometry exactly as `eval` builds it, so that `weight` is `eval(direction)/pdf`.
+        let unit = crate::numerics::unit_by_largest(&direction).unwrap_or(direction);
+        let g = incident.channels.geometry(unit);
         let v = self.eval_geometry(incident, &g);
         PhaseSample {
             direction,
