@@ -35,6 +35,7 @@ mod interaction_transmission;
 mod jones;
 mod lobe_batch;
 mod medium;
+mod medium_extremes;
 mod medium_sampling;
 mod mueller;
 mod mueller_batch;

@@ -6,7 +6,7 @@
 //! ```text
 //! Dipole (first Born, E_s ∝ (I − r̂r̂ᵀ) E):   J = diag(1, cos Θ)
 //!   M = ½ [[1 + c², 1 − c², 0, 0], [1 − c², 1 + c², 0, 0], [0, 0, 2c, 0], [0, 0, 0, 2c]],  c = cos Θ
-//! Scalar (each transverse component scatters as a scalar wave):  J = I,  M = I
+//! Scalar (the scalar Born approximation, no polarization):  M = diag(1, 0, 0, 0)
 //! ```
 //! in the frames `(ê_⊥, d̂ × ê_⊥, d̂) → (ê_⊥, r̂ × ê_⊥, r̂)`, `ê_⊥ = d̂ × r̂/|d̂ × r̂|` the normal of
 //! the scattering plane (x̂ = ⊥ = "s", ŷ = ∥ = "p"), d̂ the travel direction of the light and r̂
@@ -115,15 +115,18 @@ impl<T: Real> Scatterer<T> for Dipole {
     }
 }
 
-/// The scalar scatterer: each transverse component of the field scatters as a scalar wave
-/// (`J = I` between the scattering-plane frames, `M = I`): the medium of the scalar Born
-/// approximation, with no polarization of its own and the same intensity in every direction
-/// for the same `K³`.
+/// The scalar scatterer of the scalar Born approximation: a scalar wave has no polarization, so
+/// the scattered light has the intensity of the scalar theory (`m̄₀₀ = 1`, the same in every
+/// direction for the same `K³`) and is unpolarized, `M = diag(1, 0, 0, 0)` — the only
+/// rotation-invariant choice that is also valid backward (the identity between the
+/// scattering-plane frames is not: at `Θ = π` it depends on the arbitrary `ê_⊥`).
 ///
 /// # Examples
 /// ```
 /// use gmueller::medium::{Scalar, Scatterer};
-/// assert_eq!(Scalar.mueller(0.3_f64).matrix(), nalgebra::Matrix4::identity());
+/// let m = Scalar.mueller(0.3_f64).matrix();
+/// assert_eq!(m[(0, 0)], 1.0);
+/// assert_eq!(m.iter().filter(|&&x| x != 0.0).count(), 1);
 /// ```
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Scalar;
@@ -131,7 +134,9 @@ pub struct Scalar;
 impl<T: Real> Scatterer<T> for Scalar {
     #[inline]
     fn mueller(&self, _cos_theta: T) -> Mueller<T> {
-        Mueller(Matrix4::identity())
+        let mut m = Matrix4::zeros();
+        m[(0, 0)] = T::one();
+        Mueller(m)
     }
 
     #[inline]
