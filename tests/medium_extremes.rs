@@ -1,6 +1,6 @@
 //! The medium's promises at the extremes, in f32 and f64: valid Stokes outputs, no NaN, finite
 //! positive pdf and `σ_s` (property tests over random packets — two shapes up to the Bochner
-//! bound, any frame, σ_zz and wavelength over decades — random media and exit directions with
+//! bound, any frame, `σ_zz` and wavelength over decades — random media and exit directions with
 //! exact forward and backward among them, at every coherence level); f32 within a stated
 //! bound of f64; invariance under the scale of `S0` (1e±300 f64, 1e±30 f32) and of the length
 //! unit; continuity across the forward/backward frame switch seen in a fixed frame; the limits
@@ -506,7 +506,7 @@ fn brightness_invariance() {
     run::<f32>(&[1e-30, 1e-10, 1e10, 1e30], 1e-5);
 }
 
-/// The length unit: scaling λ, ℓ, the coherence widths and σ_zz by `c` leaves `F` and the pdf
+/// The length unit: scaling λ, ℓ, the coherence widths and `σ_zz` by `c` leaves `F` and the pdf
 /// unchanged and divides `σ_s` (and `dI/dV`) by `c` (`k⁴ p` with `p ∝ σ² ℓ³`), for `c` from
 /// 1e-6 to 1e6 (f64) and 1e-3 to 1e3 (f32).
 #[test]
@@ -624,9 +624,9 @@ fn forward_and_backward_are_continuous() {
 }
 
 /// The limits of the coherence levels: `Partial` → `PlaneWave` as the coherence grows (w and
-/// σ_zz 1e4 ℓ: within 1e-6), → `Incoherent` as it shrinks (1e-3 ℓ: within 1e-5); `Full` on a
-/// single-shape packet is `OneShape` exactly; `Partial` with unbounded σ_zz is its limit
-/// (`σ_zz = 1e8 ℓ` within 1e-9), `Incoherent` with unbounded σ_zz is refused.
+/// `σ_zz` 1e4 ℓ: within 1e-6), → `Incoherent` as it shrinks (1e-3 ℓ: within 1e-5); `Full` on a
+/// single-shape packet is `OneShape` exactly; `Partial` with unbounded `σ_zz` is its limit
+/// (`σ_zz = 1e8 ℓ` within 1e-9), `Incoherent` with unbounded `σ_zz` is refused.
 #[test]
 fn coherence_level_limits() {
     let ell = 0.5;
