@@ -52,17 +52,17 @@
 //! fluctuation `Δε = n² δε`, divide it by `n⁴`.
 //!
 //! **Longitudinal coherence.** S2.20 enters `σ_zz` as a blur of the PSD along d̂
-(`Ξ_zz = 1/σ_zz²`, from the single-frequency propagation of a packet with a longitudinal
-envelope). Light whose equal-time coherence has that length has a bandwidth `Δk = 1/σ_zz`, and
-its frequencies scatter independently, each with its own `h = k'(r̂ − d̂)`: no blur forward, a
-blur of `2/σ_zz` backward. The two differ (`tests/medium.rs`,
-`longitudinal_coherence_against_bandwidth`: forward, the packet gives `(1 + ℓ²/σ_zz²)^{−1/2}`
-of the plane wave, 0.71 at `ℓ = σ_zz`, bandwidth `E[(k'/k)⁴] ≈ 1`). A spectral renderer, whose
-packets carry one wavelength each, should leave `σ_zz` unbounded: the `Partial` level takes
-that as its limit (the `Incoherent` level, which needs every coherence length below the
-correlation lengths, refuses it).
-
-**Validity.** Single scattering in the first Born approximation: `|δε| ≪ 1` and a phase error
+//! (`Ξ_zz = 1/σ_zz²`, from the single-frequency propagation of a packet with a longitudinal
+//! envelope). Light whose equal-time coherence has that length has a bandwidth `Δk = 1/σ_zz`, and
+//! its frequencies scatter independently, each with its own `h = k'(r̂ − d̂)`: no blur forward, a
+//! blur of `2/σ_zz` backward. The two differ (`tests/medium.rs`,
+//! `longitudinal_coherence_against_bandwidth`: forward, the packet gives `(1 + ℓ²/σ_zz²)^{−1/2}`
+//! of the plane wave, 0.71 at `ℓ = σ_zz`, bandwidth `E[(k'/k)⁴] ≈ 1`). A spectral renderer, whose
+//! packets carry one wavelength each, should leave `σ_zz` unbounded: the `Partial` level takes
+//! that as its limit (the `Incoherent` level, which needs every coherence length below the
+//! correlation lengths, refuses it).
+//!
+//! **Validity.** Single scattering in the first Born approximation: `|δε| ≪ 1` and a phase error
 //! `k L |δε| ≪ 1` over the scattering region; multiple scattering is the path tracer's job
 //! (`σ_s` and `F` per event).
 //!
