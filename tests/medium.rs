@@ -711,7 +711,7 @@ fn scattering_coefficient_against_adaptive_quadrature() {
             Kernel::<Full, _>::new(Partial(gmueller::psd::GaussHermite::new(6).unwrap())),
             &packet,
             1.0 / t.sqrt(),
-            1e-7,
+            3e-7,
         );
     }
     // A mixture: the 3-D K-correlation's Gaussian fit.

@@ -214,6 +214,47 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         }
     }
 
+    /// `[dI/dV]₀/S0 = e^{ln e} · value` for the exit `r` (finite unit vector) whose transverse
+    /// direction in the packet basis is `(c, s) = (cos φ, sin φ)`, without the frames: the first
+    /// row of `m̄ T`, with `T` the rotation to the scattering plane, whose normal `d̂ × r̂` lies at
+    /// `φ + π/2` (S2.4: `(T v)₁ = −cos 2φ v₁ − sin 2φ v₂`, `(T v)₂ = sin 2φ v₁ − cos 2φ v₂`).
+    /// `axial`: the terms in `cos 2φ`, `sin 2φ` left out (they integrate to 0 over φ when the
+    /// weights are symmetric about d̂). The `σ_s` quadrature's integrand.
+    #[inline]
+    pub(crate) fn intensity_part<P, M>(
+        &self,
+        coherence: &Coh,
+        psd: &P,
+        scatterer: &M,
+        r: &nalgebra::Vector3<T>,
+        (c, s): (T, T),
+        axial: bool,
+    ) -> (T, T)
+    where
+        P: Psd<T, 3>,
+        M: Scatterer<T>,
+        Coh: VolumeCoherence<T, P>,
+    {
+        let h = (r - self.frame.k) * self.k;
+        let cos_theta = r.dot(&self.frame.k).clamp(-T::one(), T::one());
+        let w = |i: usize| coherence.log_volume_weight(psd, self.xi[i].as_ref(), &h);
+        if Pol::LEVEL == PolarizationLevel::Intensity {
+            return (scatterer.m00(cos_theta), self.ln_born + w(2));
+        }
+        let (v, ln_w) = if self.three {
+            self.prepared.channel_mix(w(0), w(1), w(2))
+        } else {
+            (self.prepared.t_stokes, w(2))
+        };
+        let m = scatterer.mueller(cos_theta).0;
+        let mut value = m[(0, 0)] * v[0] + m[(0, 3)] * v[3];
+        if !axial {
+            let (c2, s2) = (c * c - s * s, (c + c) * s);
+            value += m[(0, 1)] * (-c2 * v[1] - s2 * v[2]) + m[(0, 2)] * (s2 * v[1] - c2 * v[2]);
+        }
+        (value.max(T::zero()), self.ln_born + ln_w)
+    }
+
     /// The Mueller form: `(A, ln e)` with `dI/dV = e^{ln e} A S` for every Stokes vector `S`
     /// the packet's shapes admit (`A = m̄ T D̂`, `D̂` the channel matrix; `m̄₀₀` alone in the
     /// `(0, 0)` entry at the intensity level).
