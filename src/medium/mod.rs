@@ -68,9 +68,11 @@
 //!
 //! # Peers
 //! A polarized Rayleigh phase function is still "not implemented" in Mitsuba 3 (its
-//! `rayleigh` phase is scalar), and no renderer or scattering library we know makes a phase
-//! function coherence-aware: the coherence levels here have no peer to compare with; they are
-//! tested against the Born integral itself (`tests/medium.rs`).
+//! `src/phase/rayleigh.cpp` warns so in polarized variants and falls back to the scalar
+//! `(3/16π)(1 + cos²Θ)`, which is this module's `F₀₀` for unpolarized light in the Rayleigh
+//! limit), and no renderer or scattering library we know makes a phase function
+//! coherence-aware: the coherence levels here have no peer to compare with; they are tested
+//! against the Born integral itself (`tests/medium.rs`).
 //!
 //! # Numerics
 //! The weights are logarithms combined with `ln S0` and `ln(k⁴/16π²)` before anything is
