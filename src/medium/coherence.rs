@@ -27,7 +27,21 @@ pub(crate) fn ln_two_pi_3_2<T: Real>() -> T {
     T::lit(1.5 * core::f64::consts::TAU.ln())
 }
 
-/// The volume coherence weight `K³` of a coherence level for a 3-D PSD `P` ([module docs](self)).
+/// The volume coherence weight `K³` of a coherence level for a 3-D PSD `P`: S2.17 with n = 3
+/// and the corrected constant.
+///
+/// # Formula
+/// ```text
+/// PlaneWave:   K³ = (2π)^{3/2} p(h)
+/// Partial<B>:  K³ = |Θ_α|^{1/2} ∫ p(q) g^{Ξ_α}(h − q) d³q = (2π)^{3/2} ∫ p(q) 𝒩_{Ξ_α}(h − q) d³q
+/// Incoherent:  K³ = |Θ_α|^{1/2} g^{Ξ_α}(h) ∫ p d³q
+/// Ξ_α = Q Θ_α⁻¹ Qᵀ  (S2.18; Q = [x̂ ŷ k̂] packet → world),   Θ_α = blockdiag(Θ⊥_α, σ_zz²),   h = k(r̂ + ŝ)
+/// ```
+/// `Partial` is [`crate::interaction::volume_coherence_term`] (the same values to rounding,
+/// `tests/medium.rs`); as the coherence grows it tends to `PlaneWave`
+/// (`|Θ|^{1/2} g^Ξ → (2π)^{3/2} δ`), as it shrinks below the correlation lengths to
+/// `Incoherent`. Implemented for the crate's three coherence levels (the trait is sealed
+/// through [`CoherenceModel`]).
 pub trait VolumeCoherence<T: Real, P: Psd<T, 3>>: CoherenceModel {
     /// `ln K³` for a channel whose inverse coherence in world coordinates is `xi` (`Ξ_α`, a
     /// covariance in `h`, rad²/length²; `None` at the plane-wave level, which needs none), at

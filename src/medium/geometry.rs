@@ -31,7 +31,21 @@ fn orthogonalize<T: Real>(v: &Vector3<T>, k: &Vector3<T>) -> Vector3<T> {
     b / b.norm()
 }
 
-/// One exit direction of a packet scattered in a medium ([module docs](self)).
+/// One exit direction of a packet scattered in a medium: the scattering vector, the scattering
+/// angle and the scattering-plane frames the phase matrix maps between.
+///
+/// # Formula
+/// ```text
+/// h = k(r̂ − d̂) = k(r̂ + ŝ),   cos Θ = r̂·d̂,   |h| = 2k sin(Θ/2)
+/// ê_⊥ = d̂ × r̂ / |d̂ × r̂|                                  (normal of the scattering plane)
+/// incident frame (ê_⊥, d̂ × ê_⊥, d̂),   exit frame (ê_⊥, r̂ × ê_⊥, r̂)
+/// ```
+/// d̂ is the packet's travel direction (`ŝ = −d̂` points toward the source), r̂ the exit
+/// direction. **Forward and backward** (`|d̂ × r̂| < √ε`, within ≈ 1.5e-8 rad in `f64`,
+/// 3.5e-4 rad in `f32`): the scattering plane is undefined, and `ê_⊥` is the packet's own x̂
+/// made orthogonal to r̂. A scatterer whose forward and backward matrices are those of a
+/// symmetric particle ([`super::Scatterer`]) then gives the same light whichever ê_⊥ is chosen
+/// (`tests/medium_extremes.rs`: continuous in a fixed frame across the switch).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScatteringGeometry<T: Real> {
     pub(crate) h: Vector3<T>,

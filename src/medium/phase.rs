@@ -110,7 +110,8 @@ impl<T: Real, Pol, Coh> Incident<T, Pol, Coh> {
         &self.channels.frame
     }
 
-    /// The weight of the uniform (defensive) part of the sampler ([`super::sampler`]).
+    /// The weight `w_u` of the uniform (defensive) part of the sampler
+    /// ([`PhaseFunction::sample`]).
     #[must_use]
     pub fn uniform_weight(&self) -> T {
         self.sampler.uniform_weight()
@@ -176,8 +177,25 @@ where
         self.medium
     }
 
-    /// The per-packet work: the channels, `σ_s` by quadrature over the sphere
-    /// ([`super::coefficient`]) and the sampler.
+    /// The per-packet work: the channel weights' ingredients, `σ_s` by quadrature over the
+    /// sphere, and the sampler.
+    ///
+    /// # Formula
+    /// ```text
+    /// σ_s = (1/S0) ∫_{S²} [dI/dV(r̂)]₀ dΩ = (1/k²) ∫_{|v| ≤ 2k} f(r̂(v)) d²v,   f = [dI/dV]₀/S0
+    /// r̂(v) = (1 − 2a²) d̂ + 2a√(1 − a²) (v_x x̂ + v_y ŷ)/|v|,   a = |v|/2k      (Lambert, about d̂)
+    /// ```
+    /// The rule works in `z = L⁻¹v`, `L` the Cholesky factor of the lobe's transverse covariance
+    /// (the PSD's spectral covariance, plus the inverse coherence at the `Partial` level), where
+    /// the lobe is round and of unit width: 8-point Gauss–Legendre on radial panels
+    /// `[0, ρ₀], [ρ₀, 2ρ₀], …, [1, 2], [2, 3], …, [7, 8], [8, 16], …` up to the rim, and the
+    /// trapezoid rule over 16 azimuths — one where the integrand is symmetric about d̂ (an
+    /// isotropic PSD and isotropic transverse shapes), where the azimuth-dependent terms of
+    /// the first row of `m̄ T` integrate to 0. Accuracy against adaptive quadrature on the
+    /// sphere (`tests/medium.rs`): ≤ 3e-15 symmetric, ≤ 8e-11 for anisotropic media and
+    /// coherence, 1e-7 with a Gauss–Hermite blur. Cost: 5–15 µs symmetric, 90–250 µs
+    /// otherwise (`benches/medium.rs`; the plane-wave level ignores the shapes and is always
+    /// symmetric for an isotropic PSD).
     ///
     /// # Errors
     /// [`Error::Singular`] at the `Partial` and `Incoherent` levels for a packet with unbounded
@@ -269,6 +287,19 @@ where
     }
 
     /// The density per steradian with which [`Self::sample`] draws `direction` (a unit vector).
+    ///
+    /// # Formula
+    /// ```text
+    /// p(r̂) = w_u/(4π) + (1 − w_u) k² Σ_j c_j g_j(v)/F_j(2k),     |v| = k|r̂ − d̂|,  Σ_j c_j = 1
+    /// Gaussian lobe:  g(v) = exp(−|v|²/2s²)/(2πs²),           F(2k) = 1 − e^{−2k²/s²}
+    /// power lobe:     g(v) = (β−1)/(πs²) (1 + |v|²/s²)^{−β},   F(2k) = 1 − (1 + 4k²/s²)^{1−β}
+    /// ```
+    /// A mixture of the uniform sphere (weight `w_u`: the defensive part, and the whole
+    /// proposal when the lobe is as wide as the sphere) and up to four radial lobes on
+    /// Lambert's disk about d̂ (`d²v = k² dΩ`), each truncated to `|v| ≤ 2k` with its exact mass
+    /// `F`: scales from the PSD's spectral covariance and the inverse coherence, power lobes
+    /// of the K-correlation's own exponent. `w_u = min(1, max(0.05, (s_max/2k)², 1.5 f_far))`,
+    /// `f_far` the share of `σ_s` beyond three lobe widths.
     #[must_use]
     pub fn pdf<T: Real>(&self, incident: &Incident<T, Pol, Coh>, direction: &Vector3<T>) -> T {
         incident
@@ -277,7 +308,9 @@ where
     }
 
     /// A direction drawn from three uniforms in `[0, 1)` (`u_part` chooses the sampler's part,
-    /// `u` the direction), with its pdf and the weight `F/pdf`. Never empty.
+    /// `u` the radius by the truncated radial CDF and the azimuth about d̂), with its pdf
+    /// ([`Self::pdf`], exactly) and the weight `F/pdf`. Never empty; uniforms outside `[0, 1)`
+    /// (NaN included) are clamped into it.
     #[must_use]
     pub fn sample<T>(
         &self,

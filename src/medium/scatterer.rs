@@ -22,7 +22,8 @@ use crate::real::Real;
 /// The mean scattering matrix `m̄` of a medium whose scatterers are randomly oriented and
 /// mirror-symmetric: a Mueller matrix that depends on the scattering angle Θ only, acting on
 /// Stokes vectors in the incident scattering-plane frame `(ê_⊥, d̂ × ê_⊥, d̂)` and returning them
-/// in the exit scattering-plane frame `(ê_⊥, r̂ × ê_⊥, r̂)` ([module docs](self)).
+/// in the exit scattering-plane frame `(ê_⊥, r̂ × ê_⊥, r̂)` (`ê_⊥ = d̂ × r̂/|d̂ × r̂|`, d̂ the
+/// light's travel direction, r̂ the exit; x̂ = ⊥ = "s", ŷ = ∥ = "p").
 ///
 /// The medium multiplies it by the Born constant `k⁴/16π²` and the coherence weights `K³_α`
 /// ([`crate::medium`]); `m̄` itself is dimensionless, normalised as the Born dipole is
@@ -71,7 +72,9 @@ pub trait Scatterer<T: Real> {
 }
 
 /// The first-Born scatterer of a fluctuating permittivity: the induced dipole radiates
-/// `E_s ∝ (I − r̂r̂ᵀ) E = −r̂ × (r̂ × E)`, i.e. the Rayleigh matrix ([module docs](self)).
+/// `E_s ∝ (I − r̂r̂ᵀ) E = −r̂ × (r̂ × E)`, i.e. the Rayleigh matrix: with `S1 = I_⊥ − I_∥`, van
+/// de Hulst's (*Light Scattering by Small Particles*, 1957, §6.1) without its normalisation
+/// (`tests/medium.rs` compares it with Bohren & Huffman's small-sphere matrix).
 ///
 /// # Formula
 /// ```text
