@@ -44,10 +44,11 @@ pub(crate) fn ln_born<T: Real>(k: T) -> T {
 /// so that the longitudinal variance `1/σ_zz²` survives beside a transverse `1/w²` up to a
 /// ratio of ~1e14 in both precisions.
 ///
-/// Unbounded longitudinal coherence (`σ_zz = ∞`, monochromatic light) is, when `unbounded_ok`,
-/// its limit: a longitudinal variance of `64 ε₆₄` times the largest transverse one (the
-/// smallest the factorisation keeps), which moves a blur `∫ p 𝒩_Ξ(h − ·)` by a relative
-/// `~64 ε₆₄ λ_max(Θ⊥⁻¹)/Λ_zz` (`Λ_zz` the PSD's spectral variance along d̂): `1e-14 (ℓ/w)²`.
+/// A longitudinal variance `1/σ_zz²` below `64 ε₆₄` times the largest transverse one `1/w²`
+/// (the smallest the factorisation keeps: `σ_zz ≳ 1.2e7 w`) is raised to it, and so is that of
+/// unbounded longitudinal coherence (`σ_zz = ∞`, monochromatic light) when `unbounded_ok`: the
+/// limit, which moves a blur `∫ p 𝒩_Ξ(h − ·)` by a relative `~64 ε₆₄ λ_max(Θ⊥⁻¹)/Λ_zz` (`Λ_zz`
+/// the PSD's spectral variance along d̂): `1e-14 (ℓ/w)²`.
 ///
 /// # Errors
 /// [`Error::Singular`] for unbounded longitudinal coherence unless `unbounded_ok`;
@@ -67,11 +68,11 @@ pub(crate) fn inverse_coherence<T: Real>(
     let s = packet.shape(channel).map(|x| x.to_f64());
     let det = s[(0, 0)] * s[(1, 1)] - s[(0, 1)] * s[(1, 0)];
     let inv = Matrix2::new(s[(1, 1)], -s[(0, 1)], -s[(1, 0)], s[(0, 0)]) / det;
-    if inv_zz == 0.0 {
-        let half = 0.5 * (inv[(0, 0)] + inv[(1, 1)]);
-        let r = (0.5 * (inv[(0, 0)] - inv[(1, 1)])).hypot(0.5 * (inv[(0, 1)] + inv[(1, 0)]));
-        inv_zz = 64.0 * f64::EPSILON * (half + r);
-    }
+    // The smallest longitudinal variance the factorisation keeps beside the transverse ones:
+    // a longer σ_zz (or an unbounded one) is taken as that limit.
+    let half = 0.5 * (inv[(0, 0)] + inv[(1, 1)]);
+    let r = (0.5 * (inv[(0, 0)] - inv[(1, 1)])).hypot(0.5 * (inv[(0, 1)] + inv[(1, 0)]));
+    inv_zz = inv_zz.max(64.0 * f64::EPSILON * (half + r));
     let f = packet.frame();
     let v = |w: nalgebra::Vector3<T>| w.map(|x| x.to_f64());
     let (x, y, k) = (v(f.x), v(f.y), v(f.k));
