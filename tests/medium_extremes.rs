@@ -875,3 +875,62 @@ where
     assert!(s.pdf.is_finite() && s.pdf > T::zero() && s.weight.is_finite());
     true
 }
+
+/// A medium that does not scatter (`δε = 0`): `σ_s = 0`, `F = 0`, `dI/dV = 0`, and the sampler
+/// still draws with a finite positive pdf; a dark packet (`S0 = 0`) scatters nothing but has
+/// the phase matrix and `σ_s` of unpolarized light of its coherence.
+#[test]
+fn silent_medium_and_dark_packet() {
+    let silent = RandomMedium::new(GaussianPsd::<f64, 3>::isotropic(0.0, 0.5).unwrap(), Dipole);
+    let p = simple::<f64>(
+        [1.0, 0.2, 0.0, 0.1],
+        Matrix2::identity() * 4.0,
+        Some(2.0),
+        0.5,
+    );
+    let phase = PhaseFunction::new(&silent, Kernel::<Full, Partial>::default());
+    let inc = phase.prepare(&p).unwrap();
+    assert_eq!(inc.scattering_coefficient(), 0.0);
+    let r = Vector3::new(0.3, 0.1, 0.9);
+    assert_eq!(
+        phase.eval(&inc, r).unwrap().phase.matrix(),
+        nalgebra::Matrix4::zeros()
+    );
+    assert_eq!(
+        phase.differential_scattering(&inc, r).unwrap().light.s0(),
+        0.0
+    );
+    let s = phase.sample(&inc, 0.5, [0.5, 0.5]);
+    assert!(s.pdf.is_finite() && s.pdf > 0.0);
+
+    let m = gaussian::<f64>(0.5);
+    let phase = PhaseFunction::new(&m, Kernel::<Full, Partial>::default());
+    let dark = simple::<f64>(
+        [0.0, 0.0, 0.0, 0.0],
+        Matrix2::identity() * 4.0,
+        Some(2.0),
+        0.5,
+    );
+    let lit = simple::<f64>(
+        [1.0, 0.0, 0.0, 0.0],
+        Matrix2::identity() * 4.0,
+        Some(2.0),
+        0.5,
+    );
+    let (a, b) = (phase.prepare(&dark).unwrap(), phase.prepare(&lit).unwrap());
+    assert_close(
+        "σ_s",
+        a.scattering_coefficient(),
+        b.scattering_coefficient(),
+        Tol::new(0.0, 1e-14),
+    );
+    assert_eq!(
+        phase.differential_scattering(&a, r).unwrap().light.s0(),
+        0.0
+    );
+    let (fa, fb) = (
+        phase.eval(&a, r).unwrap().phase.matrix(),
+        phase.eval(&b, r).unwrap().phase.matrix(),
+    );
+    assert!((fa - fb).amax() <= 1e-14 * fb.amax());
+}
