@@ -55,7 +55,7 @@
 //! (`Ξ_zz = 1/σ_zz²`, from the single-frequency propagation of a packet with a longitudinal
 //! envelope). Light whose equal-time coherence has that length has a bandwidth `Δk = 1/σ_zz`, and
 //! its frequencies scatter independently, each with its own `h = k'(r̂ − d̂)`: no blur forward, a
-//! blur of `2/σ_zz` backward. The two differ (`tests/medium.rs`,
+//! blur of `2/σ_zz` backward. The two differ (`tests/medium_spectrum.rs`,
 //! `longitudinal_coherence_against_bandwidth`: forward, the packet gives `(1 + ℓ²/σ_zz²)^{−1/2}`
 //! of the plane wave, 0.71 at `ℓ = σ_zz`, bandwidth `E[(k'/k)⁴] ≈ 1`). A spectral renderer, whose
 //! packets carry one wavelength each, should leave `σ_zz` unbounded: the `Partial` level takes
