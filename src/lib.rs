@@ -31,6 +31,9 @@
 //! - [`bsdf`]: the layer a renderer calls — the kernel as a BSDF (Mueller matrices per lobe in
 //!   documented frames, lobe flags), sampling and pdf in both tracing directions, and the
 //!   coherence one Monte Carlo sample of light carries (`docs/renderer.md`).
+//! - [`medium`]: random media — S2.20 with n = 3 in first-Born form, as a volume path tracer
+//!   needs it: a scattering coefficient and a Mueller phase matrix for the incident packet's
+//!   coherence, with sampling and its exact pdf.
 //!
 //! ## Quick start
 //! ```
@@ -108,6 +111,7 @@ pub mod gaussian;
 pub mod interaction;
 pub mod jones;
 pub mod matter;
+pub mod medium;
 pub mod mueller;
 mod numerics;
 pub mod packet;

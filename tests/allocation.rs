@@ -512,3 +512,89 @@ fn batch_evaluation_allocates_nothing() {
     batches::<f64>();
     batches::<f32>();
 }
+
+/// The random medium (`gmueller::medium`): `prepare` (`σ_s` quadrature, sampler), `eval`,
+/// `differential_scattering`, `sample`, `pdf` at the Full·Partial, OneShape·PlaneWave and
+/// Intensity·Incoherent levels, Gaussian (closed form) and K-correlation (Gauss–Hermite) PSDs.
+fn medium_levels<T: Real>() {
+    use gmueller::interaction::Throughput;
+    use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence, VolumePsd};
+    use gmueller::psd::{GaussianPsd as G, KCorrelation as K};
+    fn run<T, P, Pol, Coh>(
+        name: &str,
+        m: &RandomMedium<P, Dipole>,
+        kernel: Kernel<Pol, Coh>,
+        s: &Scene<T>,
+    ) where
+        T: Real,
+        P: VolumePsd<T>,
+        Pol: PolarizationModel,
+        Coh: VolumeCoherence<T, P>,
+    {
+        let packet = s.packet.with_longitudinal_coherence(T::lit(2.0)).unwrap();
+        let phase = PhaseFunction::new(m, kernel);
+        let (n, ok) = count(|| {
+            let mut ok = true;
+            for i in 0..5 {
+                let inc = phase.prepare(black_box(&packet)).unwrap();
+                for (j, r) in s.exits.iter().enumerate() {
+                    let v = phase.eval(&inc, *r).unwrap();
+                    let d = phase.differential_scattering(&inc, *r).unwrap();
+                    let u = T::lit((i * 50 + j) as f64 / 251.0);
+                    let smp = phase.sample(&inc, u, [T::lit(0.3), u]);
+                    ok &= v.phase.is_finite()
+                        && smp.weight.is_finite()
+                        && phase.pdf(&inc, r).is_finite()
+                        && <Pol::Throughput<T> as gmueller::interaction::Throughput<T>>::intensity(
+                            &d.light,
+                        )
+                        .is_finite();
+                }
+            }
+            ok
+        });
+        assert!(ok, "{name}: finite results");
+        assert_eq!(n, 0, "{name}: {n} heap allocations");
+    }
+    let g = RandomMedium::new(
+        G::<T, 3>::isotropic(T::lit(1e-3), T::lit(0.3)).unwrap(),
+        Dipole,
+    );
+    let k = RandomMedium::new(
+        K::<T, 3>::new(T::lit(1e-6), T::lit(0.2), T::lit(3.0)).unwrap(),
+        Dipole,
+    );
+    let s = scene::<T>();
+    run(
+        "medium Full·Partial",
+        &g,
+        Kernel::<gmueller::interaction::Full, gmueller::interaction::Partial>::default(),
+        &s,
+    );
+    run(
+        "medium OneShape·PlaneWave",
+        &g,
+        Kernel::<gmueller::interaction::OneShape, gmueller::interaction::PlaneWave>::default(),
+        &s,
+    );
+    run(
+        "medium Intensity·Incoherent",
+        &g,
+        Kernel::<gmueller::interaction::Intensity, gmueller::interaction::Incoherent>::default(),
+        &s,
+    );
+    run(
+        "medium K-correlation Full·Partial(GH)",
+        &k,
+        Kernel::<gmueller::interaction::Full, _>::new(gmueller::interaction::Partial(
+            GaussHermite::<T>::new(4).unwrap(),
+        )),
+        &s,
+    );
+}
+
+#[test]
+fn medium_allocates_nothing() {
+    medium_levels::<f64>();
+    medium_levels::<f32>();
+}

@@ -26,6 +26,7 @@ const LAYERS: &[&str] = &[
     "matter",
     "interaction",
     "bsdf",
+    "medium",
     "verify",
 ];
 

@@ -132,6 +132,10 @@ pub use polarization::{
 pub use prepared::PreparedPacket;
 pub use section::surface_inverse_coherence;
 
+// The per-packet machinery the random medium (`crate::medium`) shares with the surface kernel.
+pub(crate) use polarization::onto_cone;
+pub(crate) use prepared::{Plan, unit_scaled};
+
 #[cfg(doc)]
 use crate::psd::{BlurMethod, Psd};
 #[cfg(doc)]

@@ -92,6 +92,7 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 /// Independent (crate-free) formulas used as expected values: see `tests/common/oracle.rs`.
 pub mod chi2;
 pub mod hemisphere;
+pub mod medium;
 pub mod oracle;
 pub mod quadrature;
 pub mod rng;

@@ -1,10 +1,17 @@
 //! The kernel's prediction for a volumetric brute-force scene ([`crate::brute_volume`]): the
-//! seed's S2.20 with n = 3, built from gmueller's public primitives —
+//! seed's S2.20 with n = 3 as the crate's random medium computes it,
+//! `gmueller::medium::RandomMedium::differential_scattering` (`Dipole` scatterer, `Full ·
+//! Partial` with the closed-form blur), re-expressed in the brute force's exit frame — that is
+//! [`predict`] for the bulk regions. The thin slab is the surface kernel's coherence term
+//! (`surface_coherence_term`, the 2-D result the slab tends to).
+//!
+//! [`predict_from_primitives`] assembles the same prediction independently of
+//! `gmueller::medium`, from the derivation below and the crate's lower-level primitives —
 //! `gmueller::interaction::volume_coherence_term` (the 3-D coherence term `K³_α`),
 //! `WavePacket::with_longitudinal_coherence` (`σ_zz`), `GaussianPsd::<_, 3>` (or the 3-D
 //! K-correlation's mixture fit), and the Rayleigh dipole's Mueller matrix from its Jones matrix
-//! with `Mueller::from_jones` and the crate's frame changes. It is one isolated function,
-//! [`predict`], to be replaced by the crate's volumetric medium once it exists.
+//! with `Mueller::from_jones` and the crate's frame changes; a unit test holds the medium to it
+//! (the two derivations of the absolute constant and of the frames agree).
 //!
 //! # Formula
 //! ```text
@@ -42,24 +49,90 @@
 //! Non-Gaussian R: the 3-D exponential correlation is `KCorrelation::<_, 3>(σ², ℓ², γ = 3)`
 //! (2-D, on a slab: `γ = 2`), blurred through its Gaussian-mixture fit to 1e-7 of `p(0)`.
 
-use gmueller::frame::{Frame, mueller_to_frames};
-use gmueller::interaction::{surface_coherence_term, volume_coherence_term};
+use gmueller::frame::{Frame, mueller_to_frames, stokes_to_frame};
+use gmueller::interaction::{Full, Kernel, Partial, surface_coherence_term, volume_coherence_term};
 use gmueller::jones::JonesMatrix;
+use gmueller::medium::{Dipole, RandomMedium, VolumePsd};
 use gmueller::mueller::Mueller;
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, GaussianPsd, KCorrelation};
+use gmueller::psd::{ClosedForm, ClosedFormBlur, GaussianPsd, KCorrelation};
 use gmueller::stokes::Stokes;
 use nalgebra::{Complex, Matrix2, Vector2, Vector3, Vector4};
 
 use crate::brute_volume::{Permittivity, Region, VolumeScene};
 
+/// The packet of `scene` with the incident Stokes vector `input`, in `Frame::sp(d̂, ẑ)`.
+fn packet(scene: &VolumeScene, input: [f64; 4]) -> WavePacket<f64> {
+    let light = &scene.light;
+    let d = Vector3::from(light.travel());
+    let shape = |t: [[f64; 2]; 2]| {
+        CoherenceShape::new(Matrix2::new(t[0][0], t[0][1], t[1][0], t[1][1])).expect("shape")
+    };
+    let stokes = Stokes::new(input[0], input[1], input[2], input[3]).expect("input Stokes");
+    let packet = WavePacket::new(
+        stokes,
+        shape(light.theta_x),
+        shape(light.theta_y),
+        Frame::sp(d, Vector3::z()).expect("packet frame"),
+        light.wavelength,
+    )
+    .expect("packet");
+    if light.sigma_zz.is_finite() {
+        packet
+            .with_longitudinal_coherence(light.sigma_zz)
+            .expect("σ_zz")
+    } else {
+        packet
+    }
+}
+
+/// The medium's `dI/dV` for `packet` toward `exit`, in the exit frame `Frame::sp(r̂, ẑ)`.
+fn medium_intensity<P: VolumePsd<f64> + ClosedFormBlur<f64, 3>>(
+    psd: P,
+    packet: &WavePacket<f64>,
+    exit: Vector3<f64>,
+) -> [f64; 4] {
+    let medium = RandomMedium::new(psd, Dipole);
+    let kernel = Kernel::<Full, Partial>::default();
+    let out = medium
+        .differential_scattering(&kernel, packet, exit)
+        .expect("medium evaluation");
+    let exit_frame = Frame::sp(exit, Vector3::z()).expect("exit frame");
+    let s = stokes_to_frame(&out.light, out.geometry.exit_frame(), &exit_frame).vector();
+    [s[0], s[1], s[2], s[3]]
+}
+
 /// The kernel's β (Stokes vector in the exit frame `Frame::sp(r̂, ẑ)`) for incident Stokes
-/// vector `input` (packet frame `Frame::sp(d̂, ẑ)`, `S0 = 1` unit irradiance) and exit `exit`.
+/// vector `input` (packet frame `Frame::sp(d̂, ẑ)`, `S0 = 1` unit irradiance) and exit `exit`:
+/// the crate's random medium for the bulk regions (the 3-D exponential correlation through the
+/// K-correlation's mixture fit to 1e-7 of `p(0)`), the surface coherence term for the thin slab.
 ///
 /// # Panics
 /// On parameters the crate rejects (invalid shapes, Stokes vectors or packets; an exit along ±ẑ).
 #[must_use]
 pub fn predict(scene: &VolumeScene, input: [f64; 4], exit: [f64; 3]) -> [f64; 4] {
+    let r = Vector3::from(exit);
+    match (scene.region, scene.matter) {
+        (Region::Bulk { .. }, Permittivity::Gaussian { sigma, ell }) => {
+            let psd = GaussianPsd::<f64, 3>::isotropic(sigma, ell).expect("PSD");
+            medium_intensity(psd, &packet(scene, input), r)
+        }
+        (Region::Bulk { .. }, Permittivity::Exponential { sigma, ell }) => {
+            let k = KCorrelation::<f64, 3>::new(sigma * sigma, ell * ell, 3.0).expect("PSD");
+            let (fit, _, _) = k.mixture_fit_to(1e-7).expect("mixture fit");
+            medium_intensity(fit, &packet(scene, input), r)
+        }
+        (Region::ThinSlab { .. }, _) => predict_from_primitives(scene, input, exit),
+    }
+}
+
+/// [`predict`] assembled from the derivation in the module docs and the crate's primitives,
+/// without `gmueller::medium` (module docs).
+///
+/// # Panics
+/// As [`predict`].
+#[must_use]
+pub fn predict_from_primitives(scene: &VolumeScene, input: [f64; 4], exit: [f64; 3]) -> [f64; 4] {
     let light = &scene.light;
     let v = |a: [f64; 3]| Vector3::new(a[0], a[1], a[2]);
     let z = Vector3::z();
@@ -158,4 +231,39 @@ pub fn predict(scene: &VolumeScene, input: [f64; 4], exit: [f64; 3]) -> [f64; 4]
         out += m * s * (*w * constant);
     }
     [out[0], out[1], out[2], out[3]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{predict, predict_from_primitives};
+    use crate::volume_cases::{Size, cases};
+
+    /// The medium (`gmueller::medium`) equals the assembly from the crate's primitives and this
+    /// module's derivation, at every exit and input polarization of every bulk configuration.
+    #[test]
+    fn the_medium_equals_the_assembly_from_primitives() {
+        let mut compared = 0;
+        for case in cases(Size::Full) {
+            for (_, exit) in &case.exits {
+                for (_, input) in &case.inputs {
+                    let a = predict(&case.scene, *input, *exit);
+                    let b = predict_from_primitives(&case.scene, *input, *exit);
+                    // On the scale of the unpolarized light at this exit (a polarized input
+                    // can be extinguished there: p light at 90°, where the two computations
+                    // round cos Θ differently).
+                    let scale =
+                        predict_from_primitives(&case.scene, [1.0, 0.0, 0.0, 0.0], *exit)[0];
+                    for (x, y) in a.iter().zip(&b) {
+                        assert!(
+                            (x - y).abs() <= 1e-11 * scale,
+                            "{}: {a:?} vs {b:?} at {exit:?}",
+                            case.name
+                        );
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared > 100, "{compared} comparisons");
+    }
 }

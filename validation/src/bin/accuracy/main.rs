@@ -1,7 +1,8 @@
 //! Speed versus accuracy of every model level of the S2.20 kernel.
 //!
 //! Run with `cargo run --release -p gmueller-validation --bin accuracy` (about 2–3 minutes on
-//! 2 cores), or with `-- --quick` for a tiny suite (seconds); `-- --material K` restricts the
+//! 2 cores), or with `-- --quick` for a tiny suite (seconds); `-- --medium` runs the random
+//! medium's suite instead (`medium.rs`, writing `medium.md` and `medium.csv`); `-- --material K` restricts the
 //! suite to materials whose name contains the given text. Output: a markdown table on stdout and
 //! in the workspace's
 //! `target/accuracy/accuracy.md`, CSVs (`accuracy.csv` per variant, `scenes.csv` per variant and
@@ -63,6 +64,7 @@
 //! the per-direction rows only; the Pareto plot draws batch rows as triangles.
 
 mod measure;
+mod medium;
 mod plot;
 mod scenes;
 
@@ -183,6 +185,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let wall = Instant::now();
     let out_dir = gmueller_validation::target_dir().join("accuracy");
     std::fs::create_dir_all(&out_dir)?;
+    // `--medium`: the random medium's suite instead (medium.rs).
+    if std::env::args().any(|a| a == "--medium") {
+        return medium::run_suite(quick, &out_dir);
+    }
 
     let materials: Vec<MaterialSpec> = if quick {
         vec![

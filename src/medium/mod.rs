@@ -1,0 +1,123 @@
+//! Random media: a region of locally-stationary matter whose single-scattering kernel is S2.20
+//! with n = 3, in first-Born form with its absolute constant, as a volume path tracer needs it —
+//! a scattering coefficient and a Mueller phase matrix for the incident packet's coherence,
+//! with sampling and its exact pdf.
+//!
+//! # Formula
+//! ```text
+//! dI/dV(r̂) = (k⁴/16π²) · m̄(cos Θ) · T · Σ_α K³_α(h) S_α                (Stokes radiant intensity per unit volume)
+//! K³_α     = |Θ_α|^{1/2} ∫ p(q) g^{Ξ_α}(h − q) d³q = (2π)^{3/2} ∫ p(q) 𝒩_{Ξ_α}(h − q) d³q   (S2.17, n = 3)
+//! Ξ_α      = Q Θ_α⁻¹ Qᵀ,  Θ_α = blockdiag(Θ⊥_α, σ_zz²)                       (S2.18, 3-D)
+//! h        = k(r̂ + ŝ) = k(r̂ − d̂),   cos Θ = r̂·d̂
+//! σ_s      = (1/S0) ∫ [dI/dV]₀ dΩ,     F = (dI/dV)/(σ_s S0) as a Mueller matrix,  ∫ [F S]₀ dΩ = S0
+//! ```
+//! `p` is the 3-D PSD of the relative permittivity fluctuation `δε` (unitary transform,
+//! `∫ p = (2π)^{3/2} ⟨δε²⟩`, [`crate::psd`]), `m̄` the mean scattering matrix ([`Scatterer`]:
+//! [`Dipole`] for the Born medium), `T` the rotation (S2.4) from the packet frame to the incident
+//! scattering-plane frame, `S_α` the packet's channels (S2.16) and `Θ_α` its 3-D shapes
+//! ([`WavePacket::with_longitudinal_coherence`] sets `σ_zz`). The coherence levels give `K³`
+//! as in [`VolumeCoherence`]; the polarization levels keep `m̄₀₀ K³_½ S0` (`Intensity`),
+//! `m̄ T K³_½ S` (`OneShape`) or the sum above (`Full`).
+//!
+//! # Derivation (first Born, SI, non-magnetic, background index 1)
+//! With `ε(r) = 1 + δε(r)`, `⟨δε⟩ = 0`, the field obeys `∇×∇×E − k²E = k² δε E`; to first order
+//! the far field is
+//! ```text
+//! E_s(r r̂) = (k²/4π) (e^{ikr}/r) (I − r̂r̂ᵀ) ∫ δε(p) E(p) e^{−ik r̂·p} d³p
+//! r² ⟨E_s E_s†⟩ = (k⁴/16π²) ∫∫ R(p₁ − p₂) (I − r̂r̂ᵀ) ⟨E(p₁) E(p₂)†⟩ (I − r̂r̂ᵀ) e^{−ik r̂·(p₁−p₂)} d³p₁ d³p₂
+//! ```
+//! the double integral of S2.10 with the locally-stationary `⟨δε(p₁)δε(p₂)⟩ = m̄ R(p₁ − p₂)`
+//! (S2.8, `m̄` the region's indicator times the dipole projection). For the packet
+//! `⟨E(p₁)E(p₂)†⟩ = e^{ik d̂·ξ} Σ_α g^{Θ_α}(Qᵀξ) C_α` (ξ = p₁ − p₂) the ζ = (p₁ + p₂)/2 integral
+//! gives the volume `V` (S2.14, `M̃(0)`), and the ξ integral is `∫ R(ξ) g^{Θ_α}(Qᵀξ) e^{−ih·ξ} d³ξ
+//! = (2π)^{3/2} F{R g}(h) = K³_α` (convolution theorem, Lemma S2.1 with `B = Qᵀ`). Per unit
+//! volume: `dI/dV = (k⁴/16π²) Σ_α K³_α · (I − r̂r̂ᵀ) C_α (I − r̂r̂ᵀ)`, which in Stokes form is the
+//! formula above with `m̄ = ` [`Dipole`]. For a plane wave `K³ → (2π)^{3/2} p(h)` and the
+//! differential scattering cross-section per unit volume is `(k⁴/16π²)(2π)^{3/2} p(h) |ê_o·ê_i|²`.
+//! The seed's S2.20 prefactor `cos θ_o/(λ²(2π)^{3/2})` is the surface (aperture) one; the
+//! volume's is `k⁴/16π² = π²/λ⁴` per unit volume, with `K³` carrying the corrected `(2π)^{3/2}`
+//! of S2.17 (errata).
+//!
+//! **Rayleigh limit.** For correlation lengths `≪ λ`, `p(h) ≈ p(0) = (2π)^{−3/2} ⟨δε²⟩ V_c`
+//! (`V_c = ∫R/R(0)` the correlation volume) and
+//! `σ_s = (k⁴/16π²) ⟨δε²⟩ V_c ∫ (1 + cos²Θ)/2 dΩ = (k⁴/6π) ⟨δε²⟩ V_c`, with the Rayleigh phase
+//! matrix `F = (3/8π) m̄_dipole`; a dilute medium of small spheres (`⟨δε²⟩V_c = N δε² V²`)
+//! gives `N` times the textbook Rayleigh cross-section `(8π/3) k⁴ a⁶ (δε/3)²` of one sphere.
+//! For a Gaussian `R = σ² exp(−|ξ|²/2ℓ²)`, plane wave, unpolarized, exactly:
+//! `σ_s = (k⁴/16π²)(2π)^{3/2} σ² ℓ³ · π ∫₋₁¹ e^{−k²ℓ²(1−μ)} (1 + μ²) dμ`.
+//!
+//! **Background index.** In a background of index `n` (`ε = n²(1 + δε)`, `δε` the relative
+//! fluctuation) the same formulas hold with `k = n k₀` and `λ = λ₀/n`, the wavenumber and
+//! wavelength in the medium, which is what the packet must carry; for the PSD of an absolute
+//! fluctuation `Δε = n² δε`, divide it by `n⁴`.
+//!
+//! **Longitudinal coherence.** S2.20 enters `σ_zz` as a blur of the PSD along d̂
+//! (`Ξ_zz = 1/σ_zz²`, from the single-frequency propagation of a packet with a longitudinal
+//! envelope). Light whose equal-time coherence has that length has a bandwidth `Δk = 1/σ_zz`, and
+//! its frequencies scatter independently, each with its own `h = k'(r̂ − d̂)`: no blur forward, a
+//! blur of `2/σ_zz` backward. The two differ (`tests/medium_spectrum.rs`,
+//! `longitudinal_coherence_against_bandwidth`: forward, the packet gives `(1 + ℓ²/σ_zz²)^{−1/2}`
+//! of the plane wave, 0.71 at `ℓ = σ_zz`, bandwidth `E[(k'/k)⁴] ≈ 1`). A spectral renderer, whose
+//! packets carry one wavelength each, should leave `σ_zz` unbounded: the `Partial` level takes
+//! that as its limit (the `Incoherent` level, which needs every coherence length below the
+//! correlation lengths, refuses it).
+//!
+//! **Validity.** Single scattering in the first Born approximation: `|δε| ≪ 1` and a phase error
+//! `k L |δε| ≪ 1` over the scattering region; multiple scattering is the path tracer's job
+//! (`σ_s` and `F` per event).
+//!
+//! # Peers
+//! A polarized Rayleigh phase function is still "not implemented" in Mitsuba 3 (its
+//! `src/phase/rayleigh.cpp` warns so in polarized variants and falls back to the scalar
+//! `(3/16π)(1 + cos²Θ)`, which is this module's `F₀₀` for unpolarized light in the Rayleigh
+//! limit), and no renderer or scattering library we know makes a phase function
+//! coherence-aware: the coherence levels here have no peer to compare with; they are tested
+//! against the Born integral itself (`tests/medium.rs`).
+//!
+//! # Numerics
+//! The weights are logarithms combined with `ln S0` and `ln(k⁴/16π²)` before anything is
+//! exponentiated (as the surface kernel, [`crate::interaction`]); the Full level caps `K³_½` at
+//! the Cauchy–Schwarz bound of the channel weights; outputs are valid Stokes vectors. `Ξ_α` is
+//! formed and factored in `f64` whatever the type. `σ_s` is a fixed quadrature over the sphere
+//! in Lambert coordinates adapted to the lobe ([`PhaseFunction::prepare`], cost in
+//! `benches/medium.rs`).
+
+mod coefficient;
+mod coherence;
+mod geometry;
+mod lobes;
+mod phase;
+mod sampler;
+mod scatterer;
+mod scattering;
+mod spectrum;
+
+pub use coherence::VolumeCoherence;
+pub use geometry::ScatteringGeometry;
+pub use phase::{Incident, LevelLight, PhaseFunction, PhaseSample, PhaseValue, ScatteredLight};
+pub use scatterer::{Dipole, Scalar, Scatterer};
+pub use spectrum::{VolumeLobes, VolumePsd};
+
+#[cfg(doc)]
+use crate::packet::WavePacket;
+
+/// A random medium: a region of stationary random permittivity `δε` with PSD `psd`, whose
+/// volume elements scatter with the mean matrix `scatterer` ([module docs](self)).
+///
+/// A renderer builds one per region (its bounds are the renderer's); slowly varying
+/// (locally-stationary) matter is a different medium per region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RandomMedium<P, M = Dipole> {
+    /// The 3-D PSD of `δε` (rad/length in, length³ out; [`VolumePsd`]).
+    pub psd: P,
+    /// The mean scattering matrix `m̄` ([`Scatterer`]).
+    pub scatterer: M,
+}
+
+impl<P, M> RandomMedium<P, M> {
+    /// A medium from its PSD and mean scattering matrix.
+    #[must_use]
+    pub fn new(psd: P, scatterer: M) -> Self {
+        Self { psd, scatterer }
+    }
+}
