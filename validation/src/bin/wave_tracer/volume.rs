@@ -180,7 +180,7 @@ fn case_report(
     }
     let _ = writeln!(
         s,
-        "  all inputs ({}): max |S0 rel diff| {:.2} %, median s.e. {:.2} %; time per direction: brute force {:.2} s (wall, {threads} threads, all inputs), kernel side {:.1} µs (test-side stand-in, PSD built per call)",
+        "  all inputs ({}): max |S0 rel diff| {:.2} %, median s.e. {:.2} %; time per direction: brute force {:.2} s (wall, {threads} threads, all inputs), kernel side {:.1} µs (the medium built per call: its speed is in benches/medium.rs)",
         case.inputs
             .iter()
             .map(|i| i.0)
