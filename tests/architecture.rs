@@ -33,6 +33,7 @@ const INTERACTION: &[&str] = &[
     "section",
     "attenuation",
     "coherence",
+    "roughness",
     "pbsdf",
     "material",
     "prepared",

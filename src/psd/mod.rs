@@ -27,12 +27,14 @@
 mod gaussian_psd;
 mod grating;
 mod kcorrelation;
+mod powers;
 mod quadrature;
 pub(crate) mod special;
 
 pub use gaussian_psd::{GaussianMixturePsd, GaussianPsd, Smooth};
 pub use grating::{Grating, OrderCutoff, bessel_j};
 pub use kcorrelation::KCorrelation;
+pub use powers::CorrelationPowers;
 pub use quadrature::{Adaptive, GaussHermite};
 
 use nalgebra::SVector;
