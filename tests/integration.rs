@@ -41,6 +41,7 @@ mod psd;
 mod psd_kcorrelation;
 mod psd_validation;
 mod roughness_limits;
+mod roughness_quadrature;
 mod roughness_series;
 mod roughness_tangent_plane;
 mod sampling;

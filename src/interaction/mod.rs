@@ -140,8 +140,8 @@ pub use polarization::{
 };
 pub use prepared::PreparedPacket;
 pub use roughness::{
-    FirstOrder, Geometric, KirchhoffSeries, RoughnessLevel, RoughnessModel, RoughnessWeights,
-    SeriesSum,
+    FirstOrder, Geometric, KirchhoffQuadrature, KirchhoffSeries, RoughnessLevel, RoughnessModel,
+    RoughnessWeights, SeriesSum,
 };
 pub use section::surface_inverse_coherence;
 

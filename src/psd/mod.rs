@@ -24,6 +24,7 @@
 //! - [`GaussHermite`]: tensor Gauss–Hermite quadrature of a fixed order, any PSD;
 //! - [`Adaptive`]: nested adaptive Gauss–Kronrod to a relative tolerance — the reference.
 
+mod autocorrelation;
 mod gaussian_psd;
 mod grating;
 mod kcorrelation;
@@ -31,6 +32,7 @@ mod powers;
 mod quadrature;
 pub(crate) mod special;
 
+pub use autocorrelation::{Autocorrelation, matern};
 pub use gaussian_psd::{GaussianMixturePsd, GaussianPsd, Smooth};
 pub use grating::{Grating, OrderCutoff, bessel_j};
 pub use kcorrelation::KCorrelation;

@@ -2,7 +2,9 @@
 //!
 //! Run with `cargo run --release -p gmueller-validation --bin accuracy` (about 2–3 minutes on
 //! 2 cores), or with `-- --quick` for a tiny suite (seconds); `-- --material K` restricts the
-//! suite to materials whose name contains the given text. Output: a markdown table on stdout and
+//! suite to materials whose name contains the given text; `-- --rough` runs only the rough
+//! suite (roughness levels beyond first order, `rough.rs`, also run at the end of the full one;
+//! its table goes to `target/accuracy/rough.md`). Output: a markdown table on stdout and
 //! in the workspace's
 //! `target/accuracy/accuracy.md`, CSVs (`accuracy.csv` per variant, `scenes.csv` per variant and
 //! scene) and a Pareto plot `target/accuracy/pareto.png` (median time vs max S0 error, log–log).
@@ -64,6 +66,7 @@
 
 mod measure;
 mod plot;
+mod rough;
 mod scenes;
 
 use std::fmt::Write as _;
@@ -183,6 +186,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let wall = Instant::now();
     let out_dir = gmueller_validation::target_dir().join("accuracy");
     std::fs::create_dir_all(&out_dir)?;
+    // `--rough`: only the rough suite (roughness levels beyond first order, `rough.rs`).
+    if std::env::args().any(|a| a == "--rough") {
+        let md = rough::run_suite(quick)?;
+        std::fs::write(out_dir.join("rough.md"), &md)?;
+        println!("{md}\nWrote {}", out_dir.join("rough.md").display());
+        return Ok(());
+    }
 
     let materials: Vec<MaterialSpec> = if quick {
         vec![
@@ -870,6 +880,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         out_dir.join("scenes.csv").display(),
         png.display()
     );
+    let rough_md = rough::run_suite(quick)?;
+    std::fs::write(out_dir.join("rough.md"), &rough_md)?;
+    println!("{rough_md}\nWrote {}", out_dir.join("rough.md").display());
     Ok(())
 }
 

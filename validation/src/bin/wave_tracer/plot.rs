@@ -34,7 +34,7 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
         format!(
             "brute force ({} realizations, ±1 s.e.) vs gmueller kernel [{}] — {}",
             c.realizations,
-            kernel_side::method_name(&c.scene),
+            kernel_side::method_name(&c.scene, c.order),
             verdict(s)
         ),
         (12, 38),
