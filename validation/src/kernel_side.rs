@@ -11,9 +11,10 @@
 //! incidence) for exits below the surface. The kernel's radiance is then the one in the exit
 //! medium (prefactor `cos θ_o/λ_t²`, `λ_t = λ/η`).
 //!
-//! Roughness: [`Order::First`] (the first-order kernel) or [`Order::Series`] (the Kirchhoff
-//! series, `KirchhoffSeries` at tolerance 10⁻⁶, for the Gaussian PSD; the other matters have
-//! no [`gmueller::psd::CorrelationPowers`] here and stay at first order).
+//! Roughness: [`Order::First`] (the first-order kernel) or [`Order::Series`] (all orders of the
+//! Kirchhoff phase screen: `KirchhoffSeries` at tolerance 10⁻⁶ for the Gaussian PSD,
+//! `KirchhoffQuadrature` at 10⁻⁶ for the exponential one — the K-correlation itself, not its
+//! mixture fit; the grating stays at first order).
 //!
 //! Height PSDs: `GaussianPsd::isotropic(σ, ℓ)`; the exponential correlation is
 //! `KCorrelation(σ², T = ℓ², γ = 2)`, blurred with a Gaussian-mixture fit (`ClosedForm`); the
@@ -28,13 +29,14 @@
 
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    ConstantMueller, FirstOrder, Geometry, Intensity, Kernel, KirchhoffSeries, Partial,
-    PhaseScreen, RoughSurface, RoughnessWeights, Side,
+    ConstantMueller, FirstOrder, Geometry, Intensity, Kernel, KirchhoffQuadrature, KirchhoffSeries,
+    Partial, PhaseScreen, RoughSurface, RoughnessWeights, Side,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{
-    BlurMethod, ClosedForm, GaussianPsd, Grating, KCorrelation, OrderCutoff, Psd, bessel_j,
+    BlurMethod, ClosedForm, GaussHermite, GaussianPsd, Grating, KCorrelation, OrderCutoff, Psd,
+    bessel_j,
 };
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Matrix4, Vector2, Vector3};
@@ -287,8 +289,21 @@ pub fn predict_timed_at(
         }
         Matter::Exponential { sigma, ell } => {
             let k = KCorrelation::<f64, 2>::new(sigma * sigma, ell * ell, 2.0).expect("psd");
-            let (fit, _, _) = k.mixture_fit_to(1e-6).expect("mixture fit");
-            predict_with(scene, fit, ClosedForm, FirstOrder, exits, min_seconds)
+            match order {
+                Order::First => {
+                    let (fit, _, _) = k.mixture_fit_to(1e-6).expect("mixture fit");
+                    predict_with(scene, fit, ClosedForm, FirstOrder, exits, min_seconds)
+                }
+                // The quadrature blurs by itself; the Partial level's method is not used.
+                Order::Series => predict_with(
+                    scene,
+                    k,
+                    GaussHermite::new(1).expect("order"),
+                    KirchhoffQuadrature::new(1e-6).expect("tolerance"),
+                    exits,
+                    min_seconds,
+                ),
+            }
         }
         Matter::Sinusoid { amplitude, period } => predict_with(
             scene,
@@ -301,10 +316,11 @@ pub fn predict_timed_at(
     }
 }
 
-/// Whether `order` is the series for `scene` (the Gaussian PSD), not first order.
+/// Whether `order` sums every order of the phase screen for `scene` (the Gaussian and the
+/// exponential PSDs), not first order.
 #[must_use]
 pub fn uses_series(scene: &Scene, order: Order) -> bool {
-    order == Order::Series && matches!(scene.matter, Matter::Gaussian { .. })
+    order == Order::Series && !matches!(scene.matter, Matter::Sinusoid { .. })
 }
 
 /// A short name of the kernel level used for `scene` at the roughness level `order`.
@@ -327,7 +343,12 @@ pub fn method_name(scene: &Scene, order: Order) -> String {
         (false, Matter::Sinusoid { .. }) => "Intensity/Partial/ClosedForm, Grating ±1 orders",
     };
     if uses_series(scene, order) {
-        format!("{base}, KirchhoffSeries 1e-6")
+        match scene.matter {
+            Matter::Exponential { .. } => {
+                "Intensity/Partial, KCorrelation γ=2, KirchhoffQuadrature 1e-6".to_string()
+            }
+            _ => format!("{base}, KirchhoffSeries 1e-6"),
+        }
     } else {
         format!("{base}, first order")
     }

@@ -6,10 +6,11 @@
 //! interface, into the glass and out of it (the aperture model of `brute.rs`; the kernel with
 //! `Geometry::at_interface`), the lobe around Snell's direction.
 //!
-//! The kernel side is the Kirchhoff series (`KirchhoffSeries`) for the Gaussian surfaces, whose
-//! roughness reaches `vσ = 1` (`gauss_rough`), 3 (`gauss_rough3`) and 10 (`gauss_rough10`),
-//! and first order for the other matters; `--first-order` uses first order everywhere (the
-//! kernel before the series: `gauss_rough` is then 76 % off).
+//! The kernel side sums every order of the Kirchhoff phase screen: `KirchhoffSeries` for the
+//! Gaussian surfaces, whose roughness reaches `vσ = 1` (`gauss_rough`), 3 (`gauss_rough3`) and
+//! 10 (`gauss_rough10`), `KirchhoffQuadrature` for the exponential ones (`kcorrelation`, and
+//! `kcorr_rough` at `vσ = 1`), first order for the grating; `--first-order` uses first order
+//! everywhere (the kernel before the series: `gauss_rough` is then 76 % off).
 //!
 //! Run with `cargo run --release -p gmueller-validation --bin wave_tracer` (about two minutes
 //! on 2 cores). Flags: `--realizations N` (per configuration; error bars shrink like 1/√N),
@@ -290,6 +291,32 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool, order: Orde
             k,
         );
     }
+    // The exponential (K-correlation γ = 2) surface beyond first order (vσ = 1): its slopes
+    // are unbounded (the PSD falls as |ζ|⁻³), so the grid is finer than for the Gaussian of the
+    // same vσ (12 points per coherence width; Nyquist 54 rad/µm); the kernel side is
+    // `KirchhoffQuadrature` (there are no closed-form powers to sum).
+    let sigma_k = 1.0 / v0;
+    add(
+        "kcorr_rough",
+        format!(
+            "K-correlation surface (γ = 2, exponential R), σ = {:.1} nm (vσ = 1), √T = 1 µm; w = 0.7 µm",
+            sigma_k * 1e3
+        ),
+        Scene {
+            wavelength: lambda,
+            theta_i,
+            theta: iso(0.7),
+            matter: Matter::Exponential {
+                sigma: sigma_k,
+                ell,
+            },
+            eta_t: None,
+        },
+        12.0,
+        6.0,
+        5.0,
+        128,
+    );
     // Transmission through a rough glass interface (the aperture model, t = 1; see brute.rs).
     // σ is set by the transmitted phase factor at Snell's direction, |v_t| = k |cos θ_i − η cos θ_t|
     // (0.548 k from the air at 30°, 0.368 k from the glass at 20°, against 2 cos 30° k = 1.73 k
