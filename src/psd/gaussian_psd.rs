@@ -359,6 +359,10 @@ impl<T: Real> CorrelationPowers<T> for GaussianPsd<T, 2> {
             log_amplitude: self.log_amplitude - x.ln(),
         })
     }
+    #[inline]
+    fn gaussian_spectrum(&self) -> Option<(T, nalgebra::Matrix2<T>)> {
+        Some((self.variance, *self.spectral.cholesky_factor()))
+    }
 }
 
 /// A sum of Gaussian PSDs, `p = Σⱼ pⱼ`, each `pⱼ` a [`GaussianPsd`]; closed-form blur.

@@ -2,6 +2,8 @@
 //! terms of the Kirchhoff series of a rough surface beyond first order
 //! ([`crate::interaction::KirchhoffSeries`]).
 
+use nalgebra::Matrix2;
+
 use super::Psd;
 use crate::real::Real;
 
@@ -31,4 +33,13 @@ pub trait CorrelationPowers<T: Real>: Psd<T, 2> {
     /// `None` where it is not representable in `T` (e.g. `x Λ⁻¹` overflows) or `x ≤ 0`.
     #[must_use]
     fn correlation_power(&self, x: T) -> Option<Self::Power>;
+
+    /// For a Gaussian PSD, its variance `σ²` and the Cholesky factor `L` of its spectral
+    /// covariance `Λ⁻¹` (`p_x` has `x Λ⁻¹`): the series then has one closed form for all its
+    /// orders (`KirchhoffSeries`). `None` (the default) for other PSDs.
+    #[inline]
+    #[must_use]
+    fn gaussian_spectrum(&self) -> Option<(T, Matrix2<T>)> {
+        None
+    }
 }

@@ -39,7 +39,14 @@
 //! whole series (relative), and the number of terms grows like `√g` around `n ≈ g` (`g ≫ 1`)
 //! plus the bisection's `2 log₂ g` — see the README's table for measured counts and costs.
 //! For the incoherent level every `K[p_n]` is the same (each `p_n` has the variance σ²), and
-//! the sum is `K[p] (1 − e^{−g})/g` in closed form.
+//! the sum is `K[p] (1 − e^{−g})/g` in closed form. For a Gaussian PSD with the plane-wave
+//! weight or [`crate::psd::ClosedForm`]'s, every order's weight comes from one closed form,
+//! `ln K[p_n] = ln 2πσ² − ½ ln(n²|A| + n tr(adj(A)Ξ) + |Ξ|) − ½ (n h_tᵀadj(A)h_t +
+//! h_tᵀadj(Ξ)h_t)/(n²|A| + …)` (`A = Λ⁻¹`; every coefficient a sum of squares of Cholesky
+//! products, evaluated in f64): one logarithm per order. Other blur methods
+//! ([`crate::psd::BlurMethod::exact_for_gaussians`] false) blur a power per order. With a
+//! quadrature blur the terms are log-concave only to the quadrature's accuracy, and so is the
+//! bound.
 
 #![expect(
     clippy::neg_cmp_op_on_partial_ord,
@@ -52,7 +59,7 @@ pub use quadrature::KirchhoffQuadrature;
 
 use core::fmt::Debug;
 
-use nalgebra::Vector2;
+use nalgebra::{Matrix2, Vector2};
 
 use super::coherence::{CoherenceLevel, CoherenceWeights, neg_infinity};
 use super::geometry::Geometry;
@@ -410,6 +417,64 @@ fn ln_factorial(n: u64) -> f64 {
         + r * (1.0 / 12.0 - r2 * (1.0 / 360.0 - r2 * (1.0 / 1260.0 - r2 / 1680.0)))
 }
 
+/// `ln K[p_n]` of a Gaussian PSD for every order `n` at once, for the plane-wave and the
+/// closed-form partially coherent weights (in f64):
+/// ```text
+/// ln K[p_n] = ln 2π + ln σ² − ½ ln|nA + Ξ| − ½ h_tᵀ(nA + Ξ)⁻¹h_t          (A = Λ⁻¹, Ξ = 0: plane wave)
+/// |nA + Ξ| = n² |A| + n tr(adj(A) Ξ) + |Ξ|,   h_tᵀ adj(nA + Ξ) h_t = n h_tᵀadj(A)h_t + h_tᵀadj(Ξ)h_t
+/// ```
+/// (2×2 identities; `adj(M) = J M Jᵀ`, `J` the quarter turn). Every coefficient is a sum of
+/// squares from the Cholesky factors — `|A| = (L₁₁L₂₂)²`, `tr(adj(A)Ξ) = ‖L_Ξᵀ J L_A‖²`,
+/// `h_tᵀadj(A)h_t = |L_Aᵀ Jᵀ h_t|²` — so nothing cancels, even for the ill-conditioned sections
+/// of grazing incidence. One logarithm per order instead of a blur.
+#[derive(Debug, Clone, Copy)]
+struct GaussianTerms {
+    ln_front: f64,
+    d2: f64,
+    d1: f64,
+    d0: f64,
+    c1: f64,
+    c0: f64,
+}
+
+impl GaussianTerms {
+    fn new<T: Real>(
+        sigma2: T,
+        la: &Matrix2<T>,
+        xi: Option<&Gaussian<T, 2>>,
+        h: &Vector2<T>,
+    ) -> Option<Self> {
+        let la = la.map(|x| x.to_f64());
+        let lx = xi.map_or(Matrix2::zeros(), |x| {
+            x.cholesky_factor().map(|v| v.to_f64())
+        });
+        let h = h.map(|x| x.to_f64());
+        let j = Matrix2::new(0.0, 1.0, -1.0, 0.0);
+        let jh = j.transpose() * h;
+        let out = Self {
+            ln_front: core::f64::consts::TAU.ln() + sigma2.to_f64().ln(),
+            d2: (la[(0, 0)] * la[(1, 1)]).powi(2),
+            d1: (lx.transpose() * j * la).norm_squared(),
+            d0: (lx[(0, 0)] * lx[(1, 1)]).powi(2),
+            c1: (la.transpose() * jh).norm_squared(),
+            c0: (lx.transpose() * jh).norm_squared(),
+        };
+        let ok = [out.d2, out.d1, out.d0, out.c1, out.c0]
+            .iter()
+            .all(|x| x.is_finite())
+            && out.d2 > 0.0
+            && out.ln_front.is_finite();
+        ok.then_some(out)
+    }
+
+    /// `ln K[p_n]`.
+    #[inline]
+    fn ln_k(&self, n: f64) -> f64 {
+        let det = (n * self.d2 + self.d1) * n + self.d0;
+        self.ln_front - 0.5 * det.ln() - 0.5 * (n * self.c1 + self.c0) / det
+    }
+}
+
 /// The terms `ln t_n = ln(w_n/g) + ln K[p_n]` of one evaluation, with a two-entry memory (the
 /// bisection and the sum ask for neighbours).
 struct Terms<'a, T: Real, P, Coh> {
@@ -421,7 +486,9 @@ struct Terms<'a, T: Real, P, Coh> {
     ln_g: f64,
     memo: [(u64, T); 2],
     next: usize,
-    evaluations: u64,
+    /// The closed form of every order's weight, where the PSD is a Gaussian and the
+    /// coherence weight its closed form.
+    gaussian: Option<GaussianTerms>,
 }
 
 impl<'a, T, P, Coh> Terms<'a, T, P, Coh>
@@ -446,7 +513,12 @@ where
             ln_g: g.ln(),
             memo: [(0, T::zero()); 2],
             next: 0,
-            evaluations: 0,
+            gaussian: if CoherenceWeights::<T, P::Power>::closed_form_gaussian(coherence) {
+                psd.gaussian_spectrum()
+                    .and_then(|(s2, l)| GaussianTerms::new(s2, &l, xi, h_t))
+            } else {
+                None
+            },
         }
     }
 
@@ -455,8 +527,15 @@ where
         if let Some(&(_, t)) = self.memo.iter().find(|(m, _)| *m == n) {
             return t;
         }
-        self.evaluations += 1;
-        let t = if n == 1 {
+        let t = if let Some(gt) = &self.gaussian {
+            let nf = n as f64;
+            let lw = if n == 1 {
+                -self.g
+            } else {
+                -self.g + (nf - 1.0) * self.ln_g - ln_factorial(n)
+            };
+            T::lit(lw + gt.ln_k(nf))
+        } else if n == 1 {
             // w_1/g = e^{−g} = α, and p_1 = p: the first-order term.
             T::lit(-self.g)
                 + CoherenceWeights::<T, P>::log_scatter_weight(
