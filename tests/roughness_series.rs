@@ -65,6 +65,23 @@ fn screen(sigma: f64, c: &Matrix2<f64>, eta: Option<f64>) -> Screen {
     }
 }
 
+/// The screen whose `vσ` at the specular (mirror or Snell) direction of `pk` is `v_sigma`, its
+/// σ and the specular geometry.
+fn screen_at(
+    pk: &WavePacket<f64>,
+    eta: Option<f64>,
+    c: &Matrix2<f64>,
+    v_sigma: f64,
+) -> (Screen, f64, Geometry<f64>) {
+    let g0 = geometry(
+        pk,
+        eta,
+        exit_for(THETA_I, LAMBDA, eta, Vector2::zeros()).unwrap(),
+    );
+    let sigma = v_sigma / g0.phase_factor().abs();
+    (screen(sigma, c, eta), sigma, g0)
+}
+
 /// The exit direction whose `h_t` is `h` (reflection: `k (r̂_t − d_t)`, transmission:
 /// `k (η r̂_t − d_t)`), `None` beyond the horizon.
 fn exit_for(
@@ -232,14 +249,7 @@ fn series_equals_the_phase_screen_integral() {
             for v_sigma in [0.3, 1.0, 3.0, 5.5] {
                 let theta = Matrix2::new(THETA[0][0], THETA[0][1], THETA[1][0], THETA[1][1]);
                 let pk = packet(THETA_I, theta, LAMBDA);
-                // σ from vσ at the specular (mirror or Snell) direction.
-                let g0 = geometry(
-                    &pk,
-                    eta,
-                    exit_for(THETA_I, LAMBDA, eta, Vector2::zeros()).unwrap(),
-                );
-                let sigma = v_sigma / g0.phase_factor().abs();
-                let m = screen(sigma, &c, eta);
+                let (m, sigma, g0) = screen_at(&pk, eta, &c, v_sigma);
                 let xi = section(&pk, plane_wave);
                 let e = eta.unwrap_or(1.0);
                 let peak = (e.powi(3) * g0.cos_o() / (LAMBDA * LAMBDA))
@@ -395,13 +405,7 @@ fn geometric_level_is_the_slope_distribution() {
                 let pk = packet(THETA_I, Matrix2::new(1.44, 0.2, 0.2, 2.56), LAMBDA);
                 let xi = section(&pk, plane_wave);
                 for v_sigma in [2.0, 10.0] {
-                    let g0 = geometry(
-                        &pk,
-                        eta,
-                        exit_for(THETA_I, LAMBDA, eta, Vector2::zeros()).unwrap(),
-                    );
-                    let sigma = v_sigma / g0.phase_factor().abs();
-                    let m = screen(sigma, &c, eta);
+                    let (m, sigma, _) = screen_at(&pk, eta, &c, v_sigma);
                     let e = eta.unwrap_or(1.0);
                     for h in hs() {
                         let Some(exit) = exit_for(THETA_I, LAMBDA, eta, h) else {

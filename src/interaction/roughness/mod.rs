@@ -114,7 +114,9 @@ pub trait RoughnessWeights<T: Real, P: Psd<T, 2>, Coh: CoherenceWeights<T, P>>:
         g: &Geometry<T>,
     ) -> T;
 
-    /// The weight itself (its linear form where cheaper; 0 or `∞` out of range).
+    /// The weight itself: `exp(ln K̃)` by default (0 or `∞` out of range); first order
+    /// overrides it with the coherence level's cheaper linear form.
+    #[inline]
     #[must_use]
     fn scatter_weight(
         &self,
@@ -122,7 +124,9 @@ pub trait RoughnessWeights<T: Real, P: Psd<T, 2>, Coh: CoherenceWeights<T, P>>:
         psd: &P,
         xi: Option<&Gaussian<T, 2>>,
         g: &Geometry<T>,
-    ) -> T;
+    ) -> T {
+        self.log_scatter_weight(coherence, psd, xi, g).exp()
+    }
 }
 
 /// First order in the heights (the crate's kernel before the series; the default):
@@ -686,16 +690,6 @@ where
         }
         self.sum(coherence, psd, xi, &g.psd_h(), v).log_weight
     }
-    #[inline]
-    fn scatter_weight(
-        &self,
-        coherence: &Coh,
-        psd: &P,
-        xi: Option<&Gaussian<T, 2>>,
-        g: &Geometry<T>,
-    ) -> T {
-        RoughnessWeights::<T, P, Coh>::log_scatter_weight(self, coherence, psd, xi, g).exp()
-    }
 }
 
 /// `ln(((1 − e^{−g})/g) K[p_g])`, `g = (vσ)²` (the [`Geometric`] level; `−∞` at `g = 0`).
@@ -744,16 +738,6 @@ where
         g: &Geometry<T>,
     ) -> T {
         geometric_log_weight(coherence, psd, xi, &g.psd_h(), g.phase_factor())
-    }
-    #[inline]
-    fn scatter_weight(
-        &self,
-        coherence: &Coh,
-        psd: &P,
-        xi: Option<&Gaussian<T, 2>>,
-        g: &Geometry<T>,
-    ) -> T {
-        geometric_log_weight(coherence, psd, xi, &g.psd_h(), g.phase_factor()).exp()
     }
 }
 

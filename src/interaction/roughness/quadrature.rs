@@ -313,13 +313,4 @@ where
             ),
         }
     }
-    fn scatter_weight(
-        &self,
-        coherence: &Coh,
-        psd: &P,
-        xi: Option<&Gaussian<T, 2>>,
-        g: &Geometry<T>,
-    ) -> T {
-        RoughnessWeights::<T, P, Coh>::log_scatter_weight(self, coherence, psd, xi, g).exp()
-    }
 }
