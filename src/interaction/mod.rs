@@ -53,7 +53,8 @@
 //! - Roughness ([`RoughnessModel`], the kernel's third type, [`FirstOrder`] by default): first
 //!   order in the heights (valid while `vσ ≲ 0.3`) · [`KirchhoffSeries`] (the Kirchhoff
 //!   phase-screen series `Σ_n e^{−g} gⁿ/n! F{ρⁿ}`, every `vσ`, to a tolerance) · [`Geometric`]
-//!   (its `vσ ≫ 1` limit, the slope distribution). With [`TangentPlane`] as the scattering
+//!   (its `vσ ≫ 1` limit, the slope distribution) · [`KirchhoffQuadrature`] (the same phase
+//!   screen by quadrature, for PSDs without closed-form powers). With [`TangentPlane`] as the scattering
 //!   pBSDF the series carries the Kirchhoff polarization (the Fresnel matrix of the specular
 //!   facet); see [`KirchhoffSeries`] for the formula and the truncation.
 //! - Precision: `T = f32` or `f64`.
