@@ -337,6 +337,33 @@ impl<T: Real, const N: usize> Gaussian<T, N> {
         })
     }
 
+    /// The Gaussian of covariance `s Σ` (`s > 0`): Cholesky factor `√s L`, `ln|sΣ| = ln|Σ| + N ln s`;
+    /// `None` unless `s` is positive and finite and the result's factor and covariance are finite
+    /// and positive definite. No factorisation (the hot path of the Kirchhoff series, whose
+    /// terms are one spectral shape scaled by the order `n`).
+    #[inline]
+    pub(crate) fn scaled(&self, s: T) -> Option<Self> {
+        if !(s > T::zero() && s.is_finite()) {
+            return None;
+        }
+        let root = s.sqrt();
+        let chol = self.chol * root;
+        let cov = self.cov * s;
+        for i in 0..N {
+            if !(chol[(i, i)] > T::zero() && chol[(i, i)].is_finite()) {
+                return None;
+            }
+        }
+        if !cov.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        Some(Self {
+            cov,
+            chol,
+            log_det: self.log_det + T::lit(N as f64) * s.ln(),
+        })
+    }
+
     /// The isotropic Gaussian `g^{s² I}` of standard deviation `s`.
     ///
     /// # Errors

@@ -36,6 +36,7 @@ const INTERACTION: &[&str] = &[
     "section",
     "attenuation",
     "coherence",
+    "roughness",
     "pbsdf",
     "material",
     "prepared",

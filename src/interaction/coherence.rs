@@ -76,6 +76,15 @@ pub trait CoherenceWeights<T: Real, P: Psd<T, 2>>: CoherenceModel {
     fn scatter_weight(&self, psd: &P, xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
         self.log_scatter_weight(psd, xi, h_t).exp()
     }
+
+    /// `true` when the weight of a Gaussian PSD is its exact closed form (the plane wave; the
+    /// partially coherent level with [`ClosedForm`]): the Kirchhoff series then evaluates all
+    /// its orders by one closed form ([`super::KirchhoffSeries`]). `false` by default.
+    #[inline]
+    #[must_use]
+    fn closed_form_gaussian(&self) -> bool {
+        false
+    }
 }
 
 /// The fully coherent (plane-wave) limit: `K = 2π p(h_t)`; the classical BRDF.
@@ -150,6 +159,10 @@ impl<T: Real, P: Psd<T, 2>> CoherenceWeights<T, P> for PlaneWave {
         ln_two_pi::<T>() + psd.log_value(h_t)
     }
     #[inline]
+    fn closed_form_gaussian(&self) -> bool {
+        true
+    }
+    #[inline]
     fn scatter_weight(&self, psd: &P, _xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
         T::two_pi() * psd.value(h_t)
     }
@@ -170,6 +183,10 @@ impl<T: Real, P: Psd<T, 2>, B: BlurMethod<T, 2, P> + Clone + Debug> CoherenceWei
     #[inline]
     fn scatter_weight(&self, psd: &P, xi: Option<&Gaussian<T, 2>>, h_t: &Vector2<T>) -> T {
         partial_scatter_weight(&self.0, psd, xi, h_t)
+    }
+    #[inline]
+    fn closed_form_gaussian(&self) -> bool {
+        self.0.exact_for_gaussians()
     }
 }
 

@@ -479,6 +479,64 @@ impl<T: Real> Geometry<T> {
 }
 
 impl<T: Real> Geometry<T> {
+    /// The full scattering vector `h = k (ŝ + η r̂)` (rad/length; `η = 1` in reflection), whose
+    /// tangential part is [`Geometry::h_t`] and normal part [`Geometry::phase_factor`].
+    #[inline]
+    #[must_use]
+    pub fn scattering_vector(&self) -> Vector3<T> {
+        (self.to_source + self.exit * self.eta) * self.k
+    }
+
+    /// The same directions at a facet of the surface whose normal is `normal` (unit, on the
+    /// side of the source): the tangent plane of a rough surface, as
+    /// [`super::TangentPlane`] uses it. The side, the relative index and whether the light
+    /// came from below are kept; the angles, `h_t` and the s/p frames are those of the facet
+    /// (the facet frame's tangents are [`Frame::from_normal`]'s). `None` unless the source is
+    /// above the facet (`ŝ·m > 0`) and the exit direction is on the same side of the facet as
+    /// of the surface (in front of it in reflection, behind it in transmission).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::Geometry;
+    /// use nalgebra::Vector3;
+    /// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z())?;
+    /// let g = Geometry::new(10.0_f64, &surface, Vector3::new(-0.5, 0.0, 0.866),
+    ///     Vector3::new(0.2, 0.3, 0.93))?;
+    /// // At the facet whose normal is the half vector, the exit is the mirror direction.
+    /// let m = g.scattering_vector().normalize();
+    /// let f = g.at_facet(m).unwrap();
+    /// assert!(f.h_t().norm() < 1e-12 && (f.cos_i() - f.cos_o()).abs() < 1e-12);
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    #[must_use]
+    pub fn at_facet(&self, normal: Vector3<T>) -> Option<Self> {
+        let facet = Frame::from_normal(normal).ok()?;
+        let m = facet.k();
+        let cos_i = self.to_source.dot(&m);
+        let rm = self.exit.dot(&m);
+        let same_side = match self.side {
+            Side::Reflection => rm > T::zero(),
+            Side::Transmission => rm < T::zero(),
+        };
+        if !(cos_i > T::zero() && same_side) {
+            return None;
+        }
+        // ŝ is unit and so is m.
+        let incident_sp = Frame::sp_unit(-self.to_source, m);
+        Some(Self::build(
+            self.k,
+            &facet,
+            (self.to_source, self.exit),
+            (cos_i, rm.abs()),
+            incident_sp,
+            (self.side, self.eta),
+            self.from_below,
+        ))
+    }
+}
+
+impl<T: Real> Geometry<T> {
     /// The geometry of `packet` (its wavenumber, ŝ = −k̂) leaving along `exit`.
     ///
     /// # Errors

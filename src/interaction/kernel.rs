@@ -8,6 +8,7 @@ use super::material::RoughSurface;
 use super::pbsdf::Pbsdf;
 use super::polarization::{MuellerResponse, PolarizationModel};
 use super::prepared::PreparedPacket;
+use super::roughness::{FirstOrder, RoughnessModel, RoughnessWeights};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::packet::WavePacket;
@@ -15,12 +16,16 @@ use crate::psd::Psd;
 use crate::real::Real;
 
 /// The S2.20 kernel at a chosen model level: polarization `Pol` ([`super::Intensity`],
-/// [`super::OneShape`], [`super::Full`]) and coherence `Coh` ([`super::PlaneWave`],
-/// [`super::Partial`]`<B>` with its blur method `B`, [`super::Incoherent`]).
+/// [`super::OneShape`], [`super::Full`]), coherence `Coh` ([`super::PlaneWave`],
+/// [`super::Partial`]`<B>` with its blur method `B`, [`super::Incoherent`]) and roughness
+/// `Rough` ([`FirstOrder`] by default, [`super::KirchhoffSeries`], [`super::Geometric`]: how far
+/// beyond first order in the heights, [`super::RoughnessLevel`]).
 ///
 /// `Kernel::<Full, Partial>::default()` blurs with [`crate::psd::ClosedForm`]; another blur
 /// method goes into the coherence model: `Kernel::<Full, _>::new(Partial(GaussHermite::new(8)?))`.
-/// To choose the level at run time, see [`super::Level`].
+/// To choose the level at run time, see [`super::Level`] (first order). The roughness level
+/// is a third type: `Kernel::<Full, Partial, KirchhoffSeries>::default()`, or
+/// [`Kernel::with_roughness`].
 ///
 /// # Examples
 /// ```
@@ -51,17 +56,33 @@ use crate::real::Real;
 /// assert!(r.scattered.s0() > 0.0 && r.scattered.s0().is_finite());
 /// ```
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Kernel<Pol, Coh> {
+pub struct Kernel<Pol, Coh, Rough = FirstOrder> {
     coherence: Coh,
+    roughness: Rough,
     _polarization: PhantomData<Pol>,
 }
 
 impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
-    /// A kernel with the coherence model `coherence` (e.g. `Partial(GaussHermite::new(8)?)`).
+    /// A first-order kernel with the coherence model `coherence` (e.g.
+    /// `Partial(GaussHermite::new(8)?)`).
     #[must_use]
     pub fn new(coherence: Coh) -> Self {
         Self {
             coherence,
+            roughness: FirstOrder,
+            _polarization: PhantomData,
+        }
+    }
+}
+
+impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<Pol, Coh, Rough> {
+    /// The same kernel at the roughness level `roughness` (e.g.
+    /// `KirchhoffSeries::new(1e-4)?`).
+    #[must_use]
+    pub fn with_roughness<R: RoughnessModel>(self, roughness: R) -> Kernel<Pol, Coh, R> {
+        Kernel {
+            coherence: self.coherence,
+            roughness,
             _polarization: PhantomData,
         }
     }
@@ -70,6 +91,12 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     #[must_use]
     pub fn coherence(&self) -> &Coh {
         &self.coherence
+    }
+
+    /// The roughness model (with its tolerance for [`super::KirchhoffSeries`]).
+    #[must_use]
+    pub fn roughness(&self) -> &Rough {
+        &self.roughness
     }
 
     /// Evaluates S2.20 for `packet` leaving along `g.exit` (see the module formula).
@@ -89,6 +116,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         T: Real,
         P: Psd<T, 2>,
         Coh: CoherenceWeights<T, P>,
+        Rough: RoughnessWeights<T, P, Coh>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
@@ -120,6 +148,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         T: Real,
         P: Psd<T, 2>,
         Coh: CoherenceWeights<T, P>,
+        Rough: RoughnessWeights<T, P, Coh>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
@@ -166,6 +195,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         T: Real,
         P: Psd<T, 2>,
         Coh: CoherenceWeights<T, P>,
+        Rough: RoughnessWeights<T, P, Coh>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
@@ -185,6 +215,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         T: Real,
         P: Psd<T, 2>,
         Coh: CoherenceWeights<T, P>,
+        Rough: RoughnessWeights<T, P, Coh>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
@@ -194,7 +225,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             g.k.to_f64(),
             prepared.k.to_f64()
         );
-        Pol::evaluate_mueller(&self.coherence, material, prepared, g)
+        Pol::evaluate_mueller(&self.coherence, &self.roughness, material, prepared, g)
     }
 
     /// The per-packet part of the kernel at this model level — the sections `Ξ_α` of the
@@ -272,6 +303,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         T: Real,
         P: Psd<T, 2>,
         Coh: CoherenceWeights<T, P>,
+        Rough: RoughnessWeights<T, P, Coh>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
@@ -281,7 +313,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             g.k.to_f64(),
             prepared.k.to_f64()
         );
-        Pol::evaluate(&self.coherence, material, prepared, g)
+        Pol::evaluate(&self.coherence, &self.roughness, material, prepared, g)
     }
 }
 

@@ -50,13 +50,22 @@
 //! - Coherence ([`CoherenceModel`]): [`PlaneWave`] · [`Partial`]`<B>` · [`Incoherent`]; only
 //!   `Partial` blurs the PSD, with any [`BlurMethod`] `B` (closed form by default, mixture
 //!   fit, Gauss–Hermite, adaptive).
+//! - Roughness ([`RoughnessModel`], the kernel's third type, [`FirstOrder`] by default): first
+//!   order in the heights (valid while `vσ ≲ 0.3`) · [`KirchhoffSeries`] (the Kirchhoff
+//!   phase-screen series `Σ_n e^{−g} gⁿ/n! F{ρⁿ}`, every `vσ`, to a tolerance) · [`Geometric`]
+//!   (its `vσ ≫ 1` limit, the slope distribution) · [`KirchhoffQuadrature`] (the same phase
+//!   screen by quadrature, for PSDs without closed-form powers). With [`TangentPlane`] as the scattering
+//!   pBSDF the series carries the Kirchhoff polarization (the Fresnel matrix of the specular
+//!   facet); see [`KirchhoffSeries`] for the formula and the truncation.
 //! - Precision: `T = f32` or `f64`.
-//! - Run-time choice: [`Level`] (one of the nine, [`Level::dispatch`], [`Level::evaluate`]).
+//! - Run-time choice: [`Level`] (one of the nine, [`Level::dispatch`], [`Level::evaluate`];
+//!   first order).
 //!
 //! # Layout (one concept per file, each importing only those above it)
 //! `geometry` (the directions and the interface's side) → `pbsdf/` (one file per pBSDF) →
 //! `material` (the pair `(p, M)`) → `section` (`Ξ_α`) → `attenuation` (Debye–Waller) →
-//! `coherence` (the coherence models and terms) → `prepared` (the per-packet part) →
+//! `coherence` (the coherence models and terms) → `roughness` (first order, the Kirchhoff
+//! series, its geometric limit) → `prepared` (the per-packet part) →
 //! `polarization` (the polarization models: what a level computes and returns) → `kernel` →
 //! `level` (run-time choice) → `exitant`, `sampling`, `batch`.
 //!
@@ -106,6 +115,7 @@ mod material;
 mod pbsdf;
 mod polarization;
 mod prepared;
+mod roughness;
 pub mod sampling;
 mod section;
 
@@ -123,13 +133,17 @@ pub use material::{
 };
 pub use pbsdf::{
     ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen,
-    RayleighRice,
+    RayleighRice, TangentPlane,
 };
 pub use polarization::{
     Full, Intensity, IntensityResponse, KernelOutput, LevelResponse, MuellerResponse, OneShape,
     PolarizationLevel, PolarizationModel, PreparationPlan, Response, Throughput,
 };
 pub use prepared::PreparedPacket;
+pub use roughness::{
+    FirstOrder, Geometric, KirchhoffQuadrature, KirchhoffSeries, RoughnessLevel, RoughnessModel,
+    RoughnessWeights, SeriesSum,
+};
 pub use section::surface_inverse_coherence;
 
 // The per-packet machinery the random medium (`crate::medium`) shares with the surface kernel.

@@ -2,7 +2,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::{BlurMethod, ClosedForm, ClosedFormBlur, Psd};
+use super::{BlurMethod, ClosedForm, ClosedFormBlur, CorrelationPowers, Psd};
 use crate::error::Error;
 use crate::gaussian::{Gaussian, cholesky_of_sum, mahalanobis_from_cholesky};
 use crate::numerics::{in_normal_range, log_det_from_cholesky, log_sum_exp};
@@ -329,6 +329,39 @@ impl<T: Real, const N: usize> ClosedFormBlur<T, N> for GaussianPsd<T, N> {
     #[inline]
     fn closed_form_log_normalized_blur(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         GaussianPsd::log_normalized_blur(self, cov, h)
+    }
+}
+
+/// `ρˣ = g^{Λ/x}`: the spectral covariance `x Λ⁻¹` and the amplitude `σ² |Λ|^{1/2} x⁻¹`
+/// (no factorisation: the spectral Cholesky factor scaled by `√x`).
+///
+/// # Examples
+/// ```
+/// use gmueller::psd::{CorrelationPowers, GaussianPsd, Psd};
+/// use nalgebra::Vector2;
+/// let p = GaussianPsd::<f64, 2>::isotropic(0.05, 2.0)?;
+/// // ρ³ of R = σ² e^{−r²/2ℓ²} is the Gaussian of correlation length ℓ/√3.
+/// let cubed = p.correlation_power(3.0).unwrap();
+/// let direct = GaussianPsd::<f64, 2>::isotropic(0.05, 2.0 / 3f64.sqrt())?;
+/// let z = Vector2::new(0.7, -0.2);
+/// assert!((cubed.value(&z) / direct.value(&z) - 1.0).abs() < 1e-14);
+/// assert_eq!(cubed.variance(), p.variance());
+/// # Ok::<(), gmueller::Error>(())
+/// ```
+impl<T: Real> CorrelationPowers<T> for GaussianPsd<T, 2> {
+    type Power = Self;
+    #[inline]
+    fn correlation_power(&self, x: T) -> Option<Self> {
+        let spectral = self.spectral.scaled(x)?;
+        Some(Self {
+            variance: self.variance,
+            spectral,
+            log_amplitude: self.log_amplitude - x.ln(),
+        })
+    }
+    #[inline]
+    fn gaussian_spectrum(&self) -> Option<(T, nalgebra::Matrix2<T>)> {
+        Some((self.variance, *self.spectral.cholesky_factor()))
     }
 }
 

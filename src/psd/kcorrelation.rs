@@ -154,6 +154,13 @@ impl<T: Real, const N: usize> KCorrelation<T, N> {
         self.peak_value
     }
 
+    /// The Matérn order of the 2-D autocorrelation, `ν = (γ − 1)/2` (the PSD's exponent
+    /// `(γ + 1)/2` less `n/2 = 1`).
+    #[must_use]
+    pub(crate) fn nu_2d(&self) -> f64 {
+        self.nu.to_f64() - 1.0
+    }
+
     /// A Gaussian-mixture approximation with `m ≥ 2` components, fitted once.
     ///
     /// # Formula

@@ -24,15 +24,19 @@
 //! - [`GaussHermite`]: tensor Gauss–Hermite quadrature of a fixed order, any PSD;
 //! - [`Adaptive`]: nested adaptive Gauss–Kronrod to a relative tolerance — the reference.
 
+mod autocorrelation;
 mod gaussian_psd;
 mod grating;
 mod kcorrelation;
+mod powers;
 mod quadrature;
 pub(crate) mod special;
 
+pub use autocorrelation::{Autocorrelation, matern};
 pub use gaussian_psd::{GaussianMixturePsd, GaussianPsd, Smooth};
 pub use grating::{Grating, OrderCutoff, bessel_j};
 pub use kcorrelation::KCorrelation;
+pub use powers::CorrelationPowers;
 pub use quadrature::{Adaptive, GaussHermite};
 
 use nalgebra::SVector;
@@ -175,6 +179,16 @@ pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
     fn log_normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         self.normalized_blur(psd, cov, h).ln()
     }
+
+    /// `true` when this method's blur of a Gaussian PSD is the exact closed form (as
+    /// [`ClosedForm`]'s), so that a caller may use an equivalent closed form of its own (the
+    /// Kirchhoff series sums all its orders in one, [`crate::interaction::KirchhoffSeries`]);
+    /// `false` by default (quadratures).
+    #[inline]
+    #[must_use]
+    fn exact_for_gaussians(&self) -> bool {
+        false
+    }
 }
 
 /// The exact, closed-form blur: the [`BlurMethod`] of every PSD that implements
@@ -292,5 +306,9 @@ impl<T: Real, const N: usize, P: ClosedFormBlur<T, N> + ?Sized> BlurMethod<T, N,
     #[inline]
     fn log_normalized_blur(&self, psd: &P, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
         psd.closed_form_log_normalized_blur(cov, h)
+    }
+    #[inline]
+    fn exact_for_gaussians(&self) -> bool {
+        true
     }
 }

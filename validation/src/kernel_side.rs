@@ -11,6 +11,11 @@
 //! incidence) for exits below the surface. The kernel's radiance is then the one in the exit
 //! medium (prefactor `cos θ_o/λ_t²`, `λ_t = λ/η`).
 //!
+//! Roughness: [`Order::First`] (the first-order kernel) or [`Order::Series`] (all orders of the
+//! Kirchhoff phase screen: `KirchhoffSeries` at tolerance 10⁻⁶ for the Gaussian PSD,
+//! `KirchhoffQuadrature` at 10⁻⁶ for the exponential one — the K-correlation itself, not its
+//! mixture fit; the grating stays at first order).
+//!
 //! Height PSDs: `GaussianPsd::isotropic(σ, ℓ)`; the exponential correlation is
 //! `KCorrelation(σ², T = ℓ², γ = 2)`, blurred with a Gaussian-mixture fit (`ClosedForm`); the
 //! sinusoidal height grating `a sin(2πx/Λ + φ)` has `R(ξ) = (a²/2) cos(2πξ/Λ)`, i.e. a
@@ -24,12 +29,14 @@
 
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    ConstantMueller, Geometry, Intensity, Kernel, Partial, PhaseScreen, RoughSurface, Side,
+    ConstantMueller, FirstOrder, Geometry, Intensity, Kernel, KirchhoffQuadrature, KirchhoffSeries,
+    Partial, PhaseScreen, RoughSurface, RoughnessWeights, Side,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{
-    BlurMethod, ClosedForm, GaussianPsd, Grating, KCorrelation, OrderCutoff, Psd, bessel_j,
+    BlurMethod, ClosedForm, GaussHermite, GaussianPsd, Grating, KCorrelation, OrderCutoff, Psd,
+    bessel_j,
 };
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Matrix4, Vector2, Vector3};
@@ -127,13 +134,29 @@ pub fn height_grating(amplitude: f64, period: f64) -> Grating<f64, 2> {
     out
 }
 
-fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P> + Clone + std::fmt::Debug>(
+/// The roughness level of a prediction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Order {
+    /// The first-order kernel (`FirstOrder`): valid while `vσ ≲ 0.3`.
+    First,
+    /// The Kirchhoff series (`KirchhoffSeries`, tolerance 10⁻⁶) where the PSD has its powers
+    /// (the Gaussian), first order otherwise.
+    Series,
+}
+
+fn predict_with<P, B, R>(
     scene: &Scene,
     psd: P,
     blur: B,
+    rough: R,
     exits: &[[f64; 3]],
     min_seconds: f64,
-) -> (Vec<Prediction>, f64) {
+) -> (Vec<Prediction>, f64)
+where
+    P: Psd<f64, 2>,
+    B: BlurMethod<f64, 2, P> + Clone + std::fmt::Debug,
+    R: RoughnessWeights<f64, P, Partial<B>>,
+{
     let packet = packet(scene);
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).expect("surface");
     let material = match scene.eta_t {
@@ -173,7 +196,7 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P> + Clone + std::fmt::Deb
             }
         }
     };
-    let kernel = Kernel::<Intensity, Partial<B>>::new(Partial(blur));
+    let kernel = Kernel::<Intensity, Partial<B>>::new(Partial(blur)).with_roughness(rough);
     let once = || -> Vec<Prediction> {
         // One packet, many exit directions: the per-packet work once.
         let prepared = kernel
@@ -203,7 +226,7 @@ fn predict_with<P: Psd<f64, 2>, B: BlurMethod<f64, 2, P> + Clone + std::fmt::Deb
     (out, per)
 }
 
-/// The kernel's `L` (per unit `S0`) for each exit direction.
+/// The first-order kernel's `L` (per unit `S0`) for each exit direction.
 ///
 /// # Panics
 /// On invalid scene parameters.
@@ -212,8 +235,18 @@ pub fn predict(scene: &Scene, exits: &[[f64; 3]]) -> Vec<Prediction> {
     predict_timed(scene, exits, 0.0).0
 }
 
-/// As [`predict`], and the time per direction of the evaluations, measured by repeating them
-/// for at least `min_seconds` (the material — e.g. a mixture fit — is built once, untimed).
+/// The kernel's `L` (per unit `S0`) for each exit direction at the roughness level `order`.
+///
+/// # Panics
+/// On invalid scene parameters.
+#[must_use]
+pub fn predict_at(scene: &Scene, exits: &[[f64; 3]], order: Order) -> Vec<Prediction> {
+    predict_timed_at(scene, exits, 0.0, order).0
+}
+
+/// As [`predict`] (first order), and the time per direction of the evaluations, measured by
+/// repeating them for at least `min_seconds` (the material — e.g. a mixture fit — is built
+/// once, untimed).
 ///
 /// # Panics
 /// On invalid scene parameters.
@@ -223,50 +256,100 @@ pub fn predict_timed(
     exits: &[[f64; 3]],
     min_seconds: f64,
 ) -> (Vec<Prediction>, f64) {
+    predict_timed_at(scene, exits, min_seconds, Order::First)
+}
+
+/// As [`predict_at`], timed as [`predict_timed`].
+///
+/// # Panics
+/// On invalid scene parameters.
+#[must_use]
+pub fn predict_timed_at(
+    scene: &Scene,
+    exits: &[[f64; 3]],
+    min_seconds: f64,
+    order: Order,
+) -> (Vec<Prediction>, f64) {
     match scene.matter {
-        Matter::Gaussian { sigma, ell } => predict_with(
-            scene,
-            GaussianPsd::<f64, 2>::isotropic(sigma, ell).expect("psd"),
-            ClosedForm,
-            exits,
-            min_seconds,
-        ),
+        Matter::Gaussian { sigma, ell } => {
+            let psd = GaussianPsd::<f64, 2>::isotropic(sigma, ell).expect("psd");
+            match order {
+                Order::First => {
+                    predict_with(scene, psd, ClosedForm, FirstOrder, exits, min_seconds)
+                }
+                Order::Series => predict_with(
+                    scene,
+                    psd,
+                    ClosedForm,
+                    KirchhoffSeries::new(1e-6).expect("tolerance"),
+                    exits,
+                    min_seconds,
+                ),
+            }
+        }
         Matter::Exponential { sigma, ell } => {
             let k = KCorrelation::<f64, 2>::new(sigma * sigma, ell * ell, 2.0).expect("psd");
-            let (fit, _, _) = k.mixture_fit_to(1e-6).expect("mixture fit");
-            predict_with(scene, fit, ClosedForm, exits, min_seconds)
+            match order {
+                Order::First => {
+                    let (fit, _, _) = k.mixture_fit_to(1e-6).expect("mixture fit");
+                    predict_with(scene, fit, ClosedForm, FirstOrder, exits, min_seconds)
+                }
+                // The quadrature blurs by itself; the Partial level's method is not used.
+                Order::Series => predict_with(
+                    scene,
+                    k,
+                    GaussHermite::new(1).expect("order"),
+                    KirchhoffQuadrature::new(1e-6).expect("tolerance"),
+                    exits,
+                    min_seconds,
+                ),
+            }
         }
         Matter::Sinusoid { amplitude, period } => predict_with(
             scene,
             height_grating(amplitude, period),
             ClosedForm,
+            FirstOrder,
             exits,
             min_seconds,
         ),
     }
 }
 
-/// A short name of the kernel level used for `scene`.
+/// Whether `order` sums every order of the phase screen for `scene` (the Gaussian and the
+/// exponential PSDs), not first order.
 #[must_use]
-pub fn method_name(scene: &Scene) -> &'static str {
-    if scene.eta_t.is_some() {
-        return match scene.matter {
-            Matter::Gaussian { .. } => {
-                "Intensity/Partial/ClosedForm, GaussianPsd, at_interface, PhaseScreen::interface(1, η)"
-            }
-            Matter::Exponential { .. } => {
-                "Intensity/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6, at_interface"
-            }
-            Matter::Sinusoid { .. } => {
-                "Intensity/Partial/ClosedForm, Grating ±1 orders, at_interface"
-            }
-        };
-    }
-    match scene.matter {
-        Matter::Gaussian { .. } => "Intensity/Partial/ClosedForm, GaussianPsd",
-        Matter::Exponential { .. } => {
+pub fn uses_series(scene: &Scene, order: Order) -> bool {
+    order == Order::Series && !matches!(scene.matter, Matter::Sinusoid { .. })
+}
+
+/// A short name of the kernel level used for `scene` at the roughness level `order`.
+#[must_use]
+pub fn method_name(scene: &Scene, order: Order) -> String {
+    let base = match (scene.eta_t.is_some(), scene.matter) {
+        (true, Matter::Gaussian { .. }) => {
+            "Intensity/Partial/ClosedForm, GaussianPsd, at_interface, PhaseScreen::interface(1, η)"
+        }
+        (true, Matter::Exponential { .. }) => {
+            "Intensity/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6, at_interface"
+        }
+        (true, Matter::Sinusoid { .. }) => {
+            "Intensity/Partial/ClosedForm, Grating ±1 orders, at_interface"
+        }
+        (false, Matter::Gaussian { .. }) => "Intensity/Partial/ClosedForm, GaussianPsd",
+        (false, Matter::Exponential { .. }) => {
             "Intensity/Partial/ClosedForm, KCorrelation γ=2 mixture fit 1e-6"
         }
-        Matter::Sinusoid { .. } => "Intensity/Partial/ClosedForm, Grating ±1 orders",
+        (false, Matter::Sinusoid { .. }) => "Intensity/Partial/ClosedForm, Grating ±1 orders",
+    };
+    if uses_series(scene, order) {
+        match scene.matter {
+            Matter::Exponential { .. } => {
+                "Intensity/Partial, KCorrelation γ=2, KirchhoffQuadrature 1e-6".to_string()
+            }
+            _ => format!("{base}, KirchhoffSeries 1e-6"),
+        }
+    } else {
+        format!("{base}, first order")
     }
 }

@@ -15,6 +15,7 @@ mod fresnel_reflection;
 mod ideal_diffuse;
 mod phase_screen;
 mod rayleigh_rice;
+mod tangent_plane;
 
 pub use constant::ConstantMueller;
 pub use fresnel_interface::FresnelInterface;
@@ -22,6 +23,7 @@ pub use fresnel_reflection::FresnelReflection;
 pub use ideal_diffuse::IdealDiffuse;
 pub use phase_screen::PhaseScreen;
 pub use rayleigh_rice::RayleighRice;
+pub use tangent_plane::TangentPlane;
 
 use num_complex::Complex;
 

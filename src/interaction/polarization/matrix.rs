@@ -18,8 +18,9 @@ use super::super::geometry::Geometry;
 use super::super::material::RoughSurface;
 use super::super::pbsdf::Pbsdf;
 use super::super::prepared::{PreparedPacket, flush_subnormal, unit_scaled};
-use super::front;
+use super::super::roughness::RoughnessWeights;
 use super::response::MuellerResponse;
+use super::{Front, front};
 use crate::mueller::Mueller;
 use crate::psd::Psd;
 use crate::real::Real;
@@ -43,26 +44,29 @@ fn is_dark<T: Real>(ln_e: T) -> bool {
 /// The scattered part at the one-weight levels per unit `S0`, `u α K η²/λ²`: the linear weight
 /// where it and the scale are normal numbers, the log form otherwise (as the Stokes form).
 #[inline]
-fn one_weight_scatter<T, P, Pol, Coh, const R: usize, const C: usize>(
+fn one_weight_scatter<T, P, Pol, Coh, Rough, const R: usize, const C: usize>(
     coherence: &Coh,
+    roughness: &Rough,
     psd: &P,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
-    (attenuation, ln_front): (T, T),
+    front: &Front<T>,
     u: impl FnOnce() -> nalgebra::SMatrix<T, R, C>,
 ) -> nalgebra::SMatrix<T, R, C>
 where
     T: Real,
     P: Psd<T, 2>,
     Coh: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
 {
     let xi = prepared.sections[2].as_ref();
-    let kd = coherence.scatter_weight(psd, super::psd_xi(g, xi).as_ref(), &g.psd_h());
+    let (attenuation, ln_front) = front.scatter::<Rough>();
+    let kd = roughness.scatter_weight(coherence, psd, super::psd_xi(g, xi).as_ref(), g);
     match prepared.unit_linear_scale(kd, attenuation, g.eta) {
         Some(e) => flush_subnormal(u() * e),
         None => {
             let ld = ln_front
-                + coherence.log_scatter_weight(psd, super::psd_xi(g, xi).as_ref(), &g.psd_h());
+                + roughness.log_scatter_weight(coherence, psd, super::psd_xi(g, xi).as_ref(), g);
             if is_dark(ld) {
                 nalgebra::SMatrix::zeros()
             } else {
@@ -74,8 +78,9 @@ where
 
 /// The [`super::Intensity`] level's BSDF form: scalars `(cos θ_o/λ_t²) α M₀₀ K`.
 #[inline]
-pub(super) fn intensity<T, P, Sp, Sc, Pol, Coh>(
+pub(super) fn intensity<T, P, Sp, Sc, Pol, Coh, Rough>(
     coherence: &Coh,
+    roughness: &Rough,
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
@@ -86,19 +91,20 @@ where
     Sp: Pbsdf<T>,
     Sc: Pbsdf<T>,
     Coh: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
 {
     let psd = &material.psd;
-    let (attenuation, ln_front) = front(psd, prepared, g);
+    let f = front(psd, prepared, g);
+    let (attenuation, ln_front) = (f.attenuation, f.ln_front);
     let ls = ln_front + coherence.log_specular_weight(prepared.sections[2].as_ref(), &g.h_t);
     let specular = if is_dark(ls) {
         T::zero()
     } else {
         unit_scaled(Matrix1::new(material.specular.m00(g) * g.cos_o), ls)[0]
     };
-    let scattered =
-        one_weight_scatter(coherence, psd, prepared, g, (attenuation, ln_front), || {
-            Matrix1::new(material.scatter.m00(g) * g.cos_o)
-        })[0];
+    let scattered = one_weight_scatter(coherence, roughness, psd, prepared, g, &f, || {
+        Matrix1::new(material.scatter.m00(g) * g.cos_o)
+    })[0];
     MuellerResponse {
         specular,
         scattered,
@@ -110,8 +116,9 @@ where
 /// The [`super::OneShape`] level's BSDF form (also [`super::Full`] on single-shape packets):
 /// `(cos θ_o/λ_t²) α M_pbsdf T K`.
 #[inline]
-pub(super) fn one_shape<T, P, Sp, Sc, Pol, Coh>(
+pub(super) fn one_shape<T, P, Sp, Sc, Pol, Coh, Rough>(
     coherence: &Coh,
+    roughness: &Rough,
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
@@ -122,9 +129,11 @@ where
     Sp: Pbsdf<T>,
     Sc: Pbsdf<T>,
     Coh: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
 {
     let psd = &material.psd;
-    let (attenuation, ln_front) = front(psd, prepared, g);
+    let f = front(psd, prepared, g);
+    let (attenuation, ln_front) = (f.attenuation, f.ln_front);
     let ls = ln_front + coherence.log_specular_weight(prepared.sections[2].as_ref(), &g.h_t);
     let t = prepared.t * g.cos_o;
     let specular = if Coh::USES_SHAPE && !is_dark(ls) {
@@ -132,10 +141,9 @@ where
     } else {
         Matrix4::zeros()
     };
-    let scattered =
-        one_weight_scatter(coherence, psd, prepared, g, (attenuation, ln_front), || {
-            material.scatter.mueller(g).0 * t
-        });
+    let scattered = one_weight_scatter(coherence, roughness, psd, prepared, g, &f, || {
+        material.scatter.mueller(g).0 * t
+    });
     MuellerResponse {
         specular: Mueller(specular),
         scattered: Mueller(scattered),
@@ -147,8 +155,9 @@ where
 /// The [`super::Full`] level's BSDF form on a packet with two shapes:
 /// `(cos θ_o/λ_t²) α M_pbsdf T Σ_α K_α P_α` ([`PreparedPacket::channel_matrix`]).
 #[inline]
-pub(super) fn full<T, P, Sp, Sc, Pol, Coh>(
+pub(super) fn full<T, P, Sp, Sc, Pol, Coh, Rough>(
     coherence: &Coh,
+    roughness: &Rough,
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
@@ -159,20 +168,22 @@ where
     Sp: Pbsdf<T>,
     Sc: Pbsdf<T>,
     Coh: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
 {
     let psd = &material.psd;
-    let (attenuation, ln_front) = front(psd, prepared, g);
+    let f = front(psd, prepared, g);
+    let (attenuation, ln_front) = (f.attenuation, f.ln_front);
     let log_weights = |i: usize| {
         let xi = prepared.sections[i].as_ref();
         (
             coherence.log_specular_weight(xi, &g.h_t),
-            coherence.log_scatter_weight(psd, super::psd_xi(g, xi).as_ref(), &g.psd_h()),
+            roughness.log_scatter_weight(coherence, psd, super::psd_xi(g, xi).as_ref(), g),
         )
     };
     let ((xs, xd), (ys, yd), (hs, hd)) = (log_weights(0), log_weights(1), log_weights(2));
     let (spec_d, spec_m) = prepared.channel_matrix(xs, ys, hs);
     let (scat_d, scat_m) = prepared.channel_matrix(xd, yd, hd);
-    let (spec_ln, scat_ln) = (ln_front + spec_m, ln_front + scat_m);
+    let (spec_ln, scat_ln) = (ln_front + spec_m, f.scatter::<Rough>().1 + scat_m);
     let specular = part(spec_ln, || material.specular.mueller(g).0, &spec_d, g.cos_o);
     let scattered = part(scat_ln, || material.scatter.mueller(g).0, &scat_d, g.cos_o);
     MuellerResponse {

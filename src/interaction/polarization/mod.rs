@@ -27,6 +27,7 @@ use super::geometry::Geometry;
 use super::material::RoughSurface;
 use super::pbsdf::Pbsdf;
 use super::prepared::{Plan, PreparedPacket};
+use super::roughness::{RoughnessModel, RoughnessWeights};
 use crate::gaussian::Gaussian;
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -65,10 +66,12 @@ pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
     #[must_use]
     fn plan<T: Real>(packet: &WavePacket<T>, uses_shape: bool) -> PreparationPlan;
 
-    /// The level's S2.20 for one exit direction `g` (see the module formula).
+    /// The level's S2.20 for one exit direction `g` (see the module formula), with the
+    /// scattered weights of the roughness level `roughness`.
     #[must_use]
-    fn evaluate<T, P, Sp, Sc, Coh>(
+    fn evaluate<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -78,7 +81,8 @@ pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
         P: Psd<T, 2>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>;
+        Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>;
 
     /// What the level's BSDF form holds per lobe: a Mueller matrix at the Stokes levels, a
     /// scalar at the intensity level.
@@ -87,8 +91,9 @@ pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
     /// The level's S2.20 for one exit direction `g` in BSDF form: per unit incident
     /// irradiance, acting on Stokes vectors in the packet's frame ([`MuellerResponse`]).
     #[must_use]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -98,7 +103,8 @@ pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
         P: Psd<T, 2>,
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>;
+        Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>;
 }
 
 /// The per-packet work a polarization level asks for ([`PolarizationModel::plan`]); opaque.
@@ -121,22 +127,49 @@ impl sealed::Sealed for Intensity {}
 impl sealed::Sealed for OneShape {}
 impl sealed::Sealed for Full {}
 
-/// `α` and `ln(α/λ_t²)` for one exit: the Debye–Waller factor from the geometry's phase
-/// factor, `λ_t = λ/η` the wavelength in the exit medium (`λ = 2π/k` from the packet, `η` the
-/// geometry's relative index, 1 in reflection). The factor `cos θ_o ∈ (0, 1]` multiplies the
-/// Stokes vector instead (one logarithm less per exit; it cannot underflow it).
+/// The factors in front of the parts for one exit: `α` (the Debye–Waller factor from the
+/// geometry's phase factor), `ln(α/λ_t²)` and `ln(1/λ_t²)` (`λ_t = λ/η` the wavelength in the
+/// exit medium: `λ = 2π/k` from the packet, `η` the geometry's relative index, 1 in
+/// reflection). The factor `cos θ_o ∈ (0, 1]` multiplies the Stokes vector instead (one
+/// logarithm less per exit; it cannot underflow it).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Front<T> {
+    /// `α`.
+    pub(super) attenuation: T,
+    /// `ln(α/λ_t²)`: the specular part's, and the first-order scattered part's.
+    pub(super) ln_front: T,
+    /// `ln(1/λ_t²)`: the scattered part's at the roughness levels whose weights carry `α`.
+    pub(super) ln_base: T,
+}
+
+impl<T: Real> Front<T> {
+    /// The scattered part's attenuation and log front for the roughness level `R`: `(α,
+    /// ln(α/λ_t²))`, or `(1, ln(1/λ_t²))` where its weights carry `α`
+    /// ([`RoughnessModel::CARRIES_ATTENUATION`]).
+    #[inline]
+    pub(super) fn scatter<R: RoughnessModel>(&self) -> (T, T) {
+        if R::CARRIES_ATTENUATION {
+            (T::one(), self.ln_base)
+        } else {
+            (self.attenuation, self.ln_front)
+        }
+    }
+}
+
 #[inline]
 fn front<T: Real, P: Psd<T, 2>, Pol, Coh>(
     psd: &P,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
-) -> (T, T) {
+) -> Front<T> {
     let v = g.phase_factor();
     let ln_alpha = -(v * v) * psd.variance();
-    (
-        ln_alpha.exp(),
-        (prepared.two_ln_k_over_2pi + g.ln_eta_sq) + ln_alpha,
-    )
+    let ln_base = prepared.two_ln_k_over_2pi + g.ln_eta_sq;
+    Front {
+        attenuation: ln_alpha.exp(),
+        ln_front: ln_base + ln_alpha,
+        ln_base,
+    }
 }
 
 /// `u` onto the cone of valid Stokes vectors: its polarized part scaled down to `u₀` where
@@ -182,29 +215,33 @@ pub(crate) fn psd_xi<T: Real>(
     xi.map(|x| if g.from_below { x.mirrored_y() } else { *x })
 }
 
-/// The scattered part at the one-weight levels, `u · S0 α K/λ²`: the linear weight (one
-/// exponential) where it and the whole scale are safely normal, the log form otherwise.
+/// The scattered part at the one-weight levels, `u · S0 α K/λ²` (`u · S0 K̃/λ²` at the
+/// roughness levels whose weight `K̃` carries `α`): the linear weight (one exponential) where it
+/// and the whole scale are safely normal, the log form otherwise.
 #[inline]
-fn one_weight_scatter<T, P, Pol, Coh>(
+fn one_weight_scatter<T, P, Pol, Coh, R>(
     coherence: &Coh,
+    roughness: &R,
     psd: &P,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
-    (attenuation, ln_front): (T, T),
+    front: &Front<T>,
     u: Vector4<T>,
 ) -> Vector4<T>
 where
     T: Real,
     P: Psd<T, 2>,
     Coh: CoherenceWeights<T, P>,
+    R: RoughnessWeights<T, P, Coh>,
 {
     let xi = prepared.sections[2].as_ref();
-    let kd = coherence.scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h());
+    let (attenuation, ln_front) = front.scatter::<R>();
+    let kd = roughness.scatter_weight(coherence, psd, psd_xi(g, xi).as_ref(), g);
     match prepared.linear_scale(kd, attenuation, g.eta) {
         Some(e) => crate::interaction::prepared::subnormal_onto_cone(u * e),
         None => {
             let ld =
-                ln_front + coherence.log_scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h());
+                ln_front + roughness.log_scatter_weight(coherence, psd, psd_xi(g, xi).as_ref(), g);
             if prepared.is_dark(ld) {
                 Vector4::zeros()
             } else {
@@ -216,8 +253,9 @@ where
 
 /// The [`OneShape`] path (also [`Full`] on single-shape packets and without shapes): `M T S K`.
 #[inline]
-fn one_shape<T, P, Sp, Sc, Pol, Coh>(
+fn one_shape<T, P, Sp, Sc, Pol, Coh, R>(
     coherence: &Coh,
+    roughness: &R,
     material: &RoughSurface<P, Sp, Sc>,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
@@ -228,9 +266,11 @@ where
     Sp: Pbsdf<T>,
     Sc: Pbsdf<T>,
     Coh: CoherenceWeights<T, P>,
+    R: RoughnessWeights<T, P, Coh>,
 {
     let psd = &material.psd;
-    let (attenuation, ln_front) = front(psd, prepared, g);
+    let f = front(psd, prepared, g);
+    let (attenuation, ln_front) = (f.attenuation, f.ln_front);
     let ls = ln_front + coherence.log_specular_weight(prepared.sections[2].as_ref(), &g.h_t);
     let t = prepared.t_stokes * g.cos_o;
     // Off the specular lobe (and always for a plane wave) its weight underflows: skip the
@@ -242,10 +282,11 @@ where
     };
     let scattered = one_weight_scatter(
         coherence,
+        roughness,
         psd,
         prepared,
         g,
-        (attenuation, ln_front),
+        &f,
         onto_cone(material.scatter.mueller(g).0 * t),
     );
     Response {
@@ -260,8 +301,9 @@ impl PolarizationModel for Intensity {
     type Throughput<T: Real> = T;
 
     #[inline]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -272,8 +314,9 @@ impl PolarizationModel for Intensity {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
         Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>,
     {
-        matrix::intensity(coherence, material, prepared, g)
+        matrix::intensity(coherence, roughness, material, prepared, g)
     }
     const LEVEL: PolarizationLevel = PolarizationLevel::Intensity;
     type Output<T: Real> = IntensityResponse<T>;
@@ -284,8 +327,9 @@ impl PolarizationModel for Intensity {
     }
 
     #[inline]
-    fn evaluate<T, P, Sp, Sc, Coh>(
+    fn evaluate<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -296,9 +340,11 @@ impl PolarizationModel for Intensity {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
         Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>,
     {
         let psd = &material.psd;
-        let (attenuation, ln_front) = front(psd, prepared, g);
+        let f = front(psd, prepared, g);
+        let (attenuation, ln_front) = (f.attenuation, f.ln_front);
         let xi = prepared.sections[2].as_ref();
         // Off the specular lobe (and always for a plane wave) its weight is 0.
         let ls = ln_front + coherence.log_specular_weight(xi, &g.h_t);
@@ -310,10 +356,11 @@ impl PolarizationModel for Intensity {
         };
         let scattered = one_weight_scatter(
             coherence,
+            roughness,
             psd,
             prepared,
             g,
-            (attenuation, ln_front),
+            &f,
             u(material.scatter.m00(g)),
         )[0];
         IntensityResponse {
@@ -329,8 +376,9 @@ impl PolarizationModel for OneShape {
     type Throughput<T: Real> = Mueller<T>;
 
     #[inline]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -341,8 +389,9 @@ impl PolarizationModel for OneShape {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
         Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>,
     {
-        matrix::one_shape(coherence, material, prepared, g)
+        matrix::one_shape(coherence, roughness, material, prepared, g)
     }
     const LEVEL: PolarizationLevel = PolarizationLevel::OneShape;
     type Output<T: Real> = Response<T>;
@@ -353,8 +402,9 @@ impl PolarizationModel for OneShape {
     }
 
     #[inline]
-    fn evaluate<T, P, Sp, Sc, Coh>(
+    fn evaluate<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -365,8 +415,9 @@ impl PolarizationModel for OneShape {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
         Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>,
     {
-        one_shape(coherence, material, prepared, g)
+        one_shape(coherence, roughness, material, prepared, g)
     }
 }
 
@@ -374,8 +425,9 @@ impl PolarizationModel for Full {
     type Throughput<T: Real> = Mueller<T>;
 
     #[inline]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh>(
+    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -386,11 +438,12 @@ impl PolarizationModel for Full {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
         Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>,
     {
         if !Coh::USES_SHAPE || prepared.single_shape {
-            matrix::one_shape(coherence, material, prepared, g)
+            matrix::one_shape(coherence, roughness, material, prepared, g)
         } else {
-            matrix::full(coherence, material, prepared, g)
+            matrix::full(coherence, roughness, material, prepared, g)
         }
     }
     const LEVEL: PolarizationLevel = PolarizationLevel::Full;
@@ -411,8 +464,9 @@ impl PolarizationModel for Full {
     }
 
     #[inline]
-    fn evaluate<T, P, Sp, Sc, Coh>(
+    fn evaluate<T, P, Sp, Sc, Coh, R>(
         coherence: &Coh,
+        roughness: &R,
         material: &RoughSurface<P, Sp, Sc>,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
@@ -423,23 +477,25 @@ impl PolarizationModel for Full {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
         Coh: CoherenceWeights<T, P>,
+        R: RoughnessWeights<T, P, Coh>,
     {
         if !Coh::USES_SHAPE || prepared.single_shape {
-            return one_shape(coherence, material, prepared, g);
+            return one_shape(coherence, roughness, material, prepared, g);
         }
         let psd = &material.psd;
-        let (attenuation, ln_front) = front(psd, prepared, g);
+        let f = front(psd, prepared, g);
+        let (attenuation, ln_front) = (f.attenuation, f.ln_front);
         let log_weights = |i: usize| {
             let xi = prepared.sections[i].as_ref();
             (
                 coherence.log_specular_weight(xi, &g.h_t),
-                coherence.log_scatter_weight(psd, psd_xi(g, xi).as_ref(), &g.psd_h()),
+                roughness.log_scatter_weight(coherence, psd, psd_xi(g, xi).as_ref(), g),
             )
         };
         let ((xs, xd), (ys, yd), (hs, hd)) = (log_weights(0), log_weights(1), log_weights(2));
         let (spec_in, spec_m) = prepared.channel_mix(xs, ys, hs);
         let (scat_in, scat_m) = prepared.channel_mix(xd, yd, hd);
-        let (spec_ln, scat_ln) = (ln_front + spec_m, ln_front + scat_m);
+        let (spec_ln, scat_ln) = (ln_front + spec_m, f.scatter::<R>().1 + scat_m);
         // Off the specular lobe its weight underflows: skip the specular pBSDF there.
         let specular = if prepared.is_dark(spec_ln) {
             Vector4::zeros()

@@ -2,8 +2,10 @@
 //!
 //! Run with `cargo run --release -p gmueller-validation --bin accuracy` (about 2–3 minutes on
 //! 2 cores), or with `-- --quick` for a tiny suite (seconds); `-- --medium` runs the random
-//! medium's suite instead (`medium.rs`, writing `medium.md` and `medium.csv`); `-- --material K` restricts the
-//! suite to materials whose name contains the given text. Output: a markdown table on stdout and
+//! medium's suite instead (`medium.rs`, writing `medium.md` and `medium.csv`); `-- --material K`
+//! restricts the suite to materials whose name contains the given text; `-- --rough` runs only
+//! the rough suite (roughness levels beyond first order, `rough.rs`, also run at the end of the
+//! full one; its table goes to `target/accuracy/rough.md`). Output: a markdown table on stdout and
 //! in the workspace's
 //! `target/accuracy/accuracy.md`, CSVs (`accuracy.csv` per variant, `scenes.csv` per variant and
 //! scene) and a Pareto plot `target/accuracy/pareto.png` (median time vs max S0 error, log–log).
@@ -66,6 +68,7 @@
 mod measure;
 mod medium;
 mod plot;
+mod rough;
 mod scenes;
 
 use std::fmt::Write as _;
@@ -188,6 +191,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // `--medium`: the random medium's suite instead (medium.rs).
     if std::env::args().any(|a| a == "--medium") {
         return medium::run_suite(quick, &out_dir);
+    }
+    // `--rough`: only the rough suite (roughness levels beyond first order, `rough.rs`).
+    if std::env::args().any(|a| a == "--rough") {
+        let md = rough::run_suite(quick)?;
+        std::fs::write(out_dir.join("rough.md"), &md)?;
+        println!("{md}\nWrote {}", out_dir.join("rough.md").display());
+        return Ok(());
     }
 
     let materials: Vec<MaterialSpec> = if quick {
@@ -876,6 +886,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         out_dir.join("scenes.csv").display(),
         png.display()
     );
+    let rough_md = rough::run_suite(quick)?;
+    std::fs::write(out_dir.join("rough.md"), &rough_md)?;
+    println!("{rough_md}\nWrote {}", out_dir.join("rough.md").display());
     Ok(())
 }
 

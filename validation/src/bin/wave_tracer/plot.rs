@@ -35,7 +35,7 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
         format!(
             "brute force ({} realizations, ±1 s.e.) vs gmueller kernel [{}] — {}",
             c.realizations,
-            kernel_side::method_name(&c.scene),
+            kernel_side::method_name(&c.scene, c.order),
             verdict(s)
         ),
         (12, 38),
@@ -64,7 +64,7 @@ pub fn lobe(path: &Path, c: &Config, rows: &[Row], s: &Summary) -> Res {
             })
             .collect();
         let exits: Vec<[f64; 3]> = hs.iter().filter_map(|h| c.scene.exit_for(*h)).collect();
-        let pred = kernel_side::predict(&c.scene, &exits);
+        let pred = kernel_side::predict_at(&c.scene, &exits, c.order);
         hs.iter()
             .zip(exits)
             .zip(pred)
