@@ -57,6 +57,7 @@
 mod flags;
 mod interface;
 mod lobes;
+mod orders;
 mod sampler;
 pub mod sources;
 
@@ -71,8 +72,8 @@ use nalgebra::{Matrix2, Vector3};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, Geometry, Kernel, MuellerResponse, Pbsdf, PolarizationModel,
-    PreparedPacket, RoughSurface, Throughput,
+    CoherenceLevel, CoherenceWeights, FirstOrder, Geometry, Kernel, MuellerResponse, Pbsdf,
+    PolarizationModel, PreparedPacket, RoughSurface, RoughnessLevel, RoughnessWeights, Throughput,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -116,9 +117,9 @@ use sampler::Setup;
 /// # Ok::<(), gmueller::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy)]
-pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh> {
+pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh, Rough = FirstOrder> {
     material: &'m RoughSurface<P, Sp, Sc>,
-    kernel: Kernel<Pol, Coh>,
+    kernel: Kernel<Pol, Coh, Rough>,
     surface: Frame<T>,
     k_above: T,
     eta: Option<T>,
@@ -191,7 +192,7 @@ fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error>
     })
 }
 
-impl<'m, T, P, Sp, Sc, Pol, Coh> Bsdf<'m, T, P, Sp, Sc, Pol, Coh>
+impl<'m, T, P, Sp, Sc, Pol, Coh, Rough> Bsdf<'m, T, P, Sp, Sc, Pol, Coh, Rough>
 where
     T: Real,
     P: SamplingPsd<T>,
@@ -199,6 +200,7 @@ where
     Sc: Pbsdf<T>,
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
 {
     /// The material `material` at the shading frame `surface`, at `wavelength` (in the medium
     /// above; see the type docs), evaluated by `kernel`.
@@ -208,7 +210,7 @@ where
     /// of both media normal numbers.
     pub fn new(
         material: &'m RoughSurface<P, Sp, Sc>,
-        kernel: Kernel<Pol, Coh>,
+        kernel: Kernel<Pol, Coh, Rough>,
         surface: Frame<T>,
         wavelength: T,
     ) -> Result<Self, Error> {
@@ -459,6 +461,7 @@ where
                 })
             },
             mirror: [incident.from_below; 2],
+            rough: Rough::LEVEL != RoughnessLevel::FirstOrder,
         })
     }
 
@@ -503,6 +506,7 @@ where
             blur: (!plane).then_some(xi),
             // Reflection uses the frame facing r̂ (reversed below), transmission its reverse.
             mirror: [below, !below],
+            rough: Rough::LEVEL != RoughnessLevel::FirstOrder,
         })
     }
 

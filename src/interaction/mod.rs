@@ -129,7 +129,8 @@ pub use geometry::{Geometry, Side};
 pub use kernel::Kernel;
 pub use level::{Level, LevelVisitor};
 pub use material::{
-    RoughConductor, RoughDielectric, RoughSurface, SmoothConductor, SmoothDielectric,
+    KirchhoffConductor, KirchhoffDielectric, RoughConductor, RoughDielectric, RoughSurface,
+    SmoothConductor, SmoothDielectric,
 };
 pub use pbsdf::{
     ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen,
