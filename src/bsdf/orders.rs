@@ -26,14 +26,16 @@
 //! `𝒩(0, g₀ C_p + Ξ)`. Any such mixture is exact to draw from and has the density above: it
 //! needs only to resemble the kernel, not equal it.
 //!
-//! # The disk lobe
-//! Beyond first order the scattered part of each side also draws, with probability
-//! [`DISK_SHARE`], uniformly from the side's projected disk (`p_ω = cos θ/π`), so that every
-//! propagating direction has a density of at least `DISK_SHARE · P_part cos θ/π` whatever the
-//! PSD and however `g` varies over the lobe: the Monte Carlo weight `M cos θ_o/(cos θ_i p)` then
-//! stays below `π M/(DISK_SHARE P_part cos θ_i)`. For the PSDs without a series lobe here
-//! (mixtures, K-correlation: the quadrature level) it is the only widening of the first-order
-//! lobes.
+//! # The disk lobe (PSDs without a series lobe)
+//! For the PSDs whose orders have no lobe here (Gaussian mixtures, the K-correlation: the
+//! quadrature level), the scattered part draws the first-order lobes (too narrow once
+//! `vσ ≳ 1`) and, with probability [`DISK_SHARE`], a uniform point of the side's projected disk
+//! (`p_ω = cos θ/π`), so that every propagating direction keeps a density of at least
+//! `DISK_SHARE · P_part cos θ/π` however wide the kernel's lobe grows. The Gaussian series'
+//! lobes have no disk lobe: they cover ℝ², and a disk share only adds a variance floor (the
+//! furnace of `tests/bsdf_rough.rs` measured the relative standard error at `vσ = 1`, normal
+//! incidence: 5.5·10⁻⁶ without it, 2.0·10⁻⁴ with a share of 1 %, 4.5·10⁻⁴ with 5 %; no case
+//! improved with it).
 
 use nalgebra::{Matrix2, Vector2};
 
@@ -43,8 +45,9 @@ use crate::real::Real;
 /// The most lobes the orders are grouped into.
 pub(crate) const ORDER_LOBES: usize = 6;
 
-/// The share of the projected-disk lobe in the scattered part beyond first order.
-pub(crate) const DISK_SHARE: f64 = 0.05;
+/// The share of the projected-disk lobe in the scattered part beyond first order, for PSDs
+/// without a series lobe (module docs).
+pub(crate) const DISK_SHARE: f64 = 0.25;
 
 /// From this `g₀` on, the orders are grouped as the normal `𝒩(g₀, g₀)`.
 const NORMAL_FROM: f64 = 40.0;

@@ -333,8 +333,8 @@ pub struct LobeSampler<'a, T: Real> {
     backward: bool,
     scatter: Scatter<'a, T>,
     transmits: bool,
-    /// The share of the projected-disk lobe in the scattered parts (`orders.rs`; 0 at first
-    /// order).
+    /// The share of the projected-disk lobe in the scattered parts (`orders.rs`: beyond first
+    /// order for PSDs without a series lobe; 0 otherwise).
     disk: T,
 }
 
@@ -556,7 +556,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             backward: !setup.forward,
             scatter,
             transmits,
-            disk: if setup.rough && has_scatter {
+            disk: if setup.rough && has_scatter && !matches!(scatter, Scatter::Series(_)) {
                 T::lit(DISK_SHARE)
             } else {
                 T::zero()
