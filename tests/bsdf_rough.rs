@@ -551,7 +551,7 @@ fn rough_furnace_and_variance_gain() {
             );
             let what = format!("σ {sigma}, {deg}° side {side}");
             assert!(series.z(quad) <= 4.0, "{what}: {series:?} vs {quad}");
-            assert!(quad <= 1.02 && quad >= 0.9, "{what}: albedo {quad}");
+            assert!((0.9..=1.02).contains(&quad), "{what}: albedo {quad}");
             if sigma >= 0.1 {
                 assert!(
                     rs < rf,
