@@ -127,7 +127,7 @@ pub use coherence::{
 pub use exitant::{exitant_packet, exitant_shape};
 pub use geometry::{Geometry, Side};
 pub use kernel::Kernel;
-pub use level::{Level, LevelVisitor};
+pub use level::{Level, LevelVisitor, RoughLevelVisitor, Roughness};
 pub use material::{
     KirchhoffConductor, KirchhoffDielectric, RoughConductor, RoughDielectric, RoughSurface,
     SmoothConductor, SmoothDielectric,
