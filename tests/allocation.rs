@@ -5,7 +5,8 @@
 //! interface in reflection and transmission, plus `Mueller::from_jones`, frame changes and
 //! `Geometry::for_packet`; and the renderer layer (`gmueller::bsdf`: light helpers, `prepare`,
 //! `eval` in both forms, both samplers with their draws, densities and weights) at every level
-//! on rough glass and a grating; and `Kernel::evaluate_batch` at every level (lanes and one
+//! on rough glass and a grating, and beyond first order (`Level::dispatch_rough`: every level ×
+//! first order, the Kirchhoff series, the geometric limit) on tangent-plane glass; and `Kernel::evaluate_batch` at every level (lanes and one
 //! exit at a time) and `plane_wave_rayleigh_rice`; the count must be zero.
 //!
 //! The counting allocator needs `unsafe impl GlobalAlloc`: the crate's `[lints]` deny
@@ -26,7 +27,7 @@ use gmueller::frame::{Frame, frame_change_mueller, stokes_to_frame};
 use gmueller::fresnel;
 use gmueller::interaction::{
     CoherenceWeights, FresnelReflection, Geometry, Kernel, KernelOutput, Level, LevelVisitor,
-    PolarizationModel, RayleighRice, RoughDielectric, RoughSurface,
+    PolarizationModel, RayleighRice, RoughDielectric, RoughSurface, RoughnessWeights,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
@@ -272,11 +273,75 @@ fn kernel_evaluation_allocates_nothing() {
     all_levels::<f32>();
 }
 
-/// The renderer layer at every level on rough glass (both sides) and a grating: `Bsdf::new`,
-/// the light helpers, `prepare`, `eval`, both samplers with `sample`, `pdf` and their weights.
-fn renderer_layer<T: Real>() {
-    use gmueller::bsdf::{Bsdf, SamplingPsd, SurfaceCoherence};
+/// The renderer layer at `kernel` on `material`: `Bsdf::new`, the light helpers, `prepare`,
+/// `eval`, both samplers with `sample`, `pdf` and their weights, counted.
+fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
+    material: &RoughSurface<P, Sp, Sc>,
+    kernel: Kernel<Pol, Coh, Rough>,
+    name: &str,
+) where
+    T: Real,
+    P: gmueller::bsdf::SamplingPsd<T>,
+    Sp: gmueller::bsdf::Interface<T>,
+    Sc: gmueller::interaction::Pbsdf<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
+{
+    use gmueller::bsdf::{Bsdf, SurfaceCoherence};
     use gmueller::interaction::Throughput;
+    let frame = Frame::from_normal(Vector3::new(0.1, 0.2, 1.0).map(T::lit)).unwrap();
+    let coherence = SurfaceCoherence::new(T::lit(8.0)).unwrap();
+    let stokes = Stokes::unpolarized(T::one()).unwrap();
+    let dirs = [
+        Vector3::new(-0.4, 0.1, 0.9),
+        Vector3::new(0.3, -0.2, -0.93),
+        Vector3::new(0.0, 0.0, 1.0),
+        Vector3::new(0.6, 0.5, 0.2),
+    ]
+    .map(|v| v.map(T::lit));
+    let (n, ok) = count(|| {
+        let b = Bsdf::new(material, kernel.clone(), frame, T::lit(0.55)).unwrap();
+        let mut ok = true;
+        for (i, s) in dirs.iter().enumerate() {
+            let exit = dirs[(i + 1) % dirs.len()];
+            let p = if i % 2 == 0 {
+                b.distant_packet(stokes, T::lit(6.8e-5), *s)
+            } else {
+                b.surface_packet(stokes, *s, &coherence)
+            };
+            let inc = b.prepare(&p.unwrap()).unwrap();
+            ok &= b.eval(black_box(&inc), exit).is_ok();
+            ok &= b.eval_stokes(&inc, exit).is_ok();
+            let fwd = b.exit_sampler(&inc).unwrap();
+            let bwd = b.incident_sampler(exit, &coherence).unwrap();
+            for u in [0.1, 0.5, 0.97] {
+                let u = T::lit(u);
+                if let Some(d) = fwd.sample(u, [u, T::lit(0.3)]) {
+                    ok &= fwd.pdf(&d.direction) == d.pdf || d.lobe.delta;
+                    ok &= b.exit_weight(&inc, &d).unwrap().0.m00().is_finite();
+                }
+                if let Some(d) = bwd.sample(u, [T::lit(0.7), u]) {
+                    ok &= bwd.pdf(&d.direction) == d.pdf || d.lobe.delta;
+                    let w = b.incident_weight(exit, &coherence, &d).unwrap().0;
+                    ok &= w.m00().is_finite();
+                }
+            }
+        }
+        ok
+    });
+    assert!(ok, "{name}");
+    assert_eq!(n, 0, "{n} allocations in the renderer layer at {name}");
+}
+
+/// The renderer layer at every level on rough glass (both sides) and a grating (first order),
+/// and on tangent-plane glass at `vσ ≈ 3` at every level × every run-time roughness level
+/// (`Level::dispatch_rough`).
+fn renderer_layer<T: Real>() {
+    use gmueller::bsdf::SamplingPsd;
+    use gmueller::interaction::{
+        KirchhoffDielectric, KirchhoffSeries, RoughLevelVisitor, Roughness, RoughnessLevel,
+    };
     use gmueller::psd::Grating;
 
     struct RunBsdf<'a, T: Real, P> {
@@ -289,53 +354,30 @@ fn renderer_layer<T: Real>() {
             Pol: PolarizationModel,
             Coh: CoherenceWeights<T, P>,
         {
-            let frame = Frame::from_normal(Vector3::new(0.1, 0.2, 1.0).map(T::lit)).unwrap();
-            let coherence = SurfaceCoherence::new(T::lit(8.0)).unwrap();
-            let stokes = Stokes::unpolarized(T::one()).unwrap();
-            let dirs = [
-                Vector3::new(-0.4, 0.1, 0.9),
-                Vector3::new(0.3, -0.2, -0.93),
-                Vector3::new(0.0, 0.0, 1.0),
-                Vector3::new(0.6, 0.5, 0.2),
-            ]
-            .map(|v| v.map(T::lit));
-            let (n, ok) = count(|| {
-                let b = Bsdf::new(self.material, kernel, frame, T::lit(0.55)).unwrap();
-                let mut ok = true;
-                for (i, s) in dirs.iter().enumerate() {
-                    let exit = dirs[(i + 1) % dirs.len()];
-                    let p = if i % 2 == 0 {
-                        b.distant_packet(stokes, T::lit(6.8e-5), *s)
-                    } else {
-                        b.surface_packet(stokes, *s, &coherence)
-                    };
-                    let inc = b.prepare(&p.unwrap()).unwrap();
-                    ok &= b.eval(black_box(&inc), exit).is_ok();
-                    ok &= b.eval_stokes(&inc, exit).is_ok();
-                    let fwd = b.exit_sampler(&inc).unwrap();
-                    let bwd = b.incident_sampler(exit, &coherence).unwrap();
-                    for u in [0.1, 0.5, 0.97] {
-                        let u = T::lit(u);
-                        if let Some(d) = fwd.sample(u, [u, T::lit(0.3)]) {
-                            ok &= fwd.pdf(&d.direction) == d.pdf || d.lobe.delta;
-                            ok &= b.exit_weight(&inc, &d).unwrap().0.m00().is_finite();
-                        }
-                        if let Some(d) = bwd.sample(u, [T::lit(0.7), u]) {
-                            ok &= bwd.pdf(&d.direction) == d.pdf || d.lobe.delta;
-                            let w = b.incident_weight(exit, &coherence, &d).unwrap().0;
-                            ok &= w.m00().is_finite();
-                        }
-                    }
-                }
-                ok
-            });
-            assert!(ok, "{}", level.name());
-            assert_eq!(
-                n,
-                0,
-                "{n} allocations in the renderer layer at {}",
-                level.name()
+            exercise_bsdf(self.material, kernel, level.name());
+        }
+    }
+    struct RunRough<'a, T: Real> {
+        material: &'a KirchhoffDielectric<T, GaussianPsd<T, 2>>,
+    }
+    impl<T: Real> RoughLevelVisitor<T, GaussianPsd<T, 2>> for RunRough<'_, T> {
+        type Output = RoughnessLevel;
+        fn visit<Pol, Coh, Rough>(
+            self,
+            level: Level,
+            kernel: Kernel<Pol, Coh, Rough>,
+        ) -> RoughnessLevel
+        where
+            Pol: PolarizationModel,
+            Coh: CoherenceWeights<T, GaussianPsd<T, 2>>,
+            Rough: RoughnessWeights<T, GaussianPsd<T, 2>, Coh>,
+        {
+            exercise_bsdf(
+                self.material,
+                kernel,
+                &format!("{} · {:?}", level.name(), Rough::LEVEL),
             );
+            Rough::LEVEL
         }
     }
     let glass = RoughDielectric::new(
@@ -353,9 +395,22 @@ fn renderer_layer<T: Real>() {
         T::lit(1.5),
     )
     .unwrap();
+    let rough = KirchhoffDielectric::new(
+        GaussianPsd::<T, 2>::isotropic(T::lit(0.12), T::lit(2.0)).unwrap(),
+        T::lit(1.5),
+    )
+    .unwrap();
     for level in Level::ALL {
         level.dispatch(ClosedForm, RunBsdf { material: &glass });
         level.dispatch(ClosedForm, RunBsdf { material: &grating });
+        for roughness in [
+            Roughness::FirstOrder,
+            Roughness::Series(KirchhoffSeries::new(1e-4).unwrap()),
+            Roughness::Geometric,
+        ] {
+            let ran = level.dispatch_rough(ClosedForm, roughness, RunRough { material: &rough });
+            assert_eq!(ran, roughness.level());
+        }
     }
 }
 

@@ -351,13 +351,13 @@ const N: usize = 100_000;
 
 /// A Monte Carlo mean and its standard error.
 #[derive(Debug, Clone, Copy)]
-struct Estimate {
-    mean: f64,
-    se: f64,
+pub(crate) struct Estimate {
+    pub(crate) mean: f64,
+    pub(crate) se: f64,
 }
 
 impl Estimate {
-    fn of(values: &[f64]) -> Self {
+    pub(crate) fn of(values: &[f64]) -> Self {
         let n = values.len() as f64;
         let mean = values.iter().sum::<f64>() / n;
         let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
@@ -368,14 +368,14 @@ impl Estimate {
     }
 
     /// `|mean − x|` in standard errors.
-    fn z(&self, x: f64) -> f64 {
+    pub(crate) fn z(&self, x: f64) -> f64 {
         (self.mean - x).abs() / self.se
     }
 }
 
 /// `∫ g(d) d²u` over the hemispheres `sides` of the tilted frame, in projected-disk coordinates
 /// centred on `centre(side)` (`tests/common/hemisphere.rs`); `g` gets world directions.
-fn disk_quadrature(
+pub(crate) fn disk_quadrature(
     f: &Frame<f64>,
     sides: &[f64],
     centre: &dyn Fn(f64) -> Vector2<f64>,
@@ -398,7 +398,7 @@ fn disk_quadrature(
 }
 
 /// The tangential coordinates of `d` in `f`.
-fn tangential(f: &Frame<f64>, d: &Vector3<f64>) -> Vector2<f64> {
+pub(crate) fn tangential(f: &Frame<f64>, d: &Vector3<f64>) -> Vector2<f64> {
     Vector2::new(d.dot(&f.x()), d.dot(&f.y()))
 }
 

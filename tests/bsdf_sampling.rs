@@ -110,7 +110,7 @@ impl Draws<'_, '_> {
 }
 
 /// The chi-square test of one sampler (module docs); returns the delta fraction drawn.
-fn check(name: &str, f: &Frame<f64>, sampler: &LobeSampler<'_, f64>, seed: u64) -> f64 {
+pub(crate) fn check(name: &str, f: &Frame<f64>, sampler: &LobeSampler<'_, f64>, seed: u64) -> f64 {
     let disk = disk(f);
     let mut pilot = Draws {
         sampler,

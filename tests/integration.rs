@@ -17,6 +17,7 @@ mod bsdf_eval;
 mod bsdf_extremes;
 mod bsdf_furnace;
 mod bsdf_reciprocity;
+mod bsdf_rough;
 mod bsdf_sampling;
 mod extremes;
 mod extremes_sampling;

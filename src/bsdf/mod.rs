@@ -32,6 +32,30 @@
 //! [`LobeFlags::DELTA`]; the samplers draw them with their probability and return their
 //! throughput ([`BsdfSample`]).
 //!
+//! # Roughness
+//! The roughness level is `Bsdf`'s last type parameter, the kernel's
+//! (`Kernel<Pol, Coh, Rough>`, default [`FirstOrder`]: first-order results are bit for bit those
+//! of before the parameter existed). Beyond first order ([`crate::interaction::KirchhoffSeries`],
+//! [`crate::interaction::Geometric`], [`crate::interaction::KirchhoffQuadrature`]) use a material
+//! with the tangent-plane scatterer, [`crate::interaction::KirchhoffDielectric`] or
+//! [`crate::interaction::KirchhoffConductor`]; [`Bsdf::eval`] is then the kernel's
+//! `evaluate_mueller` at that level, bit for bit. The samplers' scattered part proposes the
+//! series' orders instead of the first-order lobe: for a Gaussian PSD, the Poisson weights of the
+//! orders at the side's specular `g₀ = (vσ)²` grouped into at most six lobes `𝒩(0, n̄ C_p + Ξ)`
+//! (the first-order lobe as `g₀ → 0`, the geometric slope lobe as `g₀ → ∞`); for PSDs without
+//! that lobe (the quadrature level's K-correlations and mixtures) the first-order lobes plus a
+//! 25 % share of the projected disk. Either is drawn exactly and [`LobeSampler::pdf`] is its
+//! density (Pearson's chi-square for 20 proposals, `vσ ≈ 1, 3, 10`, both directions and sides,
+//! total internal reflection, the plane wave, a geometric conductor, a K-correlation:
+//! `tests/bsdf_rough.rs`). Furnace of lossless rough glass at `vσ ≈ 1, 3, 10`, incidence 0–60°
+//! and from inside: the sampler's estimate agrees with quadrature within 4 standard errors; the
+//! albedo is 0.993–1.003 (the tangent plane has no shadowing, so it is not exactly
+//! conservative); the variance at equal sample count is 1.6–13 000× (`vσ ≈ 1`), 17–570×
+//! (`vσ ≈ 3`) and 31–46 000× (`vσ ≈ 10`) below the first-order proposal's. At `vσ ≈ 10` toward
+//! grazing exits the tangent plane's `1/cos²θ_o` makes the weights grow like `1/cos θ_o`, which
+//! no projected-disk proposal follows (relative standard error 5·10⁻³–10⁻² in 20 000 draws).
+//! Chosen at run time: [`crate::interaction::Level::dispatch_rough`].
+//!
 //! # Reciprocity
 //! The plane-wave level is reciprocal, `M(b → a) = D M(a → b)ᵀ D` with `D = diag(1, 1, −1, 1)`
 //! in reflection (and `f_t(i → o)/n_o² = f_t(o → i)/n_i²` across an interface, in the same
@@ -57,6 +81,7 @@
 mod flags;
 mod interface;
 mod lobes;
+mod orders;
 mod sampler;
 pub mod sources;
 
@@ -71,8 +96,8 @@ use nalgebra::{Matrix2, Vector3};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, Geometry, Kernel, MuellerResponse, Pbsdf, PolarizationModel,
-    PreparedPacket, RoughSurface, Throughput,
+    CoherenceLevel, CoherenceWeights, FirstOrder, Geometry, Kernel, MuellerResponse, Pbsdf,
+    PolarizationModel, PreparedPacket, RoughSurface, RoughnessLevel, RoughnessWeights, Throughput,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -116,9 +141,9 @@ use sampler::Setup;
 /// # Ok::<(), gmueller::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy)]
-pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh> {
+pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh, Rough = FirstOrder> {
     material: &'m RoughSurface<P, Sp, Sc>,
-    kernel: Kernel<Pol, Coh>,
+    kernel: Kernel<Pol, Coh, Rough>,
     surface: Frame<T>,
     k_above: T,
     eta: Option<T>,
@@ -191,7 +216,7 @@ fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error>
     })
 }
 
-impl<'m, T, P, Sp, Sc, Pol, Coh> Bsdf<'m, T, P, Sp, Sc, Pol, Coh>
+impl<'m, T, P, Sp, Sc, Pol, Coh, Rough> Bsdf<'m, T, P, Sp, Sc, Pol, Coh, Rough>
 where
     T: Real,
     P: SamplingPsd<T>,
@@ -199,6 +224,7 @@ where
     Sc: Pbsdf<T>,
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
 {
     /// The material `material` at the shading frame `surface`, at `wavelength` (in the medium
     /// above; see the type docs), evaluated by `kernel`.
@@ -208,7 +234,7 @@ where
     /// of both media normal numbers.
     pub fn new(
         material: &'m RoughSurface<P, Sp, Sc>,
-        kernel: Kernel<Pol, Coh>,
+        kernel: Kernel<Pol, Coh, Rough>,
         surface: Frame<T>,
         wavelength: T,
     ) -> Result<Self, Error> {
@@ -459,6 +485,7 @@ where
                 })
             },
             mirror: [incident.from_below; 2],
+            rough: Rough::LEVEL != RoughnessLevel::FirstOrder,
         })
     }
 
@@ -503,6 +530,7 @@ where
             blur: (!plane).then_some(xi),
             // Reflection uses the frame facing r̂ (reversed below), transmission its reverse.
             mirror: [below, !below],
+            rough: Rough::LEVEL != RoughnessLevel::FirstOrder,
         })
     }
 

@@ -51,6 +51,7 @@
 use nalgebra::{Matrix2, Vector2, Vector3};
 
 use super::lobes::{GaussLobe, PowerLobe, PsdLobes};
+use super::orders::{DISK_SHARE, OrderLobes, disk_point};
 use crate::frame::Frame;
 use crate::interaction::{CoherenceLevel, Side};
 use crate::psd::GaussianPsd;
@@ -274,6 +275,9 @@ enum Scatter<'a, T: Real> {
     },
     /// A Dirac order at `h_t = 0` (a smooth PSD of positive weight, plane wave).
     OriginDelta(T),
+    /// Beyond first order, a Gaussian PSD: the series' orders per side (reflected,
+    /// transmitted), `orders.rs`.
+    Series([OrderLobes<T>; 2]),
 }
 
 /// What the sampler is built from (assembled by [`super::Bsdf`]).
@@ -310,6 +314,9 @@ pub(crate) struct Setup<'a, T: Real> {
     /// Per side (reflected, transmitted), whether its tangent frame is the caller's with t̂₂
     /// negated (the PSD then sees `h_t` mirrored).
     pub mirror: [bool; 2],
+    /// The kernel's roughness level is beyond first order: the scattered lobes are the
+    /// series' (`orders.rs`), with the projected-disk lobe.
+    pub rough: bool,
 }
 
 /// The sampler of one shading point in one tracing direction (see the module docs). Built
@@ -326,6 +333,9 @@ pub struct LobeSampler<'a, T: Real> {
     backward: bool,
     scatter: Scatter<'a, T>,
     transmits: bool,
+    /// The share of the projected-disk lobe in the scattered parts (`orders.rs`: beyond first
+    /// order for PSDs without a series lobe; 0 otherwise).
+    disk: T,
 }
 
 /// A uniform clamped into `[0, 1⁻]` (NaN → 0).
@@ -368,6 +378,12 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             Scatter::One(l)
             | Scatter::Orders { shape: Some(l), .. }
             | Scatter::Power { core: Some(l), .. } => w = w.min(l.narrowest()),
+            Scatter::Series(sides) => {
+                w = w.min(sides[0].narrowest());
+                if self.transmits {
+                    w = w.min(sides[1].narrowest());
+                }
+            }
             Scatter::Mixture { comps, blur, .. } => {
                 for c in comps {
                     w = w.min(mixture_lobe(c, blur.as_ref()).map_or(T::zero(), |l| l.narrowest()));
@@ -424,7 +440,21 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             Some(Specular::Gauss(lobes, setup.channel_count.max(1)))
         };
 
-        let scatter = scatter_lobes(setup, &[reflect, transmit])?;
+        let cos_b2 = T::one() - transmit.known_h.norm_squared() / (kb * kb);
+        let cos_b = cos_b2.max(T::zero()).sqrt();
+        // The phase factors at the specular directions, `v = k_a cos θ_a ± k_b cos θ_b`.
+        let v_r = T::lit(2.0) * ka * cos_a;
+        let v_t = ka * cos_a - kb * cos_b;
+        let scatter = match (setup.rough, setup.lobes, setup.level) {
+            (true, PsdLobes::Gaussian(cp), CoherenceLevel::PlaneWave | CoherenceLevel::Partial) => {
+                let blur = setup.blur.as_ref();
+                Scatter::Series([
+                    OrderLobes::new(v_r * v_r * sigma2, &cp, blur, ka)?,
+                    OrderLobes::new(v_t * v_t * sigma2, &cp, blur, kb)?,
+                ])
+            }
+            _ => scatter_lobes(setup, &[reflect, transmit])?,
+        };
         let has_scatter = sigma2 > T::zero()
             && match scatter {
                 Scatter::None => false,
@@ -434,11 +464,9 @@ impl<'a, T: Real> LobeSampler<'a, T> {
 
         // Energies (module docs).
         let r = setup.reflectance.max(T::zero()).min(T::one());
-        let alpha_r = (-(T::lit(2.0) * ka * cos_a).powi(2) * sigma2).exp();
-        let cos_b2 = T::one() - transmit.known_h.norm_squared() / (kb * kb);
+        let alpha_r = (-(v_r * v_r) * sigma2).exp();
         let snell = transmits && cos_b2 > T::zero();
-        let cos_b = cos_b2.max(T::zero()).sqrt();
-        let alpha_t = (-(ka * cos_a - kb * cos_b).powi(2) * sigma2).exp();
+        let alpha_t = (-(v_t * v_t) * sigma2).exp();
         let t = if transmits { T::one() - r } else { T::zero() };
         // Scattered transmission where no specular transmission exists (total internal
         // reflection: T = 0 at the known angle) is the roughness's coupling into the other
@@ -528,6 +556,11 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             backward: !setup.forward,
             scatter,
             transmits,
+            disk: if setup.rough && has_scatter && !matches!(scatter, Scatter::Series(_)) {
+                T::lit(DISK_SHARE)
+            } else {
+                T::zero()
+            },
         })
     }
 
@@ -629,7 +662,11 @@ impl<'a, T: Real> LobeSampler<'a, T> {
                     (map.direction(&lobe.sample(u))?, None)
                 }
             }
+        } else if v < self.disk {
+            // The projected-disk lobe, in this side's own frame.
+            (map.direction(&(map.known_h + disk_point(u) * map.k))?, None)
         } else {
+            let v = clamp01((v - self.disk) / (T::one() - self.disk));
             // The scattered lobes live in the caller's frame (the PSD's).
             let (h, delta) = self.sample_scatter(side_index, v, u)?;
             (map.direction(&map.flip(&h))?, delta)
@@ -706,6 +743,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
                 _ => Some((power.sample(u), None)),
             },
             Scatter::OriginDelta(w) => Some((Vector2::zeros(), Some((w, T::one())))),
+            Scatter::Series(sides) => Some((sides[side].sample(v, u), None)),
         }
     }
 
@@ -749,7 +787,11 @@ impl<'a, T: Real> LobeSampler<'a, T> {
                         _ => T::zero(),
                     };
                 let scat = if self.probs[2 * side + 1] > T::zero() {
-                    self.probs[2 * side + 1] * self.scatter_density(side, &map.flip(&h))
+                    // The disk lobe's density in h_t is 1/(π k_b²) on the whole side.
+                    let disk = self.disk / (T::pi() * map.k * map.k);
+                    self.probs[2 * side + 1]
+                        * ((T::one() - self.disk) * self.scatter_density(side, &map.flip(&h))
+                            + disk)
                 } else {
                     T::zero()
                 };
@@ -793,6 +835,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
                 Some(core) => T::lit(0.5) * (power.log_density(h).exp() + core.density(h)),
                 None => power.log_density(h).exp(),
             },
+            Scatter::Series(sides) => sides[side].density(h),
         }
     }
 }

@@ -23,7 +23,8 @@ use crate::real::Real;
 ///
 /// `Kernel::<Full, Partial>::default()` blurs with [`crate::psd::ClosedForm`]; another blur
 /// method goes into the coherence model: `Kernel::<Full, _>::new(Partial(GaussHermite::new(8)?))`.
-/// To choose the level at run time, see [`super::Level`] (first order). The roughness level
+/// To choose the level at run time, see [`super::Level`] ([`super::Level::dispatch_rough`] with
+/// the roughness level too). The roughness level
 /// is a third type: `Kernel::<Full, Partial, KirchhoffSeries>::default()`, or
 /// [`Kernel::with_roughness`].
 ///

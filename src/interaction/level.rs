@@ -11,8 +11,9 @@ use super::pbsdf::Pbsdf;
 use super::polarization::{
     Full, Intensity, KernelOutput, LevelResponse, OneShape, PolarizationLevel, PolarizationModel,
 };
+use super::roughness::{FirstOrder, Geometric, KirchhoffSeries, RoughnessLevel, RoughnessWeights};
 use crate::packet::WavePacket;
-use crate::psd::{BlurMethod, Psd};
+use crate::psd::{BlurMethod, CorrelationPowers, Psd};
 use crate::real::Real;
 
 /// A model level as a value: polarization × coherence (the blur method of
@@ -60,6 +61,49 @@ pub trait LevelVisitor<T: Real, P: Psd<T, 2>> {
     where
         Pol: PolarizationModel,
         Coh: CoherenceWeights<T, P>;
+}
+
+/// A roughness level as a value, with its parameters: the third axis of the model level, chosen
+/// at run time by [`Level::dispatch_rough`].
+///
+/// It is not a field of [`Level`]: [`Level::dispatch`] serves every PSD (gratings, smooth
+/// surfaces, K-correlations), while the levels beyond first order need the spectra of the
+/// autocorrelation's powers ([`CorrelationPowers`]: the Gaussian PSD). A roughness field would
+/// put that bound on every dispatch. [`super::KirchhoffQuadrature`] (any autocorrelation, but
+/// milliseconds per evaluation) is chosen by type only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Roughness {
+    /// [`FirstOrder`] (the kernel of [`Level::dispatch`]).
+    FirstOrder,
+    /// [`KirchhoffSeries`] with its tolerance.
+    Series(KirchhoffSeries),
+    /// [`Geometric`], the slope-distribution limit.
+    Geometric,
+}
+
+impl Roughness {
+    /// Which level.
+    #[must_use]
+    pub const fn level(&self) -> RoughnessLevel {
+        match self {
+            Self::FirstOrder => RoughnessLevel::FirstOrder,
+            Self::Series(_) => RoughnessLevel::KirchhoffSeries,
+            Self::Geometric => RoughnessLevel::Geometric,
+        }
+    }
+}
+
+/// A computation to run with the kernel of a [`Level`] and a [`Roughness`] chosen at run time
+/// ([`Level::dispatch_rough`]): [`LevelVisitor`] with the roughness level as a third type.
+pub trait RoughLevelVisitor<T: Real, P: Psd<T, 2>> {
+    /// What the computation returns.
+    type Output;
+    /// Runs the computation with `kernel`, the kernel of `level` at its roughness level.
+    fn visit<Pol, Coh, Rough>(self, level: Level, kernel: Kernel<Pol, Coh, Rough>) -> Self::Output
+    where
+        Pol: PolarizationModel,
+        Coh: CoherenceWeights<T, P>,
+        Rough: RoughnessWeights<T, P, Coh>;
 }
 
 impl Level {
@@ -142,6 +186,99 @@ impl Level {
             (Pl::Full, C::PlaneWave) => visitor.visit(self, Kernel::<Full, _>::new(PlaneWave)),
             (Pl::Full, C::Partial) => visitor.visit(self, Kernel::<Full, _>::new(Partial(blur))),
             (Pl::Full, C::Incoherent) => visitor.visit(self, Kernel::<Full, _>::new(Incoherent)),
+        }
+    }
+
+    /// Runs `visitor` with this level's kernel at the roughness level `roughness` (`blur` as in
+    /// [`Level::dispatch`]): one of 27 monomorphised kernels, chosen by two `match`es. The
+    /// PSD must have the spectra of its correlation powers (see [`Roughness`]).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::interaction::{Kernel, KirchhoffSeries, Level, PolarizationModel,
+    ///     RoughLevelVisitor, Roughness, RoughnessWeights, CoherenceWeights};
+    /// use gmueller::psd::{ClosedForm, GaussianPsd};
+    ///
+    /// struct Name;
+    /// impl RoughLevelVisitor<f64, GaussianPsd<f64, 2>> for Name {
+    ///     type Output = String;
+    ///     fn visit<Pol, Coh, Rough>(self, level: Level, kernel: Kernel<Pol, Coh, Rough>) -> String
+    ///     where
+    ///         Pol: PolarizationModel,
+    ///         Coh: CoherenceWeights<f64, GaussianPsd<f64, 2>>,
+    ///         Rough: RoughnessWeights<f64, GaussianPsd<f64, 2>, Coh>,
+    ///     {
+    ///         format!("{} · {:?}", level.name(), Rough::LEVEL)
+    ///     }
+    /// }
+    /// let rough = Roughness::Series(KirchhoffSeries::new(1e-4)?);
+    /// let name = Level::ALL[7].dispatch_rough(ClosedForm, rough, Name);
+    /// assert_eq!(name, "Full/Partial · KirchhoffSeries");
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    pub fn dispatch_rough<T, P, B, V>(self, blur: B, roughness: Roughness, visitor: V) -> V::Output
+    where
+        T: Real,
+        P: CorrelationPowers<T>,
+        B: BlurMethod<T, 2, P> + BlurMethod<T, 2, P::Power> + Clone + Debug,
+        V: RoughLevelVisitor<T, P>,
+    {
+        match roughness {
+            Roughness::FirstOrder => self.dispatch_with(blur, FirstOrder, visitor),
+            Roughness::Series(series) => self.dispatch_with(blur, series, visitor),
+            Roughness::Geometric => self.dispatch_with(blur, Geometric, visitor),
+        }
+    }
+
+    /// The nine arms of [`Level::dispatch`] with the roughness level `rough`.
+    fn dispatch_with<T, P, B, R, V>(self, blur: B, rough: R, visitor: V) -> V::Output
+    where
+        T: Real,
+        P: Psd<T, 2>,
+        B: BlurMethod<T, 2, P> + Clone + Debug,
+        R: RoughnessWeights<T, P, PlaneWave>
+            + RoughnessWeights<T, P, Partial<B>>
+            + RoughnessWeights<T, P, Incoherent>,
+        V: RoughLevelVisitor<T, P>,
+    {
+        use CoherenceLevel as C;
+        use PolarizationLevel as Pl;
+        let (plane, partial, incoherent) = (PlaneWave, Partial(blur), Incoherent);
+        match (self.polarization, self.coherence) {
+            (Pl::Intensity, C::PlaneWave) => visitor.visit(
+                self,
+                Kernel::<Intensity, _>::new(plane).with_roughness(rough),
+            ),
+            (Pl::Intensity, C::Partial) => visitor.visit(
+                self,
+                Kernel::<Intensity, _>::new(partial).with_roughness(rough),
+            ),
+            (Pl::Intensity, C::Incoherent) => visitor.visit(
+                self,
+                Kernel::<Intensity, _>::new(incoherent).with_roughness(rough),
+            ),
+            (Pl::OneShape, C::PlaneWave) => visitor.visit(
+                self,
+                Kernel::<OneShape, _>::new(plane).with_roughness(rough),
+            ),
+            (Pl::OneShape, C::Partial) => visitor.visit(
+                self,
+                Kernel::<OneShape, _>::new(partial).with_roughness(rough),
+            ),
+            (Pl::OneShape, C::Incoherent) => visitor.visit(
+                self,
+                Kernel::<OneShape, _>::new(incoherent).with_roughness(rough),
+            ),
+            (Pl::Full, C::PlaneWave) => {
+                visitor.visit(self, Kernel::<Full, _>::new(plane).with_roughness(rough))
+            }
+            (Pl::Full, C::Partial) => {
+                visitor.visit(self, Kernel::<Full, _>::new(partial).with_roughness(rough))
+            }
+            (Pl::Full, C::Incoherent) => visitor.visit(
+                self,
+                Kernel::<Full, _>::new(incoherent).with_roughness(rough),
+            ),
         }
     }
 

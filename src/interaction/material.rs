@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use num_complex::Complex;
 
 use super::geometry::Geometry;
-use super::pbsdf::{FresnelInterface, FresnelReflection, RayleighRice};
+use super::pbsdf::{FresnelInterface, FresnelReflection, RayleighRice, TangentPlane};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::packet::WavePacket;
@@ -50,6 +50,22 @@ pub type RoughDielectric<T, P> = RoughSurface<P, FresnelInterface<T>, RayleighRi
 /// reflection for the coherent lobe and first-order (Rayleigh–Rice) scattering, in reflection
 /// only. Build it with [`RoughConductor::new`].
 pub type RoughConductor<T, P> = RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>;
+
+/// A rough dielectric interface for the roughness levels beyond first order
+/// ([`super::KirchhoffSeries`], [`super::Geometric`]): Fresnel reflection and transmission for
+/// the coherent lobes and the Kirchhoff tangent-plane scatterer ([`TangentPlane`]: the Fresnel
+/// matrix of the facet at the half vector) for the scattered part, from either side. At first
+/// order it agrees with [`RoughDielectric`] near the specular directions; away from them the
+/// tangent plane is the model the series and its geometric (microfacet) limit are derived for.
+/// Build it with [`KirchhoffDielectric::new`].
+pub type KirchhoffDielectric<T, P> =
+    RoughSurface<P, FresnelInterface<T>, TangentPlane<FresnelInterface<T>>>;
+
+/// A rough conductor for the roughness levels beyond first order: Fresnel reflection and the
+/// tangent-plane scatterer with Fresnel facets ([`KirchhoffDielectric`]'s opaque twin). Build it
+/// with [`KirchhoffConductor::new`].
+pub type KirchhoffConductor<T, P> =
+    RoughSurface<P, FresnelReflection<T>, TangentPlane<FresnelReflection<T>>>;
 
 /// The smooth limit of [`RoughDielectric`]: a flat interface (only the coherent lobes, widened
 /// by the coherence; no roughness attenuation).
@@ -171,6 +187,58 @@ impl<T: Real, P: Psd<T, 2>> RoughSurface<P, FresnelReflection<T>, RayleighRice<T
         exit: Vector3<T>,
     ) -> Result<Geometry<T>, Error> {
         Geometry::new(k, surface, to_source, exit)
+    }
+}
+
+impl<T: Real, P: Psd<T, 2>>
+    RoughSurface<P, FresnelInterface<T>, TangentPlane<FresnelInterface<T>>>
+{
+    /// A rough dielectric interface of relative index `eta = n_below/n_above` with the height
+    /// PSD `psd` and tangent-plane scattering ([`KirchhoffDielectric`]).
+    ///
+    /// # Errors
+    /// As [`RoughDielectric::new`].
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::interaction::{KirchhoffDielectric, RoughDielectric};
+    /// use gmueller::psd::GaussianPsd;
+    /// let psd = GaussianPsd::<f64, 2>::isotropic(0.1, 1.0)?; // vσ ≈ 2.5 at normal incidence
+    /// let glass = KirchhoffDielectric::new(psd, 1.5)?;
+    /// assert_eq!(glass.specular, RoughDielectric::new(psd, 1.5)?.specular);
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    pub fn new(psd: P, eta: T) -> Result<Self, Error> {
+        let facet = FresnelInterface::new(eta)?;
+        Ok(Self {
+            psd,
+            specular: facet,
+            scatter: TangentPlane::new(facet),
+        })
+    }
+
+    /// `η = n_below/n_above`.
+    #[must_use]
+    pub fn relative_index(&self) -> T {
+        self.specular.relative_index()
+    }
+}
+
+impl<T: Real, P: Psd<T, 2>>
+    RoughSurface<P, FresnelReflection<T>, TangentPlane<FresnelReflection<T>>>
+{
+    /// A rough conductor of complex relative index `eta = n + iκ` with the height PSD `psd`
+    /// and tangent-plane scattering ([`KirchhoffConductor`]).
+    ///
+    /// # Errors
+    /// As [`RoughConductor::new`].
+    pub fn new(psd: P, eta: Complex<T>) -> Result<Self, Error> {
+        let facet = FresnelReflection::new(eta)?;
+        Ok(Self {
+            psd,
+            specular: facet,
+            scatter: TangentPlane::new(facet),
+        })
     }
 }
 

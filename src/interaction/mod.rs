@@ -127,9 +127,10 @@ pub use coherence::{
 pub use exitant::{exitant_packet, exitant_shape};
 pub use geometry::{Geometry, Side};
 pub use kernel::Kernel;
-pub use level::{Level, LevelVisitor};
+pub use level::{Level, LevelVisitor, RoughLevelVisitor, Roughness};
 pub use material::{
-    RoughConductor, RoughDielectric, RoughSurface, SmoothConductor, SmoothDielectric,
+    KirchhoffConductor, KirchhoffDielectric, RoughConductor, RoughDielectric, RoughSurface,
+    SmoothConductor, SmoothDielectric,
 };
 pub use pbsdf::{
     ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen,
