@@ -31,6 +31,10 @@
 //! reflection only (`with_part_probabilities`): what it transmits is absorbed. Russian
 //! roulette on the throughput's `M₀₀` ends paths; contributions below 1e-30 are dropped.
 //!
+//! `--rough-gold σ` renders the gold sphere with rms height `σ` (µm) beyond first order: the
+//! tangent-plane scatterer (`KirchhoffConductor`) and `Kernel::with_roughness(KirchhoffSeries)`,
+//! whose samplers propose the series' orders.
+//!
 //! `--uniform` replaces step 3 by uniform sampling of the sphere (dielectrics) or hemisphere
 //! (metals) with the same coherence: the brute-force reference of the example's test.
 
@@ -44,7 +48,8 @@ use std::time::Instant;
 use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
 use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, Partial, Pbsdf, RoughSurface, Throughput,
+    CoherenceWeights, Full, Kernel, KirchhoffSeries, Partial, Pbsdf, RoughSurface,
+    RoughnessWeights, Throughput,
 };
 use gmueller::mueller::Mueller;
 use gmueller::stokes::Stokes;
@@ -92,6 +97,9 @@ pub(crate) struct Options {
     /// A factor on every BSDF-sampling weight: 1 for a correct render (the test's negative
     /// control sets another).
     pub(crate) weight_scale: f32,
+    /// `--rough-gold σ`: the gold sphere with rms height `σ` (µm), the tangent-plane scatterer
+    /// and the Kirchhoff series (tolerance 1e-3) instead of the first-order kernel.
+    pub(crate) rough_gold: Option<f32>,
 }
 
 impl Default for Options {
@@ -110,6 +118,7 @@ impl Default for Options {
             seed: 1,
             progress: true,
             weight_scale: 1.0,
+            rough_gold: None,
             lambda: None,
         }
     }
@@ -210,9 +219,11 @@ struct At<'a> {
     coherence: &'a SurfaceCoherence<f32>,
 }
 
-/// One vertex on `material`: sun NEE into `path`, then the next direction (or `None`).
-fn vertex<P, Sp, Sc>(
+/// One vertex on `material` with `kernel` (its roughness level): sun NEE into `path`, then the
+/// next direction (or `None`).
+fn vertex<P, Sp, Sc, R>(
     material: &RoughSurface<P, Sp, Sc>,
+    kernel: Kernel<Full, Partial, R>,
     at: &At<'_>,
     path: &mut Path,
     rng: &mut Rng,
@@ -222,6 +233,7 @@ where
     Sp: Interface<f32>,
     Sc: Pbsdf<f32>,
     Partial: CoherenceWeights<f32, P>,
+    R: RoughnessWeights<f32, P, Partial>,
 {
     let At {
         scene,
@@ -232,7 +244,7 @@ where
         coherence,
     } = *at;
     let frame = scene.shading_frame(hit);
-    let bsdf = Bsdf::new(material, Kernel::<Full, Partial>::default(), frame, lambda)?;
+    let bsdf = Bsdf::new(material, kernel, frame, lambda)?;
     let opaque = matches!(hit.material, Material::Gold | Material::Grating);
     let n = hit.normal;
 
@@ -322,6 +334,8 @@ fn trace(
     let mut d = cam.direction(x, y, opts.width as f32 / opts.height as f32);
     let mut o = cam.origin;
     let coherence = SurfaceCoherence::new(opts.sky_coherence).expect("coherence width");
+    let first = Kernel::<Full, Partial>::default();
+    let series = KirchhoffSeries::new(1e-3).expect("series tolerance");
     let mut path = Path {
         radiance: Vector4::zeros(),
         t: Mueller::identity(),
@@ -345,10 +359,13 @@ fn trace(
             coherence: &coherence,
         };
         let step = match hit.material {
-            Material::Ground => vertex(&mats.ground, &at, &mut path, rng),
-            Material::Glass => vertex(&mats.glass, &at, &mut path, rng),
-            Material::Gold => vertex(&mats.gold, &at, &mut path, rng),
-            Material::Grating => vertex(&mats.grating, &at, &mut path, rng),
+            Material::Ground => vertex(&mats.ground, first, &at, &mut path, rng),
+            Material::Glass => vertex(&mats.glass, first, &at, &mut path, rng),
+            Material::Gold => match &mats.rough_gold {
+                Some(m) => vertex(m, first.with_roughness(series), &at, &mut path, rng),
+                None => vertex(&mats.gold, first, &at, &mut path, rng),
+            },
+            Material::Grating => vertex(&mats.grating, first, &at, &mut path, rng),
         };
         match step {
             Ok(Some(s)) => {
@@ -386,7 +403,7 @@ pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
     let mats: Vec<Materials> = (0..bins)
         .map(|b| {
             let centre = LAMBDA_MIN + (b as f32 + 0.5) * width_bin;
-            Materials::at(opts.lambda.unwrap_or(centre), &metals)
+            Materials::at(opts.lambda.unwrap_or(centre), &metals, opts.rough_gold)
         })
         .collect();
     let white = color::cmf_integral(LAMBDA_MIN, LAMBDA_MAX);
@@ -485,7 +502,8 @@ pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
 fn usage() -> ! {
     eprintln!(
         "path_tracer [--width N] [--height N] [--spp N] [--wavelengths N] [--depth N]\n\
-         \x20           [--sky-coherence µm] [--sun-split N] [--sun-solid-angle sr] [--uniform] [--threads N] [--seed N] [--out DIR]\n\
+         \x20           [--sky-coherence µm] [--sun-split N] [--sun-solid-angle sr] [--rough-gold σ/µm]\n\
+         \x20           [--uniform] [--threads N] [--seed N] [--out DIR]\n\
          path_tracer --tradeoff [--out DIR]"
     );
     std::process::exit(2)
@@ -513,6 +531,9 @@ fn main() {
             }
             "--sky-coherence" => {
                 opts.sky_coherence = value().parse().unwrap_or_else(|_| usage());
+            }
+            "--rough-gold" => {
+                opts.rough_gold = Some(value().parse().unwrap_or_else(|_| usage()));
             }
             "--uniform" => opts.sampling = Sampling::Uniform,
             "--tradeoff" => tradeoff = true,

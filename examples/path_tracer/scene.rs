@@ -4,7 +4,9 @@
 //!   ℓ = 3 µm); what it transmits is absorbed below.
 //! - A rough glass sphere (η from a Cauchy fit to BK7, σ = 10 nm, ℓ = 2 µm): reflection and
 //!   transmission at both of its surfaces, from outside and from inside.
-//! - A rough gold sphere (σ = 12 nm, ℓ = 1.5 µm; n + iκ of gold, Mitsuba 3's tables).
+//! - A rough gold sphere (σ = 12 nm, ℓ = 1.5 µm; n + iκ of gold, Mitsuba 3's tables); with
+//!   `--rough-gold σ` a much rougher one (σ in µm, same ℓ, the tangent-plane scatterer),
+//!   rendered beyond first order by the Kirchhoff series.
 //! - An aluminium plate (n + iκ of aluminium, same source) carrying a sinusoidal **height**
 //!   grating (amplitude 25 nm, period 2 µm), tilted so that the sun's first diffraction order
 //!   reaches the camera across the plate.
@@ -14,7 +16,7 @@
 //!   illustrative, not measured.
 
 use gmueller::frame::Frame;
-use gmueller::interaction::{RoughConductor, RoughDielectric};
+use gmueller::interaction::{KirchhoffConductor, RoughConductor, RoughDielectric};
 use gmueller::psd::{GaussianPsd, Grating};
 use gmueller::stokes::Stokes;
 use nalgebra::{Vector2, Vector3};
@@ -63,6 +65,8 @@ pub(crate) struct Materials {
     pub(crate) ground: RoughDielectric<f32, GaussianPsd<f32, 2>>,
     pub(crate) glass: RoughDielectric<f32, GaussianPsd<f32, 2>>,
     pub(crate) gold: RoughConductor<f32, GaussianPsd<f32, 2>>,
+    /// The gold sphere beyond first order (`--rough-gold σ`), if asked for.
+    pub(crate) rough_gold: Option<KirchhoffConductor<f32, GaussianPsd<f32, 2>>>,
     pub(crate) grating: RoughConductor<f32, Grating<f32, 2>>,
 }
 
@@ -96,7 +100,9 @@ impl Metals {
 }
 
 impl Materials {
-    pub(crate) fn at(lambda: f32, metals: &Metals) -> Self {
+    /// The materials at `lambda`; `rough_gold` the rms height (µm) of a gold sphere rendered
+    /// beyond first order, or `None` for the first-order one.
+    pub(crate) fn at(lambda: f32, metals: &Metals, rough_gold: Option<f32>) -> Self {
         // BK7, Cauchy fit n = A + B/λ² (λ in µm).
         let n_glass = 1.5046 + 0.00420 / (lambda * lambda);
         let psd = |s: f32, l: f32| GaussianPsd::isotropic(s, l).expect("valid PSD");
@@ -105,6 +111,10 @@ impl Materials {
             ground: RoughDielectric::new(psd(0.008, 3.0), 1.5).expect("ground"),
             glass: RoughDielectric::new(psd(0.010, 2.0), n_glass).expect("glass"),
             gold: RoughConductor::new(psd(0.012, 1.5), metals.index("Au", lambda)).expect("gold"),
+            rough_gold: rough_gold.map(|sigma| {
+                KirchhoffConductor::new(psd(sigma, 1.5), metals.index("Au", lambda))
+                    .expect("rough gold")
+            }),
             grating: RoughConductor::new(grating, metals.index("Al", lambda)).expect("aluminium"),
         }
     }
