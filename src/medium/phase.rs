@@ -66,7 +66,7 @@ use crate::stokes::Stokes;
 /// let sigma_s = incident.scattering_coefficient(); // 1/µm
 /// assert!(sigma_s > 0.0);
 /// let v = phase.eval(&incident, Vector3::new(0.0, 0.6, 0.8))?;
-/// let f = v.phase.apply(&light.stokes()); // per sr, in v.geometry.exit_frame()
+/// let f = v.apply(&light.stokes()); // F S per sr, valid, in v.geometry.exit_frame()
 /// assert!(f.s0() > 0.0 && f.degree_of_polarization() < 1.0);
 /// let s = phase.sample(&incident, 0.3, [0.7, 0.2]);
 /// assert!((phase.pdf(&incident, &s.direction) - s.pdf).abs() <= 1e-12 * s.pdf);
@@ -126,6 +126,41 @@ pub struct PhaseValue<T: Real, Th> {
     pub phase: Th,
     /// The geometry: frames, scattering vector, angle.
     pub geometry: ScatteringGeometry<T>,
+}
+
+impl<T: Real, Th: Throughput<T>> PhaseValue<T, Th> {
+    /// `F S`: the phase matrix applied to the light `light` (in the packet's frame; the
+    /// packet's own Stokes vector, for which `F` was prepared), in the exit frame, a valid
+    /// Stokes vector — projected onto the cone where rounding left it outside, as the surfaces'
+    /// [`crate::interaction::MuellerResponse::apply`].
+    ///
+    /// The raw product `phase.apply(light)` rounds on its own: where the output is far below
+    /// the input (polarized scattered light leaving near the dipole's null, `F S₀ ∝ cos²Θ`) the
+    /// rounding of `F`'s entries is amplified by about `1/cos²Θ`, and in `f32` the raw product
+    /// can leave the cone by a few `10⁻⁶` of `S0` (4.8e-6 at `Θ = 85°` in
+    /// `tests/medium_extremes.rs`, `f_s_near_the_dipole_null`).
+    #[must_use]
+    pub fn apply(&self, light: &Th::Light) -> Th::Light {
+        on_cone::<T, Th>(self.phase.apply(light))
+    }
+}
+
+impl<T: Real, Th: Throughput<T>> PhaseSample<T, Th> {
+    /// `weight · S`, the Monte Carlo estimate of the scattered light for `light` (the packet's
+    /// own), a valid Stokes vector as [`PhaseValue::apply`].
+    #[must_use]
+    pub fn apply(&self, light: &Th::Light) -> Th::Light {
+        on_cone::<T, Th>(self.weight.apply(light))
+    }
+}
+
+/// A light of a throughput's level, moved onto the cone if it is a Stokes vector outside it.
+#[inline]
+fn on_cone<T: Real, Th: Throughput<T>>(light: Th::Light) -> Th::Light {
+    match Th::light_stokes(&light) {
+        Some(s) => Th::light(&Stokes(crate::interaction::onto_cone(s.0))),
+        None => light,
+    }
 }
 
 /// [`PhaseFunction::sample`]'s answer.

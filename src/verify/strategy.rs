@@ -25,7 +25,9 @@ pub const PROPTEST_SEED: u64 = 0x6d75_656c_6c65_7221;
 pub const PROPTEST_SEARCH_VAR: &str = "GMUELLER_PROPTEST_SEARCH";
 
 /// The configuration of a property test: `cases` cases from [`PROPTEST_SEED`], or — when
-/// [`PROPTEST_SEARCH_VAR`] holds a factor `f` — `f · cases` cases from a random seed.
+/// [`PROPTEST_SEARCH_VAR`] holds a factor `f` — `f · cases` cases from a random seed, with `f`
+/// times proptest's budget of global rejects (`prop_assume!`), so that a test that rejects a
+/// fixed share of its inputs does not abort for "too many global rejects" once its cases grow.
 ///
 /// ```
 /// use gmueller::verify::strategy::proptest_config;
@@ -38,10 +40,16 @@ pub fn proptest_config(cases: u32) -> Config {
         .ok()
         .and_then(|v| v.trim().parse::<u32>().ok())
         .filter(|&f| f > 0);
+    config_for(cases, factor)
+}
+
+/// [`proptest_config`] for a given search factor.
+fn config_for(cases: u32, factor: Option<u32>) -> Config {
     match factor {
         Some(f) => Config {
             cases: cases.saturating_mul(f),
             rng_seed: RngSeed::Random,
+            max_global_rejects: Config::default().max_global_rejects.saturating_mul(f),
             ..Config::default()
         },
         None => Config {
@@ -721,4 +729,30 @@ pub fn mixture_psd<const N: usize>(
 ) -> impl Strategy<Value = crate::psd::GaussianMixturePsd<f64, N>> {
     proptest::collection::vec(gaussian_psd::<N>(r), 1..=max_components.max(1))
         .prop_map(|c| crate::psd::GaussianMixturePsd::new(c).expect("valid"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Config, PROPTEST_SEED, RngSeed, config_for};
+
+    /// A normal run is the fixed seed and the given cases; a search scales the cases and the
+    /// reject budget by its factor (`propagation::s2_5_is_s2_2_under_a_mul` rejects a quarter
+    /// of its inputs and aborted at 50× with proptest's fixed budget of 1024).
+    #[test]
+    fn search_scales_cases_and_rejects() {
+        let fixed = config_for(64, None);
+        assert_eq!(fixed.cases, 64);
+        assert_eq!(fixed.rng_seed, RngSeed::Fixed(PROPTEST_SEED));
+        assert_eq!(
+            fixed.max_global_rejects,
+            Config::default().max_global_rejects
+        );
+        let search = config_for(64, Some(50));
+        assert_eq!(search.cases, 3200);
+        assert_eq!(search.rng_seed, RngSeed::Random);
+        assert_eq!(
+            search.max_global_rejects,
+            50 * Config::default().max_global_rejects
+        );
+    }
 }
