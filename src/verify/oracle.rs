@@ -298,7 +298,10 @@ pub fn lemma_s2_1<const N: usize>(
 
 /// The left side of Lemma S2.1, `F{g^Σ(Bξ)}(q)`, by quadrature ([`fourier_transform`]) on a
 /// cube reaching 9 standard deviations of `g^Σ(B·)` along each axis, `n` points per axis
-/// (`n ≈ 301` gives ~1e-12 in 2-D for moderate `q`; 3-D needs `n³` evaluations).
+/// (`n ≈ 301` gives ~1e-12 in 2-D for moderate `q` and a round `g^Σ(B·)`; 3-D needs `n³`
+/// evaluations). The step `18 σ_max/n` must also resolve the narrowest width `σ_min` of
+/// `C = B⁻¹ΣB⁻ᵀ`: `n ≳ 36 σ_max/σ_min` keeps it below `σ_min/2` (a fixed 241 missed 1e-6
+/// relative at `σ_max/σ_min ≈ 30`; `examples/verify_derivation.rs` chooses `n` so).
 pub fn lemma_s2_1_by_quadrature<const N: usize>(
     cov: &nalgebra::SMatrix<f64, N, N>,
     b: &nalgebra::SMatrix<f64, N, N>,
