@@ -55,10 +55,10 @@ fn row_stacked(j: &Jones) -> Matrix4<f64> {
 type LemmaCase = (Matrix2<f64>, Matrix2<f64>, Vector2<f64>);
 
 /// Points per axis for the quadrature of `g^Σ(Bξ)`, whose covariance `C = B⁻¹ΣB⁻ᵀ` can be
-/// elongated (`|det B|` down to 0.2 with entries up to 1.5): the box reaches 9 σ_max each way, and
-/// the step must stay below half the narrowest σ_min (the trapezoid's aliasing error is then
-/// `~e^{−8π²}`): `36 σ_max/σ_min` points, at least 241 (1081 at σ_max/σ_min = 30). A fixed 241 missed
-/// 1e-6 relative in fresh-seed runs (`GMUELLER_PROPTEST_SEARCH=50`: 8e-6 at σ_max/σ_min ≈ 30).
+/// elongated (`|det B|` down to 0.2 with entries up to 1.5): the box reaches `9 σ_max` each way, and
+/// the step must stay below half the narrowest `σ_min` (the trapezoid's aliasing error is then
+/// `~e^{−8π²}`): `36 σ_max/σ_min` points, at least 241 (1081 at `σ_max/σ_min = 30`). A fixed 241 missed
+/// 1e-6 relative in fresh-seed runs (`GMUELLER_PROPTEST_SEARCH=50`: 8e-6 at `σ_max/σ_min ≈ 30`).
 fn points(cov: &Matrix2<f64>, b: &Matrix2<f64>) -> usize {
     let bi = b.try_inverse().expect("|det B| ≥ 0.2");
     let e = (bi * cov * bi.transpose()).symmetric_eigenvalues();
