@@ -19,7 +19,6 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, Incident, SurfaceCoherence};
-use gmueller::frame::Frame;
 use gmueller::interaction::{
     CoherenceWeights, Geometry, Kernel, Level, LevelVisitor, PolarizationModel, RoughDielectric,
 };
@@ -39,18 +38,9 @@ struct Case<T: Real> {
     width: f64,
 }
 
-fn frame<T: Real>() -> Frame<T> {
-    Frame::from_normal(Vector3::new(0.1, -0.2, 1.0).map(T::lit)).unwrap()
-}
-
-fn dir<T: Real>(f: &Frame<T>, theta: f64, phi: f64, side: f64) -> Vector3<T> {
-    let v = Vector3::new(
-        theta.sin() * phi.cos(),
-        theta.sin() * phi.sin(),
-        side * theta.cos(),
-    );
-    f.x() * T::lit(v.x) + f.y() * T::lit(v.y) + f.k() * T::lit(v.z)
-}
+#[path = "common/shading.rs"]
+mod shading;
+use shading::{dir, frame};
 
 fn cases<T: Real>() -> Vec<Case<T>> {
     let f = frame::<T>();

@@ -15,7 +15,6 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, SurfaceCoherence};
-use gmueller::frame::Frame;
 use gmueller::interaction::{
     Full, Geometric, Kernel, KirchhoffDielectric, KirchhoffSeries, Partial, RoughnessWeights,
 };
@@ -35,18 +34,9 @@ struct Case<T: Real> {
     sun: bool,
 }
 
-fn frame<T: Real>() -> Frame<T> {
-    Frame::from_normal(Vector3::new(0.1, -0.2, 1.0).map(T::lit)).unwrap()
-}
-
-fn dir<T: Real>(f: &Frame<T>, theta: f64, phi: f64, side: f64) -> Vector3<T> {
-    let v = Vector3::new(
-        theta.sin() * phi.cos(),
-        theta.sin() * phi.sin(),
-        side * theta.cos(),
-    );
-    f.x() * T::lit(v.x) + f.y() * T::lit(v.y) + f.k() * T::lit(v.z)
-}
+#[path = "common/shading.rs"]
+mod shading;
+use shading::{dir, frame};
 
 /// Exits within ±0.4 rad of the mirror direction (3 of 4) or anywhere in the other hemisphere
 /// up to 80°: the rough lobes are wide, so the exits are too.

@@ -38,10 +38,7 @@ fn frame() -> Frame<f64> {
     Frame::from_normal(Vector3::new(-0.1, 0.15, 1.0)).unwrap()
 }
 
-fn dir(f: &Frame<f64>, deg: f64, phi_deg: f64, side: f64) -> Vector3<f64> {
-    let (t, p) = (deg.to_radians(), phi_deg.to_radians());
-    f.x() * (t.sin() * p.cos()) + f.y() * (t.sin() * p.sin()) + f.k() * (side * t.cos())
-}
+use crate::common::shading::dir;
 
 fn unpolarized() -> Stokes<f64> {
     Stokes::unpolarized(1.0).unwrap()

@@ -31,16 +31,7 @@ use num_complex::Complex;
 
 const LAMBDA: f64 = 0.5;
 
-/// A tilted shading frame, so that nothing lines up with the world axes.
-fn frame() -> Frame<f64> {
-    Frame::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap()
-}
-
-/// A direction at polar angle `deg` from `side · n̂`, azimuth `phi_deg`, in frame `f`.
-fn dir(f: &Frame<f64>, deg: f64, phi_deg: f64, side: f64) -> Vector3<f64> {
-    let (t, p) = (deg.to_radians(), phi_deg.to_radians());
-    f.x() * (t.sin() * p.cos()) + f.y() * (t.sin() * p.sin()) + f.k() * (side * t.cos())
-}
+use crate::common::shading::{dir, tilted_frame as frame};
 
 fn unpolarized() -> Stokes<f64> {
     Stokes::unpolarized(1.0).unwrap()

@@ -28,10 +28,7 @@ use num_complex::Complex;
 const N: usize = 100_000;
 const LAMBDA: f64 = 0.5;
 
-fn frame() -> Frame<f64> {
-    // A tilted shading frame, so that nothing lines up with the world axes.
-    Frame::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap()
-}
+use crate::common::shading::{dir, tilted_frame as frame};
 
 fn disk(f: &Frame<f64>) -> Disk {
     Disk {
@@ -39,12 +36,6 @@ fn disk(f: &Frame<f64>) -> Disk {
         t2: f.y(),
         n: f.k(),
     }
-}
-
-/// A direction at polar angle `deg` from `±n̂` (`side`), azimuth `phi_deg` in the frame.
-fn dir(f: &Frame<f64>, deg: f64, phi_deg: f64, side: f64) -> Vector3<f64> {
-    let (t, p) = (deg.to_radians(), phi_deg.to_radians());
-    f.x() * (t.sin() * p.cos()) + f.y() * (t.sin() * p.sin()) + f.k() * (side * t.cos())
 }
 
 /// Quantile edges of a pilot draw (seed distinct from the test's) merged with a coarse grid,

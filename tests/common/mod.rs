@@ -97,6 +97,7 @@ pub mod oracle;
 pub mod quadrature;
 pub mod rng;
 pub mod scene;
+pub mod shading;
 
 #[allow(unused_imports, reason = "not every test binary uses the generator")]
 pub use rng::{Lcg, SplitMix64};
