@@ -44,7 +44,8 @@ use gmueller::bsdf::{Bsdf, LobeFlags, SurfaceCoherence};
 use gmueller::error::Error;
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, MuellerResponse, OneShape,
+    CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput, MuellerResponse,
+    OneShape,
     Partial, Pbsdf, PlaneWave, PolarizationModel, Response, RoughConductor, RoughDielectric,
     RoughSurface, SmoothConductor, SmoothDielectric, surface_coherence_term,
     surface_inverse_coherence,
@@ -1050,24 +1051,35 @@ fn bsdf_matches_kernel<T: Real>() {
             .rotated(T::lit(0.7));
         let inc = bg.prepare(&packet).unwrap();
         let v = bg.eval(&inc, r).unwrap();
+        // The coherent lobe divided by its mass over the propagating directions.
+        let norm = inc.specular_mass(v.geometry.side()).recip();
         assert_eq!(
             v.response,
-            kernel.evaluate_mueller(&glass, &packet, &v.geometry)
+            kernel
+                .evaluate_mueller(&glass, &packet, &v.geometry)
+                .specular_scaled(norm)
         );
         assert_eq!(
             bg.eval_stokes(&inc, r).unwrap(),
-            kernel.evaluate(&glass, &packet, &v.geometry)
+            kernel
+                .evaluate(&glass, &packet, &v.geometry)
+                .specular_scaled(norm)
         );
         if s_side > 0.0 && r_side > 0.0 {
             let inc = bm.prepare(&packet).unwrap();
             let v = bm.eval(&inc, r).unwrap();
+            let norm = inc.specular_mass(v.geometry.side()).recip();
             assert_eq!(
                 v.response,
-                kernel.evaluate_mueller(&gold, &packet, &v.geometry)
+                kernel
+                    .evaluate_mueller(&gold, &packet, &v.geometry)
+                    .specular_scaled(norm)
             );
             assert_eq!(
                 bm.eval_stokes(&inc, r).unwrap(),
-                kernel.evaluate(&gold, &packet, &v.geometry)
+                kernel
+                    .evaluate(&gold, &packet, &v.geometry)
+                    .specular_scaled(norm)
             );
         }
     }
@@ -1638,7 +1650,8 @@ fn surface_coherence_section<T: Real>(seed_tol: f64) {
             let surface = Frame::<T>::from_normal(n).unwrap();
             let s = local(&surface, theta, phi, if below { -1.0 } else { 1.0 });
             let sigma = 10f64.powf(lw);
-            let c = SurfaceCoherence::new(T::lit(sigma)).unwrap();
+            // The width exactly σ (no horizon rule), whose section this checks.
+            let c = SurfaceCoherence::fixed(T::lit(sigma)).unwrap();
             let u = Stokes::unpolarized(T::one()).unwrap();
             let p = c.packet(u, s, &surface, T::lit(LAMBDA)).unwrap();
             let xi = section_in_sp_basis(&p, &surface) * (sigma * sigma);

@@ -290,7 +290,8 @@ fn backward_furnace_excess_is_the_finite_coherence_term() {
     let n = 50_000;
     let mut excess = Vec::new();
     for w in [3.0, 30.0] {
-        let c = SurfaceCoherence::new(w).unwrap();
+        // A fixed width (no horizon rule): the excess as a function of w.
+        let c = SurfaceCoherence::fixed(w).unwrap();
         let (m, se) = backward_furnace(&b, exit, &c, 1.5, n, 10);
         println!("w = {w:>4} µm: white-furnace radiance {m:.5} ± {se:.1e}");
         excess.push((m - 1.0, se));

@@ -274,7 +274,8 @@ fn partial_coherence_is_not_reciprocal() {
         )
     };
     let sun = |s: Vector3<f64>| b.distant_packet(u, 6.8e-5, s).unwrap();
-    let surface = SurfaceCoherence::new(34.2).unwrap();
+    // A fixed width: the horizon rule would make it depend (slightly) on the direction.
+    let surface = SurfaceCoherence::fixed(34.2).unwrap();
     let isotropic = |s: Vector3<f64>| b.surface_packet(u, s, &surface).unwrap();
     let s = dir(&f, 40.0, 0.0, 1.0);
     let (mut sun_max, mut spec_max, mut scat_max): (f64, f64, f64) = (0.0, 0.0, 0.0);
@@ -489,7 +490,8 @@ where
 fn backward_monte_carlo_needs_the_physical_direction() {
     let f = frame();
     let (glass, gold) = (glass(), gold());
-    let c = SurfaceCoherence::new(1.0).unwrap();
+    // A fixed width (the horizon rule would widen it to ~2.6 µm here).
+    let c = SurfaceCoherence::fixed(1.0).unwrap();
     let up = dir(&f, 40.0, 30.0, 1.0);
     let down = dir(&f, 30.0, 200.0, -1.0);
     let partial = Kernel::<Full, Partial>::default();

@@ -79,6 +79,7 @@
 //! one Fresnel evaluation) and draws in closed form. Measured in `benches/bsdf.rs`.
 
 mod flags;
+mod horizon;
 mod interface;
 mod lobes;
 mod orders;
@@ -89,15 +90,16 @@ pub use flags::LobeFlags;
 pub use interface::Interface;
 pub use lobes::{PsdLobes, SamplingPsd};
 pub use sampler::{DirectionSample, LobeSampler, Part, SampledLobe};
-pub use sources::{SurfaceCoherence, area_light, distant_disk};
+pub use sources::{HORIZON_RULE_Q, SurfaceCoherence, area_light, distant_disk};
 
 use nalgebra::{Matrix2, Vector3};
 
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, FirstOrder, Geometry, Kernel, MuellerResponse, Pbsdf,
-    PolarizationModel, PreparedPacket, RoughSurface, RoughnessLevel, RoughnessWeights, Throughput,
+    CoherenceLevel, CoherenceWeights, FirstOrder, Geometry, Kernel, KernelOutput, MuellerResponse,
+    Pbsdf, PolarizationModel, PreparedPacket, RoughSurface, RoughnessLevel, RoughnessWeights, Side,
+    Throughput,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -157,6 +159,9 @@ pub struct Incident<T: Real, Pol, Coh> {
     to_source: Vector3<T>,
     facing: Frame<T>,
     from_below: bool,
+    /// `E` of the coherent lobe on each side (reflected, transmitted): module docs,
+    /// "Near the horizon".
+    specular_mass: [T; 2],
 }
 
 impl<T: Real, Pol, Coh> Incident<T, Pol, Coh> {
@@ -166,10 +171,32 @@ impl<T: Real, Pol, Coh> Incident<T, Pol, Coh> {
         self.to_source
     }
 
-    /// The kernel's per-packet work.
+    /// The kernel's per-packet work. The kernel evaluated with it directly gives the coherent
+    /// lobe without the normalisation [`Incident::specular_mass`] of this layer.
     #[must_use]
     pub fn prepared(&self) -> &PreparedPacket<T, Pol, Coh> {
         &self.prepared
+    }
+
+    /// `E`, the share of the incident power that the kernel's coherent specular lobe on `side`
+    /// carries over the propagating directions, relative to the Fresnel share (module docs,
+    /// "Near the horizon"): [`Bsdf::eval`] and the weights divide that lobe by it. 1 at the
+    /// plane-wave level, for a side without a propagating specular direction (total internal
+    /// reflection), and for an opaque surface's transmission.
+    #[must_use]
+    pub fn specular_mass(&self, side: Side) -> T {
+        self.specular_mass[usize::from(side == Side::Transmission)]
+    }
+
+    /// The coherent lobe of a kernel response on `side`, divided by its mass.
+    #[inline]
+    fn normalise<M: Throughput<T>>(&self, r: MuellerResponse<T, M>) -> MuellerResponse<T, M> {
+        let mass = self.specular_mass(r.side);
+        if mass == T::one() {
+            r
+        } else {
+            r.specular_scaled(mass.recip())
+        }
     }
 }
 
@@ -197,6 +224,11 @@ pub struct BsdfSample<T: Real, M> {
     /// packet's frame to [`Geometry::exit_sp`]).
     pub geometry: Geometry<T>,
 }
+
+/// The share of the wider specular lobe of the backward sampler where the horizon rule is
+/// active, and its width relative to the lobe ([`Bsdf::incident_sampler`]).
+const WIDE_SHARE: f64 = 0.25;
+const WIDE_FACTOR: f64 = 2.0;
 
 /// What [`Bsdf::sample_exit`] and [`Bsdf::sample_incident`] return: a weighted sample, `None`
 /// for an evanescent draw.
@@ -330,12 +362,44 @@ where
         }
     }
 
-    /// A packet arriving from `to_source` with surface-isotropic coherence `coherence`
-    /// ([`SurfaceCoherence::packet`]) at the wavelength of the source's medium, carrying
-    /// `stokes` in the incident s/p frame.
+    /// The surface coherence width of light arriving from `to_source` under `coherence`
+    /// ([`SurfaceCoherence`], "The horizon rule"): `σ` combined with the rule's `Q/(k cos²θ)`
+    /// of the direction itself and, across an interface, of its Snell partner on the other
+    /// side (whose lobe must fit that side's horizon too).
     ///
     /// # Errors
-    /// As [`SurfaceCoherence::packet`] and [`Bsdf::wavenumber`].
+    /// As [`Bsdf::wavenumber`] for `to_source`, and for a zero or non-finite direction.
+    pub fn surface_width(
+        &self,
+        to_source: &Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<T, Error> {
+        let s = unit(*to_source, "direction to the source")?;
+        let k = self.wavenumber(&s)?;
+        let cos = s.dot(&self.surface.k()).abs();
+        let partner = self.eta.and_then(|eta| {
+            let k_t = if s.dot(&self.surface.k()) > T::zero() {
+                self.k_above * eta
+            } else {
+                self.k_above
+            };
+            let ratio = k / k_t;
+            let sin2 = (T::one() - cos) * (T::one() + cos) * ratio * ratio;
+            (sin2 < T::one()).then(|| ((T::one() - sin2).sqrt(), k_t))
+        });
+        Ok(match partner {
+            Some(t) => coherence.combined(&[(cos, k), t]),
+            None => coherence.combined(&[(cos, k)]),
+        })
+    }
+
+    /// A packet arriving from `to_source` with surface-isotropic coherence `coherence` at the
+    /// wavelength of the source's medium, carrying `stokes` in the incident s/p frame: the
+    /// width [`Bsdf::surface_width`] (the horizon rule on both sides of an interface) through
+    /// [`SurfaceCoherence::packet`].
+    ///
+    /// # Errors
+    /// As [`SurfaceCoherence::packet`] and [`Bsdf::surface_width`].
     pub fn surface_packet(
         &self,
         stokes: Stokes<T>,
@@ -343,7 +407,8 @@ where
         coherence: &SurfaceCoherence<T>,
     ) -> Result<WavePacket<T>, Error> {
         let lambda = self.wavelength(&to_source)?;
-        coherence.packet(stokes, to_source, &self.surface, lambda)
+        let width = self.surface_width(&to_source, coherence)?;
+        SurfaceCoherence::fixed(width)?.packet(stokes, to_source, &self.surface, lambda)
     }
 
     /// A sample of a distant disk source of solid angle `Ω` along `to_source`
@@ -378,12 +443,68 @@ where
             });
         }
         let facing = self.surface.facing(&s);
+        let prepared = self.kernel.prepare(packet, &facing)?;
+        let from_below = s.dot(&self.surface.k()) < T::zero();
+        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below);
         Ok(Incident {
-            prepared: self.kernel.prepare(packet, &facing)?,
+            prepared,
             to_source: s,
             facing,
-            from_below: s.dot(&self.surface.k()) < T::zero(),
+            from_below,
+            specular_mass,
         })
+    }
+
+    /// `E` per side for a prepared packet (module docs, "Near the horizon"): `E` of each
+    /// channel's section, averaged with the channels' intensities.
+    fn specular_mass(
+        &self,
+        prepared: &PreparedPacket<T, Pol, Coh>,
+        s: &Vector3<T>,
+        facing: &Frame<T>,
+        from_below: bool,
+    ) -> [T; 2] {
+        let mut channels = [(0.0, Matrix2::<f64>::zeros()); 2];
+        let count = match (prepared.channel_sections(), prepared.section()) {
+            _ if Coh::LEVEL == CoherenceLevel::PlaneWave => 0,
+            (Some([(x, wx), (y, wy)]), _) => {
+                channels = [
+                    (wx.to_f64(), x.covariance().map(T::to_f64)),
+                    (wy.to_f64(), y.covariance().map(T::to_f64)),
+                ];
+                2
+            }
+            (None, Some(xi)) => {
+                channels[0] = (1.0, xi.covariance().map(T::to_f64));
+                1
+            }
+            (None, None) => 0,
+        };
+        if count == 0 {
+            return [T::one(); 2];
+        }
+        let k = prepared.wavenumber().to_f64();
+        let st = nalgebra::Vector2::new(s.dot(&facing.x()).to_f64(), s.dot(&facing.y()).to_f64());
+        let mass = |k_exit: f64| {
+            let ratio = k / k_exit;
+            let c = -st * ratio;
+            let (mut e, mut w) = (0.0, 0.0);
+            for (weight, xi) in &channels[..count] {
+                e += weight * horizon::lobe_mass(&(xi / (k_exit * k_exit)), &c);
+                w += weight;
+            }
+            let e = T::lit(e / w);
+            if e > T::zero() && e.is_finite() && e.recip().is_finite() {
+                e
+            } else {
+                T::one()
+            }
+        };
+        let transmitted = self.eta.map_or(T::one(), |eta| {
+            let eta = eta.to_f64();
+            mass(if from_below { k / eta } else { k * eta })
+        });
+        [mass(k), transmitted]
     }
 
     /// The kernel in BSDF form for the prepared packet leaving along `exit`: `M(ŝ → r̂)` per
@@ -398,9 +519,11 @@ where
     ) -> Result<BsdfValue<T, Pol::Throughput<T>>, Error> {
         let g = self.geometry(incident.to_source, exit)?;
         Ok(BsdfValue {
-            response: self
-                .kernel
-                .evaluate_mueller_prepared(self.material, &incident.prepared, &g),
+            response: incident.normalise(self.kernel.evaluate_mueller_prepared(
+                self.material,
+                &incident.prepared,
+                &g,
+            )),
             geometry: g,
         })
     }
@@ -416,9 +539,15 @@ where
         exit: Vector3<T>,
     ) -> Result<Pol::Output<T>, Error> {
         let g = self.geometry(incident.to_source, exit)?;
-        Ok(self
+        let out = self
             .kernel
-            .evaluate_prepared(self.material, &incident.prepared, &g))
+            .evaluate_prepared(self.material, &incident.prepared, &g);
+        let mass = incident.specular_mass(g.side());
+        Ok(if mass == T::one() {
+            out
+        } else {
+            out.specular_scaled(mass.recip())
+        })
     }
 
     /// The sampler of exit directions for the prepared packet (forward tracing): its lobes are
@@ -512,8 +641,27 @@ where
         });
         let facing = self.surface.facing(&r);
         let cos_o = r.dot(&facing.k());
-        let xi = coherence.inverse_coherence();
+        // The width of light arriving along r̂'s mirror (the same angle, medium and Snell
+        // partner as r̂): the reflected specular ŝ, and close to every ŝ the lobes reach.
+        let width = self.surface_width(&r, coherence)?;
+        let xi = Matrix2::identity() * (width * width).recip();
         let plane = Coh::LEVEL == CoherenceLevel::PlaneWave;
+        // Where the horizon rule widens the coherence, the light's width varies across the
+        // lobe (narrower lobes toward the horizon, wider toward the normal): a quarter of the
+        // specular draws come from a lobe twice as wide, so that the weights stay bounded.
+        let (channels, channel_count) = if plane {
+            ([(T::one(), xi), (T::zero(), xi)], 0)
+        } else if width > coherence.width() * T::lit(1.01) {
+            (
+                [
+                    (T::lit(1.0 - WIDE_SHARE), xi),
+                    (T::lit(WIDE_SHARE), xi * T::lit(WIDE_FACTOR * WIDE_FACTOR)),
+                ],
+                2,
+            )
+        } else {
+            ([(T::one(), xi), (T::zero(), xi)], 1)
+        };
         self.sampler(&Setup {
             known: r,
             facing,
@@ -525,8 +673,8 @@ where
             lobes: self.material.psd.lobes(),
             level: Coh::LEVEL,
             specular: true,
-            channels: [(T::one(), xi), (T::zero(), xi)],
-            channel_count: usize::from(!plane),
+            channels,
+            channel_count,
             blur: (!plane).then_some(xi),
             // Reflection uses the frame facing r̂ (reversed below), transmission its reverse.
             mirror: [below, !below],
@@ -574,9 +722,11 @@ where
             let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &t);
             Pol::Throughput::<T>::from_mueller(&m).scaled(flux / s.pdf)
         } else {
-            let v = self
-                .kernel
-                .evaluate_mueller_prepared(self.material, &incident.prepared, &g);
+            let v = incident.normalise(self.kernel.evaluate_mueller_prepared(
+                self.material,
+                &incident.prepared,
+                &g,
+            ));
             v.total().scaled(flux / s.pdf)
         };
         Ok((weight, g))

@@ -10,11 +10,13 @@ pub(crate) mod chebyshev;
 mod cholesky;
 mod complex;
 mod dft;
+mod gauss_legendre;
 mod linalg2;
 
 pub(crate) use cholesky::{cholesky, in_normal_range, is_nan, log_det_from_cholesky, solve_lower};
 pub(crate) use complex::{HYPOT_PLAIN, principal_sqrt};
 pub(crate) use dft::dft_in_place;
+pub(crate) use gauss_legendre::GL8;
 pub(crate) use linalg2::{
     det2, det2_of_mean, inverse_cholesky_of_mean, inverse_cholesky2, inverse2, pow2_scale,
 };

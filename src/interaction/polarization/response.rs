@@ -48,6 +48,10 @@ pub trait KernelOutput<T: Real>: Copy + Debug + PartialEq {
     /// Every radiance multiplied by `factor` (the attenuation unchanged), e.g. `1/pdf`.
     #[must_use]
     fn scaled(&self, factor: T) -> Self;
+    /// The coherent specular lobe multiplied by `factor`, the scattered part unchanged (the
+    /// renderer layer's normalisation of the lobe near the horizon, `crate::bsdf`).
+    #[must_use]
+    fn specular_scaled(&self, factor: T) -> Self;
 }
 
 /// What a kernel of a run-time [`crate::interaction::Level`] returns: the level's own output.
@@ -104,6 +108,13 @@ impl<T: Real> KernelOutput<T> for LevelResponse<T> {
         match self {
             Self::Intensity(r) => Self::Intensity(r.scaled(factor)),
             Self::Stokes(r) => Self::Stokes(r.scaled(factor)),
+        }
+    }
+    #[inline]
+    fn specular_scaled(&self, factor: T) -> Self {
+        match self {
+            Self::Intensity(r) => Self::Intensity(r.specular_scaled(factor)),
+            Self::Stokes(r) => Self::Stokes(r.specular_scaled(factor)),
         }
     }
 }
@@ -175,6 +186,15 @@ impl<T: Real> KernelOutput<T> for Response<T> {
             side: self.side,
         }
     }
+    #[inline]
+    fn specular_scaled(&self, factor: T) -> Self {
+        Self {
+            specular: Stokes(crate::interaction::prepared::subnormal_onto_cone(
+                self.specular.0 * factor,
+            )),
+            ..*self
+        }
+    }
 }
 
 /// The [`Intensity`] level's answer for one exit direction: radiances `L₀` only (in the exit
@@ -231,6 +251,13 @@ impl<T: Real> KernelOutput<T> for IntensityResponse<T> {
             scattered: self.scattered * factor,
             attenuation: self.attenuation,
             side: self.side,
+        }
+    }
+    #[inline]
+    fn specular_scaled(&self, factor: T) -> Self {
+        Self {
+            specular: self.specular * factor,
+            ..*self
         }
     }
 }
@@ -466,6 +493,15 @@ impl<T: Real, M: Throughput<T>> MuellerResponse<T, M> {
             scattered: self.scattered.scaled(factor),
             attenuation: self.attenuation,
             side: self.side,
+        }
+    }
+
+    /// The coherent specular lobe multiplied by `factor`, the scattered part unchanged.
+    #[must_use]
+    pub fn specular_scaled(&self, factor: T) -> Self {
+        Self {
+            specular: self.specular.scaled(factor),
+            ..*self
         }
     }
 }

@@ -12,6 +12,7 @@ use super::{
 };
 use crate::error::Error;
 use crate::gaussian::Gaussian;
+use crate::numerics::GL8;
 use crate::psd::Autocorrelation;
 use crate::real::Real;
 
@@ -109,18 +110,6 @@ impl RoughnessModel for KirchhoffQuadrature {
     const LEVEL: RoughnessLevel = RoughnessLevel::KirchhoffQuadrature;
     const CARRIES_ATTENUATION: bool = true;
 }
-
-/// 8-point Gauss–Legendre nodes and weights on `[−1, 1]`.
-const GL8: [(f64, f64); 8] = [
-    (-0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
-    (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
-    (-0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
-    (-0.183_434_642_495_649_8, 0.362_683_783_378_362),
-    (0.183_434_642_495_649_8, 0.362_683_783_378_362),
-    (0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
-    (0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
-    (0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
-];
 
 /// `ψ(ρ) = e^{−g} (e^{gρ} − 1)/g` (`ρ` at `g = 0`), without cancellation.
 #[inline]
