@@ -45,9 +45,8 @@ use gmueller::error::Error;
 use gmueller::frame::Frame;
 use gmueller::interaction::{
     CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput, MuellerResponse,
-    OneShape,
-    Partial, Pbsdf, PlaneWave, PolarizationModel, Response, RoughConductor, RoughDielectric,
-    RoughSurface, SmoothConductor, SmoothDielectric, surface_coherence_term,
+    OneShape, Partial, Pbsdf, PlaneWave, PolarizationModel, Response, RoughConductor,
+    RoughDielectric, RoughSurface, SmoothConductor, SmoothDielectric, surface_coherence_term,
     surface_inverse_coherence,
 };
 use gmueller::mueller::Mueller;

@@ -247,7 +247,9 @@ fn rough_eval_is_the_kernel_at_that_level() {
             assert!(
                 same(
                     &got,
-                    &series.evaluate_mueller(&m, &packet, &g).specular_scaled(norm)
+                    &series
+                        .evaluate_mueller(&m, &packet, &g)
+                        .specular_scaled(norm)
                 ),
                 "series σ {sigma}"
             );

@@ -16,6 +16,7 @@ mod bad_input;
 mod bsdf_eval;
 mod bsdf_extremes;
 mod bsdf_furnace;
+mod bsdf_horizon;
 mod bsdf_reciprocity;
 mod bsdf_rough;
 mod bsdf_sampling;

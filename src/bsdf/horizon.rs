@@ -46,6 +46,10 @@ const PANELS: usize = 3;
 /// horizon (no propagating partner: the lobe is then not normalised) and for a covariance that
 /// is not positive definite.
 #[must_use]
+#[expect(
+    clippy::neg_cmp_op_on_partial_ord,
+    reason = "a NaN must fail the test too"
+)]
 pub(crate) fn lobe_mass(sigma: &Matrix2<f64>, c: &Vector2<f64>) -> f64 {
     let rho = c.norm();
     if !(rho < 1.0) {
@@ -90,7 +94,7 @@ fn quadrature(rho: f64, f: f64, stt: f64, srt: f64, det: f64) -> f64 {
         for &(node, weight) in &GL8 {
             let x = mid + 0.5 * dx * node;
             let a2 = (1.0 - x) * (1.0 + x);
-            if !(a2 > 0.0) {
+            if a2 <= 0.0 {
                 continue;
             }
             let a = a2.sqrt();

@@ -144,7 +144,8 @@ impl<T: Real> SideMap<T> {
     #[inline]
     fn h_of(&self, d: &Vector3<T>) -> Option<(Vector2<T>, T)> {
         let c = d.dot(&self.n);
-        (c > T::zero()).then(|| {
+        // Below half the draws' margin from the horizon no lobe draws (module docs).
+        (c > T::EPSILON.sqrt() * T::lit(0.5)).then(|| {
             (
                 self.known_h + Vector2::new(d.dot(&self.t1), d.dot(&self.t2)) * self.k,
                 c,
@@ -184,6 +185,11 @@ impl<T: Real> SideMap<T> {
             return None;
         }
         let (s, c) = theta.sin_cos();
+        // The same margin from the horizon as `direction` (cos θ > √ε): a direction closer to
+        // the plane of the surface is not on a definite side in `T`.
+        if !(c > T::EPSILON.sqrt()) {
+            return None;
+        }
         let u = if theta > T::zero() {
             x * (s / theta)
         } else {
@@ -684,6 +690,11 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             Some((weight, share)) => (self.probs[part] * share, weight),
             None => (self.pdf(&direction), T::zero()),
         };
+        // Every direction returned has a finite, positive density (a draw the density does not
+        // see is rejected, as an evanescent one).
+        if !(pdf > T::zero() && pdf.is_finite()) {
+            return None;
+        }
         Some(DirectionSample {
             direction,
             pdf,

@@ -149,17 +149,23 @@ impl<T: Real> SurfaceCoherence<T> {
     }
 
     /// `σ` combined with the horizon rule's width `Q/(k cos²θ)` of every `(cos θ, k)` in
-    /// `sides` by the root of the sum of squares (`σ` alone for [`SurfaceCoherence::fixed`]),
-    /// capped where its square would leave the normal numbers of `T`.
+    /// `sides` by the root of the sum of squares (`σ` alone for [`SurfaceCoherence::fixed`]).
+    /// The rule's widening stops where the lobe would be narrower than `32 ε` in the projected
+    /// disk of a side (`1/(k σ) ≥ 32 ε`, so that samplers can still resolve it: in `f32` beyond
+    /// about 89.5°, never in `f64` within 89.99999°).
     pub(crate) fn combined(&self, sides: &[(T, T)]) -> T {
         if !self.horizon_rule {
             return self.width;
         }
-        let cap = T::MAX.sqrt() * T::lit(1e-3);
         let mut w = self.width;
+        let mut k_max = T::zero();
         for &(cos_theta, k) in sides {
             w = w.hypot(T::lit(HORIZON_RULE_Q) / (k * cos_theta * cos_theta));
+            k_max = k_max.max(k);
         }
+        let cap = (T::lit(32.0) * T::EPSILON * k_max)
+            .recip()
+            .min(T::MAX.sqrt() * T::lit(1e-3));
         if w.is_finite() && w < cap {
             w
         } else {
