@@ -646,12 +646,15 @@ where
         let width = self.surface_width(&r, coherence)?;
         let xi = Matrix2::identity() * (width * width).recip();
         let plane = Coh::LEVEL == CoherenceLevel::PlaneWave;
-        // Where the horizon rule widens the coherence, the light's width varies across the
-        // lobe (narrower lobes toward the horizon, wider toward the normal): a quarter of the
-        // specular draws come from a lobe twice as wide, so that the weights stay bounded.
+        // Where the horizon rule sets the width (its term above σ) away from the normal, the
+        // light's width varies across the lobe (narrower toward the horizon, wider toward the
+        // normal): a quarter of the specular draws come from a lobe twice as wide, so that the
+        // weights stay bounded.
+        let base = coherence.width();
+        let varies = width * width >= T::lit(2.0) * base * base && cos_o * cos_o <= T::lit(0.75);
         let (channels, channel_count) = if plane {
             ([(T::one(), xi), (T::zero(), xi)], 0)
-        } else if width > coherence.width() * T::lit(1.01) {
+        } else if varies {
             (
                 [
                     (T::lit(1.0 - WIDE_SHARE), xi),
