@@ -24,11 +24,15 @@
 //! E ≈ 1 − ½ (s_rr / f⁴ + s_tt / f²)
 //! ```
 //! (the Hessian of `√(1 − |u|²)` at `c` is `−diag(1/f³, 1/f)` in `(e, e⊥)`), whose next term is
-//! about `2 t⁴ < 6·10⁻⁶`. Otherwise a tensor Gauss–Legendre rule in polar angles of the exit
-//! direction (`u = sin θ (cos φ, sin φ)`, `d²u = cos θ sin θ dθ dφ`; the integrand
-//! `cos²θ sin θ 𝒩` vanishes smoothly at the horizon), 4 × 8 nodes in θ over the lobe's nine
-//! standard deviations cut at the horizon, and 2 × 8 (4 × 8 on a full circle) in φ.
-//! Everything in `f64`.
+//! about `2 t⁴ < 6·10⁻⁶`. Otherwise Gauss–Legendre in `(e, e⊥)` coordinates: the tangential
+//! offset `x` over the lobe's seven standard deviations (cut at `|x| < 1`), and for each `x`
+//! the radial coordinate `y = a sin ψ` (`a = √(1 − x²)`), in which the horizon is `ψ = ±π/2`
+//! and `√(a² − y²) = a cos ψ` is smooth, over the seven standard deviations of the conditional
+//! Gaussian of `y` given `x`; 3 × 8 nodes each (576 exponentials). Against adaptive quadrature
+//! (scipy, 1e-11) of the same integral: 1.5·10⁻⁶ (expansion, the sun at 85°), 9·10⁻⁶ (rule, the
+//! sun at 88°); against the verification kit's hemisphere quadrature of the kernel's own lobe
+//! (`tests/bsdf_horizon.rs`): within 6.9·10⁻⁶ over 0–89° and 2 µm to sunlight. Everything in
+//! `f64`.
 
 use nalgebra::{Matrix2, Vector2};
 

@@ -11,7 +11,12 @@
 //! p_h = Σ_parts P_part · p_part(h_t)                                           (the lobes of `lobes.rs`)
 //! ```
 //! `k_b = k_a` on the known side (reflection) and the other medium's wavenumber across an
-//! interface (transmission). A draw whose `|u_b| ≥ 1` (evanescent) is rejected; Dirac lobes
+//! interface (transmission). A draw whose `|u_b| ≥ 1` (evanescent) is rejected, and so is one
+//! within `cos θ_b ≤ √ε` of the horizon (ε the machine epsilon of the scalar type; 3.5·10⁻⁴
+//! in `f32`, 89.98°), where a direction is not on a definite side of the surface in that type
+//! (its dot product with the normal is rounding): `pdf` is 0 there, and every direction
+//! `sample` returns has a finite, positive `pdf` (in `f32` at 89.99° the angle chart below drew
+//! a direction 1.3·10⁻⁸ from the plane, whose weight was refused); Dirac lobes
 //! (the specular lobe of a plane wave, grating orders of a plane wave) are drawn with their
 //! probability and excluded from the density, as pbrt and Mitsuba do.
 //!
