@@ -483,8 +483,9 @@ where
 /// Backward Monte Carlo (`Bsdf::sample_incident`, 100 000 seeded draws per case) against the
 /// adaptive quadrature of `∫ M₀₀(ŝ → r̂) L(ŝ) dω_s` over both hemispheres of ŝ (module docs),
 /// for rough glass seen from above and from inside and for a conductor, with the surface
-/// coherence σ = 1 µm: within 4 standard errors. The swapped estimator misses the quadrature by
-/// many standard errors at this coherence (its coherent specular lobe is not the physical one)
+/// coherence σ = 1 µm: within 4 standard errors. The swapped estimator converges to its own,
+/// different quadrature at this coherence (0.6–4 % away; its coherent specular lobe is not the
+/// physical one)
 /// and agrees with it for plane waves, where the swapped integrand is the physical one.
 #[test]
 fn backward_monte_carlo_needs_the_physical_direction() {
@@ -552,9 +553,11 @@ fn backward_monte_carlo_needs_the_physical_direction() {
                 "{name}: swapped {swapped:?} vs {quad}"
             );
         } else {
+            // The swapped estimator converges to another value (its own quadrature, checked
+            // above): 0.6 % (glass, exit inside) to 4 % apart, 5–490 standard errors.
             assert!(
-                swapped.z(quad) >= 10.0,
-                "{name}: swapped {swapped:?} agrees with {quad}"
+                (swap_quad - quad).abs() >= 5e-3 * quad && swapped.z(quad) >= 4.0,
+                "{name}: swapped {swapped:?} ({swap_quad}) agrees with {quad}"
             );
         }
     }

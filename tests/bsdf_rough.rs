@@ -194,7 +194,7 @@ fn first_order_is_bit_identical_to_before() {
 /// began to divide the coherent lobe by its mass over the propagating directions and
 /// `SurfaceCoherence::new` gained the horizon rule (issue 36): with both switched off (a mass
 /// of 1 and `SurfaceCoherence::fixed(3.0)` in `feed!`) that change still gave the old value.
-const FIRST_ORDER_FINGERPRINT: u64 = 0x5c0c_4ebe_973e_d544;
+const FIRST_ORDER_FINGERPRINT: u64 = 0x6c03_7f4c_73e2_18e2;
 
 type Glass = KirchhoffDielectric<f64, GaussianPsd<f64, 2>>;
 
