@@ -85,15 +85,19 @@ use crate::stokes::Stokes;
 /// use nalgebra::Vector3;
 /// let c = SurfaceCoherence::new(2.0_f64)?;
 /// let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z())?;
-/// let to_source = Vector3::new(-0.5, 0.3, 0.81);
+/// let to_source = Vector3::new(-0.5, 0.3, 0.81).normalize();
 /// let p = c.packet(Stokes::unpolarized(1.0)?, to_source, &surface, 0.5)?;
-/// // On the surface the coherence is isotropic: Ξ = I/σ² (here the rule leaves σ = 2 µm).
-/// let xi = surface_inverse_coherence(&p, Channel::Half, &surface).unwrap();
-/// assert!((xi.covariance() - nalgebra::Matrix2::identity() * 0.25).norm() < 1e-14);
-/// // Near the horizon the rule widens it: at 85° and λ = 0.5 µm, 16/(k cos²θ) ≈ 167 µm.
+/// // On the surface the coherence is isotropic: Ξ = I/σ(θ)², where the rule gives
+/// // σ(θ) = √(σ² + (16/(k cos²θ))²) = 2.80 µm at cos θ = 0.81, λ = 0.5 µm.
 /// let k = 2.0 * std::f64::consts::PI / 0.5;
+/// let w = (4.0 + (16.0 / (k * to_source.z.powi(2))).powi(2)).sqrt();
+/// assert!((w - c.width_at(to_source.z, k)).abs() < 1e-12);
+/// let xi = surface_inverse_coherence(&p, Channel::Half, &surface).unwrap();
+/// assert!((xi.covariance() - nalgebra::Matrix2::identity() / (w * w)).norm() < 1e-12);
+/// // Near the horizon the rule widens it: at 85°, 16/(k cos²θ) ≈ 167 µm.
 /// let w = c.width_at(85_f64.to_radians().cos(), k);
-/// assert!((w - 16.0 / (k * 85_f64.to_radians().cos().powi(2))).abs() < 1e-9 * w);
+/// let rule = 16.0 / (k * 85_f64.to_radians().cos().powi(2));
+/// assert!((w - rule.hypot(2.0)).abs() < 1e-9 * w && w > 166.0);
 /// # Ok::<(), gmueller::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
