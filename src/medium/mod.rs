@@ -82,6 +82,7 @@
 //! in Lambert coordinates adapted to the lobe ([`PhaseFunction::prepare`], cost in
 //! `benches/medium.rs`).
 
+mod basis;
 mod coefficient;
 mod coherence;
 mod geometry;

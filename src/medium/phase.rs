@@ -243,16 +243,17 @@ where
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
-        let channels = Channels::<T, Pol, Coh>::new(packet)?;
+        let (psd, coherence) = (&self.medium.psd, self.kernel.coherence());
+        let channels = Channels::<T, Pol, Coh>::new(packet, psd, coherence)?;
         let phase_channels = if packet.stokes().s0() > T::zero() {
             channels.clone()
         } else {
-            Channels::unpolarized(packet)?
+            Channels::unpolarized(packet, psd, coherence)?
         };
         let model = LobeModel::new(
             self.medium.psd.lobes(),
             Coh::LEVEL,
-            phase_channels.xi[2].as_ref(),
+            phase_channels.xi_half.as_ref(),
             packet.frame(),
             channels_axial(packet, phase_channels.three),
             packet.wavenumber(),
@@ -264,6 +265,30 @@ where
             &self.medium.scatterer,
             &model,
         );
+        if coefficient.ln_sigma > neg_inf::<T>() {
+            // F(d̂), the phase matrix's scale forward (where every lobe the model names peaks):
+            // beyond the largest a resolved lobe has, σ_s missed the lobe and F would be ~∞.
+            let zero = nalgebra::Vector3::zeros();
+            let (_, ln_e) = phase_channels.intensity_part(
+                self.kernel.coherence(),
+                &self.medium.psd,
+                &self.medium.scatterer,
+                (&zero, T::one()),
+                (T::one(), T::zero()),
+                model.axial,
+            );
+            let resolved = matches!(
+                (ln_e - coefficient.ln_sigma).partial_cmp(&model.ln_peak),
+                Some(core::cmp::Ordering::Less | core::cmp::Ordering::Equal)
+            );
+            if !resolved {
+                return Err(Error::Unrealizable {
+                    reason: "the σ_s quadrature did not resolve the phase function's lobe (F \
+                             forward beyond what a resolved lobe allows: a VolumePsd naming a \
+                             lobe far wider than its PSD's)",
+                });
+            }
+        }
         let sampler = DirectionMixture::new(&model, packet.wavenumber(), coefficient.far);
         Ok(Incident {
             channels,
@@ -455,7 +480,7 @@ impl<P, M> RandomMedium<P, M> {
         Pol: PolarizationModel,
         Coh: VolumeCoherence<T, P>,
     {
-        let channels = Channels::<T, Pol, Coh>::new(packet)?;
+        let channels = Channels::<T, Pol, Coh>::new(packet, &self.psd, kernel.coherence())?;
         let g = ScatteringGeometry::new(packet.frame(), packet.wavenumber(), exit)?;
         let v = channels.scattered(kernel.coherence(), &self.psd, &self.scatterer, &g);
         Ok(ScatteredLight {
