@@ -235,11 +235,12 @@ fn incoherent_sigma_s(k: f64, w: f64, zz: f64, integral: f64) -> f64 {
 /// The `f64` failure of the same kind (issue 36, beyond the tested ranges): a K-correlation
 /// medium and a packet of 5 λ coherence width with `σ_zz = 2.4·10⁷ λ`. At the `Incoherent` level
 /// the lobe on the sphere is set by `σ_zz`, not by the width: `h·d̂ = −|h|²/2k`, so it is
-/// `√(2k/σ_zz)` wide, 10³ times narrower than `1/w`; the quadrature's lobe model read only the
-/// transverse block and its nodes missed it (`σ_s` came out 10⁻¹⁰⁸ instead of 10⁻²). Now within
-/// 5e-9 of the independent 1-D integral, for two wavelengths and widths (measured 2.6e-9 in all
-/// three: the rule's unit panels resolve a Gaussian lobe to ~1e-15, this lobe, quartic in
-/// `|v|`, `exp(−σ_zz²|v|⁴/8k²)`, to a few 1e-9).
+/// `√(2k/σ_zz)` wide, 276 times narrower than `1/w` here; the quadrature's lobe model read only
+/// the transverse block and its nodes missed most of it (before the fix: `σ_s` 1.27e-2 instead
+/// of 9.74e-3 at λ = 0.5 µm, w = 5 λ; 10⁻¹⁰⁸ instead of 1.4e-4 at w = 0.5 λ). Now within 5e-9 of
+/// the independent 1-D integral, for two wavelengths and widths (measured 2.6e-9 in all three:
+/// the rule's unit panels resolve a Gaussian lobe to ~1e-15, this lobe, quartic in `|v|`,
+/// `exp(−σ_zz²|v|⁴/8k²)`, to a few 1e-9).
 #[test]
 fn long_longitudinal_coherence_in_f64() {
     for (lambda, w_l) in [(0.5, 5.0), (5.0, 5.0), (0.5, 50.0)] {
@@ -515,9 +516,25 @@ fn case_errors(l: &Light, f: &Frame<f64>, m: Medium) -> [f64; 9] {
     }
 }
 
-/// The largest `|ln σ_s(f32) − ln σ_s(f64)|` the property test allows, per coherence level
-/// (`Partial`, `PlaneWave`, `Incoherent`).
-const F32_LN_SIGMA: [f64; 3] = [1e-3, 1e-3, 4e-3];
+/// The largest anisotropy (ratio of widths) of the packet's coherence and of the medium's
+/// correlation for which the tight bound applies: beyond it the lobe can be narrower than `k`
+/// one way and wider than the sphere the other (a band across the Lambert disk), where the fixed
+/// `σ_s` rule is itself uncertain at the percent level (`docs/numerical.md`) and rounding moves
+/// it by more.
+const BAND: f64 = 30.0;
+
+/// The largest `|ln σ_s(f32) − ln σ_s(f64)|` the property test allows: outside bands (both
+/// anisotropies below [`BAND`]) and in them.
+const F32_LN_SIGMA: [f64; 2] = [1e-3, 2e-2];
+
+/// `true` when the case may make a band lobe (an anisotropy of [`BAND`] or more).
+fn band(l: &Light, m: Medium) -> bool {
+    let medium = match m {
+        Medium::Aniso(a, b, _) => a.max(b) / a.min(b),
+        _ => 1.0,
+    };
+    l.a >= BAND || medium >= BAND
+}
 
 proptest! {
     #![proptest_config(proptest_config(32))]
@@ -528,13 +545,14 @@ proptest! {
     /// (ℓ 10⁻³–10³ λ), anisotropic (10⁻²–10² λ) and K-correlation media, any frame. Every level
     /// prepares in both precisions, `ln σ_s` is finite, `F` and the sample weights are finite,
     /// `F S` and `weight · S` are valid, and `ln σ_s` agrees with `f64` on the same inputs to
-    /// [`F32_LN_SIGMA`] (before the fix, `σ_s` was 0 — `ln σ_s` off by ~10³ — where the 3-D
-    /// coherence's variances spanned more than 10⁸).
+    /// [`F32_LN_SIGMA`] (1e-3; 2e-2 where an anisotropy of 30 or more can make a band lobe).
+    /// Before the fix `σ_s` was 0 — `ln σ_s` off by ~10³ — where the 3-D coherence's variances
+    /// spanned more than 10⁸.
     #[test]
     fn f32_sigma_s_around_the_issue(l in light(), f in frame(), m in medium()) {
         let e = case_errors(&l, &f, m);
+        let bound = F32_LN_SIGMA[usize::from(band(&l, m))];
         for (i, e) in e.iter().enumerate() {
-            let bound = F32_LN_SIGMA[i / 3];
             prop_assert!(*e <= bound, "level {i}: |Δ ln σ_s| = {e:e} > {bound:e}");
         }
     }
@@ -694,5 +712,31 @@ fn a_lobe_the_quadrature_cannot_see_is_refused() {
             }
             (got, _) => panic!("named {scale} times wide: {got:?}"),
         }
+    }
+}
+
+/// The f32 errors of the property test's region, measured: `|Δ ln σ_s|` per coherence level
+/// (`Partial`, `PlaneWave`, `Incoherent`) outside and inside bands ([`band`]) over 3 000 cases
+/// drawn from the fixed seed (the numbers in `docs/numerical.md`):
+/// `cargo test --release --test integration medium_f32::f32_sigma_s_sweep -- --ignored --nocapture`.
+#[test]
+#[ignore = "3 000 cases at nine levels in both precisions, ~1 min in release"]
+fn f32_sigma_s_sweep() {
+    let cases = gmueller::verify::strategy::sample((light(), frame(), medium()), 3000);
+    let mut worst = [[0.0f64; 3]; 2];
+    let mut count = [0usize; 2];
+    for (l, f, m) in &cases {
+        let b = usize::from(band(l, *m));
+        count[b] += 1;
+        for (i, e) in case_errors(l, f, *m).iter().enumerate() {
+            worst[b][i / 3] = worst[b][i / 3].max(*e);
+        }
+    }
+    for (b, name) in ["outside bands", "in bands"].iter().enumerate() {
+        println!(
+            "max |Δ ln σ_s| {name} ({} cases): Partial {:.2e}, PlaneWave {:.2e}, Incoherent {:.2e}",
+            count[b], worst[b][0], worst[b][1], worst[b][2]
+        );
+        assert!(worst[b].iter().all(|w| *w <= F32_LN_SIGMA[b]), "{worst:?}");
     }
 }

@@ -7,8 +7,11 @@
 //!     = (|L|/k²) ∫₀^{2π} dψ ∫₀^{ρ_max(ψ)} f(r̂(L ρ ê_ψ)) ρ dρ,        ρ_max(ψ) = 2k/|L ê_ψ|
 //! r̂(v) = (1 − 2a²) d̂ + 2a√(1 − a²) (v_x x̂ + v_y ŷ)/|v|,   a = |v|/2k        (Lambert, about d̂)
 //! ```
-//! `L` is the Cholesky factor of the lobe's transverse covariance ([`super::lobes`]), so that
-//! in `z = L⁻¹v` the lobe is round and of unit width. The rule: the trapezoid rule in ψ with
+//! `L` is the Cholesky factor of the lobe's covariance on the Lambert disk ([`super::lobes`]; a
+//! larger eigenvalue beyond the disk's `(2k)²` capped there, so that the disk is not a sliver in
+//! `z`), so that in `z = L⁻¹v` the lobe is round and of unit width. The integrand is evaluated
+//! at `h = √(1 − a²) v − (|v|²/2k) d̂` formed from `v` (relative accuracy ε; `k(r̂ − d̂)` of a
+//! rounded r̂ carries `ε k`). The rule: the trapezoid rule in ψ with
 //! [`AZIMUTHS`] nodes — or one node when the integrand is symmetric about d̂ (an isotropic PSD
 //! and isotropic transverse shapes): then the terms of the first row of `m̄ T` in `cos 2φ`,
 //! `sin 2φ` integrate to 0 and are left out, and the rest does not depend on φ —,

@@ -5,11 +5,20 @@
 //! # Formula
 //! ```text
 //! v = (2k/|r̂ + d̂|) (r̂·x̂, r̂·ŷ),   |v| = |h| = k|r̂ − d̂| ∈ [0, 2k],   d²v = k² dΩ    (Lambert's equal-area map about d̂)
-//! lobe covariance in v ≈ h_⊥:  PlaneWave Λ⊥,  Partial Λ⊥ + Ξ⊥,  Incoherent Ξ⊥     (Λ the PSD's spectral covariance)
+//! h = √(1 − a²) v − (|v|²/2k) d̂,   a = |v|/2k                                     (on the sphere)
+//! 3-D lobe covariance C in h (packet basis):  PlaneWave Λ,  Partial Λ + Ξ,  Incoherent Ξ   (Λ the PSD's spectral covariance)
+//! hᵀC⁻¹h ≈ vᵀPv + a² (c_zz − p) |v|²,   P = (C⁻¹)⊥ = (C⊥ − c cᵀ/C_zz)⁻¹,  c_zz = (C⁻¹)_zz
+//! lobe covariance in v:  (P + q I)⁻¹,   q = √(c_zz − p_min)/2k  (0 unless c_zz > p_min)
 //! Gaussian radial lobe:  g(v) = exp(−|v|²/2s²)/(2πs²),               mass in the disk F(2k) = 1 − e^{−2k²/s²}
 //! power radial lobe:     g(v) = (β−1)/(πs²) (1 + |v|²/s²)^{−β},        F(2k) = 1 − (1 + 4k²/s²)^{1−β}
 //! ```
-//! `⊥` is the block in the packet's transverse basis (x̂, ŷ); `Ξ⊥ = Θ⊥_½⁻¹`.
+//! `⊥` is the block in the packet's transverse basis (x̂, ŷ); `Ξ = blockdiag(Θ⊥_½⁻¹, Ξ_zz)` in
+//! that basis, exact (from the packet, in `f64`: the transverse block of a world-axes `Ξ` rounded
+//! to `f32` is noise once `Ξ_zz/λ_min(Θ⊥⁻¹) ≳ 1/ε₃₂`, issue 36). The lobe on the sphere is the
+//! slice of the 3-D lobe at `h·d̂ = 0` (precision `P`), narrowed by the quartic term where the
+//! lobe is narrower along d̂ than across it — the lobe edge `|v|² = 2k/√(c_zz − p)` as an
+//! isotropic precision `q` (a long `σ_zz` at the `Incoherent` level: width `√(2k/σ_zz)`, not `1/w`).
+//! An isotropic `C` gives `hᵀC⁻¹h = |v|²/s²` exactly (`|h| = |v|`), and `q = 0`.
 
 use nalgebra::{Matrix2, Matrix3};
 

@@ -233,9 +233,13 @@ where
     /// symmetric for an isotropic PSD).
     ///
     /// # Errors
-    /// [`Error::Singular`] at the `Partial` and `Incoherent` levels for a packet with unbounded
-    /// longitudinal coherence (set `σ_zz` with [`WavePacket::with_longitudinal_coherence`]);
-    /// [`Error::NotPositiveDefinite`] when its inverse coherence is not representable.
+    /// [`Error::Singular`] at the `Incoherent` level for a packet with unbounded longitudinal
+    /// coherence (set `σ_zz` with [`WavePacket::with_longitudinal_coherence`]);
+    /// [`Error::NotPositiveDefinite`] when its inverse coherence is not representable;
+    /// [`Error::Unrealizable`] when the quadrature of `σ_s` did not resolve the phase
+    /// function's lobe (`F` forward beyond what a resolved lobe of the named shape allows: a
+    /// [`VolumePsd`] naming a lobe far wider than its PSD's), where `F` would be ~∞
+    /// ([module docs](super), "When `σ_s` is 0 or not representable").
     pub fn prepare<T>(&self, packet: &WavePacket<T>) -> Result<Incident<T, Pol, Coh>, Error>
     where
         T: Real,
