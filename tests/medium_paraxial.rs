@@ -212,15 +212,15 @@ fn the_packet_against_an_exact_plane_wave_sum() {
     }
 }
 
-/// The same over a finer and wider grid (w = 1.5–200 λ, kℓ = 0.1–20, every 10°):
+/// The same over a finer and wider grid (w = 1.5–200 λ, kℓ = 0.1–10, every 10°):
 /// `cargo test --release --test integration medium_paraxial -- --ignored --nocapture`.
 #[test]
-#[ignore = "a larger sweep, ~1 min in release"]
+#[ignore = "a larger sweep, several minutes in release"]
 fn the_packet_against_an_exact_plane_wave_sum_wide() {
     let degrees: Vec<f64> = (1..=18).map(|i| 10.0 * f64::from(i)).collect();
     let (c, flat) = sweep(
         &[1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0],
-        &[0.1, 0.3, 1.0, 2.0, 5.0 / 2f64.sqrt(), 5.0, 10.0, 20.0],
+        &[0.1, 0.3, 1.0, 2.0, 5.0 / 2f64.sqrt(), 5.0, 10.0],
         &degrees,
     );
     assert!(
