@@ -8,7 +8,7 @@
 
 use crate::common;
 
-use common::medium::{gaussian, simple, turned};
+use common::medium::{gaussian, simple, turned, widened};
 use common::{Tol, assert_close, log_uniform, proptest_config};
 use gmueller::Real;
 use gmueller::frame::Frame;
@@ -429,29 +429,6 @@ fn f32_agrees_with_f64() {
         worst.0, worst.1
     );
     assert!(worst.1 <= 1e-5);
-}
-
-/// The f64 packet with the numbers of an f32 one (the frame renormalised).
-fn widened(p: &WavePacket<f32>) -> WavePacket<f64> {
-    let f = p.frame();
-    // (f32 unit vectors are not unit to f64's 256 ε: renormalised, a ~1e-7 change.)
-    let fr = Frame::from_direction_and_x(f.k().map(f64::from), f.x().map(f64::from)).unwrap();
-    let s = p.stokes().vector().map(f64::from);
-    let c = |ch| CoherenceShape::new(p.shape(ch).map(f64::from)).unwrap();
-    let out = WavePacket::new(
-        Stokes::new(s[0], s[1], s[2], s[3]).unwrap(),
-        c(gmueller::packet::Channel::X),
-        c(gmueller::packet::Channel::Y),
-        fr,
-        f64::from(p.wavelength()),
-    )
-    .unwrap();
-    let inv = f64::from(p.inverse_longitudinal_variance());
-    if inv > 0.0 {
-        out.with_longitudinal_coherence(inv.sqrt().recip()).unwrap()
-    } else {
-        out
-    }
 }
 
 /// `F`, `σ_s` and the pdf do not depend on the packet's brightness, and `dI/dV` is

@@ -340,9 +340,10 @@ where
     true
 }
 
-/// A medium that does not scatter (`δε = 0`): `σ_s = 0`, `F = 0`, `dI/dV = 0`, and the sampler
-/// still draws with a finite positive pdf; a dark packet (`S0 = 0`) scatters nothing but has
-/// the phase matrix and `σ_s` of unpolarized light of its coherence.
+/// A medium that does not scatter (`δε = 0`): `σ_s = 0`, `F = 0`, `dI/dV = 0`, sample weights
+/// and `weight · S` 0, and the sampler still draws with a finite positive pdf; a dark packet
+/// (`S0 = 0`) scatters nothing but has the phase matrix and `σ_s` of unpolarized light of its
+/// coherence.
 #[test]
 fn silent_medium_and_dark_packet() {
     let silent = RandomMedium::new(GaussianPsd::<f64, 3>::isotropic(0.0, 0.5).unwrap(), Dipole);
@@ -366,6 +367,8 @@ fn silent_medium_and_dark_packet() {
     );
     let s = phase.sample(&inc, 0.5, [0.5, 0.5]);
     assert!(s.pdf.is_finite() && s.pdf > 0.0);
+    assert_eq!(s.weight.matrix(), nalgebra::Matrix4::zeros(), "zero weight");
+    assert_eq!(s.apply(&p.stokes()).vector(), Vector4::zeros());
 
     let m = gaussian::<f64>(0.5);
     let phase = PhaseFunction::new(&m, Kernel::<Full, Partial>::default());

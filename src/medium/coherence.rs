@@ -48,6 +48,16 @@ pub trait VolumeCoherence<T: Real, P: Psd<T, 3>>: CoherenceModel {
     /// the scattering vector `h` (rad/length); `−∞` where `K³ = 0`.
     #[must_use]
     fn log_volume_weight(&self, psd: &P, xi: Option<&Gaussian<T, 3>>, h: &Vector3<T>) -> T;
+
+    /// `true` when this level's `K³` of a Gaussian PSD is its closed form
+    /// (`(2π)^{3/2} σ² |Λ + Ξ|^{−1/2} exp(−½ hᵀ(Λ + Ξ)⁻¹h)`): `Partial` with a blur exact for
+    /// Gaussians ([`BlurMethod::exact_for_gaussians`], e.g. [`crate::psd::ClosedForm`]). The
+    /// medium then evaluates that closed form itself, in the packet's own axes, where it keeps
+    /// every variance in both precisions ([module docs](crate::medium)); `false` by default.
+    #[must_use]
+    fn closed_form_for_gaussians(&self) -> bool {
+        false
+    }
 }
 
 impl<T: Real, P: Psd<T, 3>> VolumeCoherence<T, P> for PlaneWave {
@@ -71,6 +81,11 @@ where
             Some(xi) => ln_two_pi_3_2::<T>() + self.0.log_normalized_blur(psd, xi, h),
             None => ln_two_pi_3_2::<T>() + psd.log_value(h),
         }
+    }
+
+    #[inline]
+    fn closed_form_for_gaussians(&self) -> bool {
+        self.0.exact_for_gaussians()
     }
 }
 

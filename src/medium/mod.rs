@@ -12,7 +12,7 @@
 //! σ_s      = (1/S0) ∫ [dI/dV]₀ dΩ,     F = (dI/dV)/(σ_s S0) as a Mueller matrix,  ∫ [F S]₀ dΩ = S0
 //! ```
 //! `p` is the 3-D PSD of the relative permittivity fluctuation `δε` (unitary transform,
-//! `∫ p = (2π)^{3/2} ⟨δε²⟩`, [`crate::psd`]), `m̄` the mean scattering matrix ([`Scatterer`]:
+//! `∫ p = (2π)^{3/2} ⟨δε²⟩`, [`crate::psd`]; see *Conventions* below), `m̄` the mean scattering matrix ([`Scatterer`]:
 //! [`Dipole`] for the Born medium), `T` the rotation (S2.4) from the packet frame to the incident
 //! scattering-plane frame, `S_α` the packet's channels (S2.16) and `Θ_α` its 3-D shapes
 //! ([`WavePacket::with_longitudinal_coherence`] sets `σ_zz`). The coherence levels give `K³`
@@ -66,6 +66,55 @@
 //! `k L |δε| ≪ 1` over the scattering region; multiple scattering is the path tracer's job
 //! (`σ_s` and `F` per event).
 //!
+//! # Conventions (read before building a medium)
+//! - **The PSD is of the relative permittivity `δε`, not of the index.** For index
+//!   fluctuations `δn` in a background of index `n`, `ε = (n + δn)² = n²(1 + δε)` gives
+//!   `δε = 2δn/n + (δn/n)²`, so `p_δε ≈ (4/n²) p_δn` — in air or vacuum `δε ≈ 2δn` and
+//!   `p_δε = 4 p_δn`: a `δn` spectrum passed in unchanged understates `σ_s` (and `dI/dV`) by a
+//!   factor 4 (`tests/medium_conventions.rs`: against the classical `2πk⁴Φ_n sin²χ` of index
+//!   fluctuations, to 1e-12). [`RandomMedium::new`] has the formula.
+//! - **`GaussianPsd::isotropic(σ, ℓ)` is the correlation `σ² e^{−r²/2ℓ²}`** (its PSD
+//!   `σ²ℓ³ e^{−ℓ²|q|²/2}`, the unitary transform, checked by radial quadrature). Much of the
+//!   literature (SCATMECH, the surface-scattering texts) writes `σ² e^{−r²/ℓ'²}`: its `ℓ'` is
+//!   `√2 ℓ`.
+//! - **`h = k(r̂ + ŝ)` with ŝ pointing toward the source** (`ŝ = −d̂`, d̂ the travel direction):
+//!   `h = 0` forward, `h = 2kŝ` straight back toward the source
+//!   ([`ScatteringGeometry::scattering_vector`]).
+//!
+//! # The packet is paraxial
+//! The packet's coherence `e^{ik d̂·ξ} g^{Θ}(ξ)` puts its plane waves on the plane tangent to the
+//! sphere `|K| = k` at `k d̂`; a real beam's lie on the sphere, `κ⊥²/2k` behind the plane. Against
+//! an exact sum of plane waves (a Gaussian Schell-model beam in a Gaussian medium, each plane
+//! wave scattered by the exact first-Born formula; `tests/medium_paraxial.rs`) the packet is low
+//! by `e = I_exact/I_packet − 1 ≈ 2(ℓ/w)²(1 − cos Θ)/2` (`ℓ` this crate's correlation length, `w`
+//! the coherence width; exactly `2ℓ²/(w² − ℓ²)` backward for a scalar scatterer), more off axis
+//! where `kℓ²/w` is not small, plus `O((ℓ/w)² sin²Θ + 1/(kw)²)` from the dipole factor taken at
+//! d̂. Measured: backward 16.5 % at `w = 2 λ`, `kℓ = 3.54` (the `kℓ' = 5` of a correlation
+//! `σ²e^{−r²/ℓ'²}`), 1.5e-3 at `w = 20 λ`, 2.4e-4 at `w = 50 λ`; 10° from forward at most
+//! 3.3e-3 at `w = 5 λ` and 2.2e-4 at `w = 20 λ` (dipole, `kℓ ≤ 10`). Asserted over
+//! `w = 2–50 λ`, `kℓ = 0.5–10` (`ℓ ≤ w/2`), `Θ = 10°–180°`:
+//! ```text
+//! |e| ≤ 2.02 [a² ((1 − cos Θ)/2 · (1 + (kℓ²/w)² sin²Θ) + D sin²Θ) + D/(kw)²],   a² = ℓ²/(w² − ℓ²)
+//! ```
+//! (`D` = 1 for [`Dipole`], 0 for [`Scalar`]; measured constant 2.011 and 1.971). A renderer
+//! whose coherence widths are a few wavelengths and whose media are correlated over more than
+//! a tenth of them should expect percent-level errors away from forward.
+//!
+//! # When `σ_s` is 0 or not representable
+//! - `F`, the pdf and the sample weight are computed from `ln σ_s`
+//!   ([`Incident::ln_scattering_coefficient`]): a `σ_s` that underflows the type
+//!   ([`Incident::scattering_coefficient`] 0) or overflows it (∞) leaves them finite and exact
+//!   (`tests/medium_f32.rs`: `σ_s` 5e-49 and 1e40 in `f32`, `F` within 1e-5 of `f64`).
+//! - A medium that does not scatter (`δε = 0`, `ln σ_s = −∞`): `σ_s = 0`, `F = 0`, `dI/dV = 0`,
+//!   sample weights 0, and the sampler still draws with a finite positive pdf.
+//! - `σ_s` that did not resolve the phase function's lobe — a [`VolumePsd`] that names a lobe
+//!   far wider than its PSD's, so that every quadrature node misses it — is refused:
+//!   [`PhaseFunction::prepare`] returns [`crate::Error::Unrealizable`] when `F` forward exceeds
+//!   `64 c max(k²/2πs², 1/4π)` (`s` the lobe's finest named scale, `c = 2ν` for a power lobe, 1
+//!   otherwise), rather than hand out an `F` of ~10⁸⁶ (∞ in `f32`). Every lobe a crate PSD names
+//!   peaks forward, where the check looks, so for them `F` and the weights are finite for every
+//!   prepared packet.
+//!
 //! # Peers
 //! A polarized Rayleigh phase function is still "not implemented" in Mitsuba 3 (its
 //! `src/phase/rayleigh.cpp` warns so in polarized variants and falls back to the scalar
@@ -77,11 +126,26 @@
 //! # Numerics
 //! The weights are logarithms combined with `ln S0` and `ln(k⁴/16π²)` before anything is
 //! exponentiated (as the surface kernel, [`crate::interaction`]); the Full level caps `K³_½` at
-//! the Cauchy–Schwarz bound of the channel weights; outputs are valid Stokes vectors. `Ξ_α` is
-//! formed and factored in `f64` whatever the type. `σ_s` is a fixed quadrature over the sphere
-//! in Lambert coordinates adapted to the lobe ([`PhaseFunction::prepare`], cost in
-//! `benches/medium.rs`).
+//! the Cauchy–Schwarz bound of the channel weights; outputs are valid Stokes vectors. `σ_s` is a
+//! fixed quadrature over the sphere in Lambert coordinates adapted to the lobe
+//! ([`PhaseFunction::prepare`], cost in `benches/medium.rs`).
+//!
+//! **Each channel in its own axes.** `Ξ_α`'s variances span `(w/σ_zz)²` — 10⁸ for a 2.7·10³ λ
+//! width beside a 0.27 λ `σ_zz` — and a 3-D matrix in world axes cannot hold more than `1/ε` of
+//! span in `T`: rounded to `f32`, its transverse block was noise, the `σ_s` quadrature missed the
+//! lobe and `σ_s` came out 0 (issue 36; `tests/medium_f32.rs`). `Ξ_α` is diagonal in the basis
+//! of the channel's transverse eigenvectors and d̂, formed in `f64`; there the `Incoherent`
+//! weight, and the `Partial` weight of a Gaussian PSD whose blur is exact for Gaussians, are
+//! Gaussian lobes `c − ½|L⁻¹Bᵀh|²` whose rows are formed in `f64`, and an isotropic mixture
+//! with a closed-form blur is blurred with the diagonal `Ξ_α` at `Bᵀh`
+//! ([`VolumePsd::exact_lobes`], [`VolumeCoherence::closed_form_for_gaussians`]). Quadrature
+//! blurs and PSDs not known to be Gaussian or isotropic get `Ξ_α` in world axes (factored in
+//! `f64`, rounded to `T`). The lobe that places the quadrature's nodes is the 3-D lobe restricted
+//! to the sphere (the slice at `h·d̂ = 0`, narrowed where `h·d̂ = −|h|²/2k` limits it: a long
+//! `σ_zz` at the `Incoherent` level), and `h` at the nodes is formed from the Lambert point, not
+//! from a rounded exit direction.
 
+mod basis;
 mod coefficient;
 mod coherence;
 mod geometry;
@@ -116,6 +180,30 @@ pub struct RandomMedium<P, M = Dipole> {
 
 impl<P, M> RandomMedium<P, M> {
     /// A medium from its PSD and mean scattering matrix.
+    ///
+    /// # Formula
+    /// ```text
+    /// ε(r) = n² (1 + δε(r)),   p = F{⟨δε(x) δε(x + ξ)⟩}   (3-D, unitary)
+    /// index fluctuations δn:   δε = 2δn/n + (δn/n)²  ⇒  p_δε ≈ (4/n²) p_δn
+    /// ```
+    /// `psd` is the PSD of the **relative permittivity** fluctuation `δε`, in rad/length in and
+    /// length³ out, with the packet's wavelength the one in the background of index `n`. For a
+    /// medium described by its refractive-index fluctuations `δn` (rms `σ_n`), pass the `δε`
+    /// spectrum: `4/n²` times the `δn` spectrum (`GaussianPsd::isotropic(2σ_n/n, ℓ)` for a
+    /// Gaussian one); passed in unchanged, a `δn` spectrum in air understates `σ_s` and `dI/dV`
+    /// by a factor 4 (`tests/medium_conventions.rs`, against the classical cross-section
+    /// `2πk⁴Φ_n sin²χ` of index fluctuations). `GaussianPsd::isotropic(σ, ℓ)` is the correlation
+    /// `σ² e^{−r²/2ℓ²}` ([module docs](self)).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::medium::{Dipole, RandomMedium};
+    /// use gmueller::psd::GaussianPsd;
+    /// // Index fluctuations of rms 5e-4 in air (n = 1), correlated over 0.3 µm.
+    /// let (sigma_n, ell) = (5e-4_f64, 0.3);
+    /// let medium = RandomMedium::new(GaussianPsd::<f64, 3>::isotropic(2.0 * sigma_n, ell)?, Dipole);
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
     #[must_use]
     pub fn new(psd: P, scatterer: M) -> Self {
         Self { psd, scatterer }

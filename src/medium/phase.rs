@@ -233,9 +233,13 @@ where
     /// symmetric for an isotropic PSD).
     ///
     /// # Errors
-    /// [`Error::Singular`] at the `Partial` and `Incoherent` levels for a packet with unbounded
-    /// longitudinal coherence (set `σ_zz` with [`WavePacket::with_longitudinal_coherence`]);
-    /// [`Error::NotPositiveDefinite`] when its inverse coherence is not representable.
+    /// [`Error::Singular`] at the `Incoherent` level for a packet with unbounded longitudinal
+    /// coherence (set `σ_zz` with [`WavePacket::with_longitudinal_coherence`]);
+    /// [`Error::NotPositiveDefinite`] when its inverse coherence is not representable;
+    /// [`Error::Unrealizable`] when the quadrature of `σ_s` did not resolve the phase
+    /// function's lobe (`F` forward beyond what a resolved lobe of the named shape allows: a
+    /// [`VolumePsd`] naming a lobe far wider than its PSD's), where `F` would be ~∞
+    /// ([module docs](super), "When `σ_s` is 0 or not representable").
     pub fn prepare<T>(&self, packet: &WavePacket<T>) -> Result<Incident<T, Pol, Coh>, Error>
     where
         T: Real,
@@ -243,16 +247,17 @@ where
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
-        let channels = Channels::<T, Pol, Coh>::new(packet)?;
+        let (psd, coherence) = (&self.medium.psd, self.kernel.coherence());
+        let channels = Channels::<T, Pol, Coh>::new(packet, psd, coherence)?;
         let phase_channels = if packet.stokes().s0() > T::zero() {
             channels.clone()
         } else {
-            Channels::unpolarized(packet)?
+            Channels::unpolarized(packet, psd, coherence)?
         };
         let model = LobeModel::new(
             self.medium.psd.lobes(),
             Coh::LEVEL,
-            phase_channels.xi[2].as_ref(),
+            phase_channels.xi_half.as_ref(),
             packet.frame(),
             channels_axial(packet, phase_channels.three),
             packet.wavenumber(),
@@ -264,6 +269,30 @@ where
             &self.medium.scatterer,
             &model,
         );
+        if coefficient.ln_sigma > neg_inf::<T>() {
+            // F(d̂), the phase matrix's scale forward (where every lobe the model names peaks):
+            // beyond the largest a resolved lobe has, σ_s missed the lobe and F would be ~∞.
+            let zero = nalgebra::Vector3::zeros();
+            let (_, ln_e) = phase_channels.intensity_part(
+                self.kernel.coherence(),
+                &self.medium.psd,
+                &self.medium.scatterer,
+                (&zero, T::one()),
+                (T::one(), T::zero()),
+                model.axial,
+            );
+            let resolved = matches!(
+                (ln_e - coefficient.ln_sigma).partial_cmp(&model.ln_peak),
+                Some(core::cmp::Ordering::Less | core::cmp::Ordering::Equal)
+            );
+            if !resolved {
+                return Err(Error::Unrealizable {
+                    reason: "the σ_s quadrature did not resolve the phase function's lobe (F \
+                             forward beyond what a resolved lobe allows: a VolumePsd naming a \
+                             lobe far wider than its PSD's)",
+                });
+            }
+        }
         let sampler = DirectionMixture::new(&model, packet.wavenumber(), coefficient.far);
         Ok(Incident {
             channels,
@@ -455,7 +484,7 @@ impl<P, M> RandomMedium<P, M> {
         Pol: PolarizationModel,
         Coh: VolumeCoherence<T, P>,
     {
-        let channels = Channels::<T, Pol, Coh>::new(packet)?;
+        let channels = Channels::<T, Pol, Coh>::new(packet, &self.psd, kernel.coherence())?;
         let g = ScatteringGeometry::new(packet.frame(), packet.wavenumber(), exit)?;
         let v = channels.scattered(kernel.coherence(), &self.psd, &self.scatterer, &g);
         Ok(ScatteredLight {

@@ -14,11 +14,13 @@
 //! kernel does (the bound holds in any dimension: the spectral matrix of a realizable packet is
 //! positive semidefinite at every frequency, and `K³` averages it against `p ≥ 0`).
 
-use nalgebra::{Matrix2, Matrix3, Matrix4, Vector4};
+use nalgebra::{Matrix3, Matrix4, Vector4};
 
+use super::basis::{ChannelBasis, PacketLobe, PacketXi, packet_inverse_coherence};
 use super::coherence::VolumeCoherence;
 use super::geometry::ScatteringGeometry;
 use super::scatterer::Scatterer;
+use super::spectrum::{VolumeLobes, VolumePsd};
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::gaussian::Gaussian;
@@ -40,15 +42,18 @@ pub(crate) fn ln_born<T: Real>(k: T) -> T {
 }
 
 /// The inverse coherence `Ξ_α = Q Θ_α⁻¹ Qᵀ` of a channel in world coordinates (S2.18), as a
-/// Gaussian in `h`: formed and factored in `f64` whatever `T` (the factor is then rounded),
-/// so that the longitudinal variance `1/σ_zz²` survives beside a transverse `1/w²` up to a
-/// ratio of ~1e14 in both precisions.
+/// Gaussian in `h`: formed and factored in `f64` whatever `T` (the factor is then rounded).
 ///
 /// A longitudinal variance `1/σ_zz²` below `64 ε₆₄` times the largest transverse one `1/w²`
 /// (the smallest the factorisation keeps: `σ_zz ≳ 1.2e7 w`) is raised to it, and so is that of
 /// unbounded longitudinal coherence (`σ_zz = ∞`, monochromatic light) when `unbounded_ok`: the
 /// limit, which moves a blur `∫ p 𝒩_Ξ(h − ·)` by a relative `~64 ε₆₄ λ_max(Θ⊥⁻¹)/Λ_zz` (`Λ_zz`
 /// the PSD's spectral variance along d̂): `1e-14 (ℓ/w)²`.
+///
+/// The world form is what a blur method is handed for a PSD that is not known to be isotropic
+/// or Gaussian ([`super::VolumePsd::exact_lobes`]); its rounding to `T` keeps `Ξ_α`'s small
+/// variances only to a relative `~ε κ` in sums such as `Λ + Ξ_α` (`κ` the condition of the
+/// sum), which is why the medium prefers the channel's own basis ([`super::basis`]).
 ///
 /// # Errors
 /// [`Error::Singular`] for unbounded longitudinal coherence unless `unbounded_ok`;
@@ -58,21 +63,10 @@ pub(crate) fn inverse_coherence<T: Real>(
     channel: Channel,
     unbounded_ok: bool,
 ) -> Result<Gaussian<T, 3>, Error> {
-    let mut inv_zz = packet.inverse_longitudinal_variance().to_f64();
-    if inv_zz == 0.0 && !unbounded_ok {
-        return Err(Error::Singular {
-            what: "3-D shape matrix with unbounded longitudinal coherence (set σ_zz with \
-                   WavePacket::with_longitudinal_coherence)",
-        });
-    }
-    let s = packet.shape(channel).map(|x| x.to_f64());
-    let det = s[(0, 0)] * s[(1, 1)] - s[(0, 1)] * s[(1, 0)];
-    let inv = Matrix2::new(s[(1, 1)], -s[(0, 1)], -s[(1, 0)], s[(0, 0)]) / det;
-    // The smallest longitudinal variance the factorisation keeps beside the transverse ones:
-    // a longer σ_zz (or an unbounded one) is taken as that limit.
-    let half = 0.5 * (inv[(0, 0)] + inv[(1, 1)]);
-    let r = (0.5 * (inv[(0, 0)] - inv[(1, 1)])).hypot(0.5 * (inv[(0, 1)] + inv[(1, 0)]));
-    inv_zz = inv_zz.max(64.0 * f64::EPSILON * (half + r));
+    let PacketXi {
+        transverse: inv,
+        zz: inv_zz,
+    } = packet_inverse_coherence(packet, channel, unbounded_ok)?;
     let f = packet.frame();
     let v = |w: nalgebra::Vector3<T>| w.map(|x| x.to_f64());
     let (x, y, k) = (v(f.x), v(f.y), v(f.k));
@@ -88,15 +82,49 @@ pub(crate) fn inverse_coherence<T: Real>(
     Gaussian::from_cholesky(l.map(T::lit)).ok_or(bad)
 }
 
+/// How one channel's weight is evaluated ([`super::basis`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Weight<T: Real> {
+    /// Unused by the level.
+    None,
+    /// The level's [`VolumeCoherence::log_volume_weight`] at the world `h` (`PlaneWave`; a
+    /// `Partial` blur of a PSD that is neither an exact Gaussian with a closed-form blur nor
+    /// isotropic), with the world `Ξ_α` where the level uses it.
+    World(Option<Gaussian<T, 3>>),
+    /// The level's weight of an isotropic PSD at `B_αᵀ h`, with the diagonal `Ξ_α` of the
+    /// channel's basis.
+    Basis([nalgebra::Vector3<T>; 3], Gaussian<T, 3>),
+    /// A Gaussian lobe in the channel's basis (`Incoherent`; `Partial` with a Gaussian PSD and
+    /// a blur exact for Gaussians).
+    Lobe(PacketLobe<T>),
+}
+
+/// `true` when every lobe is isotropic (`Λ ∝ I` to 64 ε; the K-correlation always).
+fn lobes_isotropic<T: Real>(lobes: &VolumeLobes<'_, T>) -> bool {
+    let iso = |a: &Matrix3<T>| {
+        let mean = a.trace() / T::lit(3.0);
+        (a - Matrix3::identity() * mean).amax() <= T::lit(64.0) * T::EPSILON * mean.abs()
+    };
+    match lobes {
+        VolumeLobes::Gaussian(lambda) => iso(lambda),
+        VolumeLobes::Mixture(components) => components
+            .iter()
+            .all(|c| iso(c.spectral_shape().covariance())),
+        VolumeLobes::KCorrelation { .. } => true,
+    }
+}
+
 /// The per-packet part of the medium's kernel: the packet's channel intensities and
 /// Bochner bound (the surface kernel's [`PreparedPacket`], without sections or rotation), the
-/// inverse coherences `Ξ_α` of the channels the level uses, the packet frame and the Born
-/// constant.
+/// weights `K³_α` of the channels the level uses in the form each is evaluated in, the packet
+/// frame and the Born constant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Channels<T: Real, Pol, Coh> {
     pub(crate) prepared: PreparedPacket<T, Pol, Coh>,
-    /// `Ξ_x`, `Ξ_y`, `Ξ_½` (`None` where unused).
-    pub(crate) xi: [Option<Gaussian<T, 3>>; 3],
+    /// The weights of `x`, `y`, `½`.
+    pub(crate) weights: [Weight<T>; 3],
+    /// `Ξ_½` in the packet basis, exact (`None` at the plane-wave level): the lobe's shape.
+    pub(crate) xi_half: Option<PacketXi>,
     pub(crate) frame: Frame<T>,
     pub(crate) k: T,
     pub(crate) ln_born: T,
@@ -105,11 +133,15 @@ pub(crate) struct Channels<T: Real, Pol, Coh> {
 }
 
 impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh> {
-    /// The per-packet part for `packet` at the levels `(Pol, Coh)`.
+    /// The per-packet part for `packet` at the levels `(Pol, Coh)` in the medium of PSD `psd`.
     ///
     /// # Errors
     /// As [`inverse_coherence`], for the levels that use the shapes (`Partial`, `Incoherent`).
-    pub(crate) fn new(packet: &WavePacket<T>) -> Result<Self, Error> {
+    pub(crate) fn new<P>(packet: &WavePacket<T>, psd: &P, coherence: &Coh) -> Result<Self, Error>
+    where
+        P: VolumePsd<T>,
+        Coh: VolumeCoherence<T, P>,
+    {
         let single = packet.has_single_shape();
         let three = Pol::LEVEL == PolarizationLevel::Full && Coh::USES_SHAPE && !single;
         let plan = Plan {
@@ -119,20 +151,60 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
             single_shape: single,
         };
         let prepared = PreparedPacket::new(packet, packet.frame(), packet.frame(), plan);
-        let xi = |used: bool, c: Channel| -> Result<Option<Gaussian<T, 3>>, Error> {
-            if used {
-                inverse_coherence(packet, c, Coh::LEVEL == CoherenceLevel::Partial).map(Some)
-            } else {
-                Ok(None)
+        let partial = Coh::LEVEL == CoherenceLevel::Partial;
+        let lobes = psd.lobes();
+        let exact = psd.exact_lobes();
+        let isotropic = exact && lobes_isotropic(&lobes);
+        // A closed-form blur in the channel's basis (a quadrature blur keeps the world axes its
+        // nodes were placed in: its error depends on their orientation).
+        let closed = coherence.closed_form_for_gaussians();
+        // ln((2π)^{3/2} σ²) = ln ∫p.
+        let ln_amplitude = psd.integral().to_f64().ln();
+        let bad = |x: &PacketXi| Error::NotPositiveDefinite {
+            what: "inverse coherence Ξ = QΘ⁻¹Qᵀ of the packet",
+            min_eigenvalue: x.zz.min(x.transverse[(0, 0)]),
+        };
+        let weight = |used: bool, c: Channel| -> Result<Weight<T>, Error> {
+            if !used {
+                return Ok(Weight::None);
+            }
+            if !Coh::USES_SHAPE {
+                return Ok(Weight::World(None));
+            }
+            let x = packet_inverse_coherence(packet, c, partial)?;
+            let basis = ChannelBasis::new(&x, packet.frame());
+            if !partial {
+                // Incoherent: the lobe of Ξ_α alone.
+                return PacketLobe::new(&basis.diagonal(), &basis, ln_amplitude)
+                    .map(Weight::Lobe)
+                    .ok_or_else(|| bad(&x));
+            }
+            match lobes {
+                VolumeLobes::Gaussian(lambda) if exact && closed => {
+                    let cov = basis.project(&lambda) + basis.diagonal();
+                    PacketLobe::new(&cov, &basis, ln_amplitude)
+                        .map(Weight::Lobe)
+                        .ok_or_else(|| bad(&x))
+                }
+                _ if isotropic && closed => basis
+                    .gaussian()
+                    .map(|g| Weight::Basis(basis.rows(), g))
+                    .ok_or_else(|| bad(&x)),
+                _ => inverse_coherence(packet, c, true).map(|g| Weight::World(Some(g))),
             }
         };
         Ok(Self {
             prepared,
-            xi: [
-                xi(three, Channel::X)?,
-                xi(three, Channel::Y)?,
-                xi(Coh::USES_SHAPE, Channel::Half)?,
+            weights: [
+                weight(three, Channel::X)?,
+                weight(three, Channel::Y)?,
+                weight(true, Channel::Half)?,
             ],
+            xi_half: if Coh::USES_SHAPE {
+                Some(packet_inverse_coherence(packet, Channel::Half, partial)?)
+            } else {
+                None
+            },
             frame: *packet.frame(),
             k: packet.wavenumber(),
             ln_born: ln_born(packet.wavenumber()),
@@ -142,7 +214,15 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
 
     /// The same for unpolarized light of the packet's coherence (for a dark packet, whose
     /// phase matrix and scattering coefficient are those of unpolarized light).
-    pub(crate) fn unpolarized(packet: &WavePacket<T>) -> Result<Self, Error> {
+    pub(crate) fn unpolarized<P>(
+        packet: &WavePacket<T>,
+        psd: &P,
+        coherence: &Coh,
+    ) -> Result<Self, Error>
+    where
+        P: VolumePsd<T>,
+        Coh: VolumeCoherence<T, P>,
+    {
         let mut p = WavePacket::new(
             Stokes::unpolarized(T::one())?,
             CoherenceShape::new(packet.shape(Channel::X))?,
@@ -154,13 +234,32 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         if inv > T::zero() {
             p = p.with_longitudinal_coherence(inv.sqrt().recip())?;
         }
-        Self::new(&p)
+        Self::new(&p, psd, coherence)
     }
 
     /// The geometry of the exit direction `r` (finite unit vector).
     #[inline]
     pub(crate) fn geometry(&self, r: nalgebra::Vector3<T>) -> ScatteringGeometry<T> {
         ScatteringGeometry::from_unit(&self.frame, self.k, r)
+    }
+
+    /// `ln K³` of channel `i` (`x`, `y`, `½`) at `h` (world), in the channel's form
+    /// ([`Weight`]).
+    #[inline]
+    fn log_weight<P>(&self, coherence: &Coh, psd: &P, i: usize, h: &nalgebra::Vector3<T>) -> T
+    where
+        P: Psd<T, 3>,
+        Coh: VolumeCoherence<T, P>,
+    {
+        match &self.weights[i] {
+            Weight::Lobe(l) => l.log_weight(h),
+            Weight::Basis(rows, xi) => {
+                let hb = nalgebra::Vector3::new(rows[0].dot(h), rows[1].dot(h), rows[2].dot(h));
+                coherence.log_volume_weight(psd, Some(xi), &hb)
+            }
+            Weight::World(xi) => coherence.log_volume_weight(psd, xi.as_ref(), h),
+            Weight::None => coherence.log_volume_weight(psd, None, h),
+        }
     }
 
     /// The channel weights `ln K³_x, ln K³_y, ln K³_½` (only `K³_½` unless three).
@@ -170,7 +269,7 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         P: Psd<T, 3>,
         Coh: VolumeCoherence<T, P>,
     {
-        let w = |i: usize| coherence.log_volume_weight(psd, self.xi[i].as_ref(), &g.h);
+        let w = |i: usize| self.log_weight(coherence, psd, i, &g.h);
         if self.three {
             [w(0), w(1), w(2)]
         } else {
@@ -215,8 +314,9 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         }
     }
 
-    /// `[dI/dV]₀/S0 = e^{ln e} · value` for the exit `r` (finite unit vector) whose transverse
-    /// direction in the packet basis is `(c, s) = (cos φ, sin φ)`, without the frames: the first
+    /// `[dI/dV]₀/S0 = e^{ln e} · value` for the exit of scattering vector `h` and `cos Θ`
+    /// whose transverse direction in the packet basis is `(c, s) = (cos φ, sin φ)`, without
+    /// the frames: the first
     /// row of `m̄ T`, with `T` the rotation to the scattering plane, whose normal `d̂ × r̂` lies at
     /// `φ + π/2` (S2.4: `(T v)₁ = −cos 2φ v₁ − sin 2φ v₂`, `(T v)₂ = sin 2φ v₁ − cos 2φ v₂`).
     /// `axial`: the terms in `cos 2φ`, `sin 2φ` left out (they integrate to 0 over φ when the
@@ -227,7 +327,7 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         coherence: &Coh,
         psd: &P,
         scatterer: &M,
-        r: &nalgebra::Vector3<T>,
+        (h, cos_theta): (&nalgebra::Vector3<T>, T),
         (c, s): (T, T),
         axial: bool,
     ) -> (T, T)
@@ -236,9 +336,7 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
-        let h = (r - self.frame.k) * self.k;
-        let cos_theta = r.dot(&self.frame.k).clamp(-T::one(), T::one());
-        let w = |i: usize| coherence.log_volume_weight(psd, self.xi[i].as_ref(), &h);
+        let w = |i: usize| self.log_weight(coherence, psd, i, h);
         if Pol::LEVEL == PolarizationLevel::Intensity {
             return (scatterer.m00(cos_theta), self.ln_born + w(2));
         }

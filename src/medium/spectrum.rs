@@ -42,6 +42,19 @@ pub enum VolumeLobes<'a, T: Real> {
 pub trait VolumePsd<T: Real>: Psd<T, 3> {
     /// The lobe's shape.
     fn lobes(&self) -> VolumeLobes<'_, T>;
+
+    /// `true` when the PSD *is* the shape [`Self::lobes`] names, not merely the closest one:
+    /// the medium may then evaluate it through that shape — a Gaussian PSD's blur in closed
+    /// form (where the coherence level's blur is exact for Gaussians,
+    /// [`super::VolumeCoherence::closed_form_for_gaussians`]), and an isotropic shape (a
+    /// Gaussian or mixture with `Λ ∝ I`, the K-correlation) in any orthonormal basis — in the
+    /// packet's own axes, where a long correlation length beside a short `σ_zz` keeps its
+    /// precision in `f32` ([module docs](crate::medium)). `false` by default (a downstream PSD
+    /// that names its closest shape); `true` for [`GaussianPsd`], [`GaussianMixturePsd`] and
+    /// [`KCorrelation`].
+    fn exact_lobes(&self) -> bool {
+        false
+    }
 }
 
 impl<T: Real> VolumePsd<T> for GaussianPsd<T, 3> {
@@ -49,12 +62,20 @@ impl<T: Real> VolumePsd<T> for GaussianPsd<T, 3> {
     fn lobes(&self) -> VolumeLobes<'_, T> {
         VolumeLobes::Gaussian(*self.spectral_shape().covariance())
     }
+    #[inline]
+    fn exact_lobes(&self) -> bool {
+        true
+    }
 }
 
 impl<T: Real> VolumePsd<T> for GaussianMixturePsd<T, 3> {
     #[inline]
     fn lobes(&self) -> VolumeLobes<'_, T> {
         VolumeLobes::Mixture(self.components())
+    }
+    #[inline]
+    fn exact_lobes(&self) -> bool {
+        true
     }
 }
 
@@ -65,5 +86,9 @@ impl<T: Real> VolumePsd<T> for KCorrelation<T, 3> {
             t: self.t(),
             gamma: self.gamma(),
         }
+    }
+    #[inline]
+    fn exact_lobes(&self) -> bool {
+        true
     }
 }

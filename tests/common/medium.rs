@@ -1,5 +1,5 @@
 //! Scenes shared by the random medium's tests (`tests/medium_extremes.rs`,
-//! `tests/medium_limits.rs`).
+//! `tests/medium_limits.rs`, `tests/medium_f32.rs`).
 #![allow(
     dead_code,
     reason = "each test file uses a different subset of the helpers"
@@ -50,6 +50,29 @@ pub fn gaussian<T: Real>(ell: f64) -> RandomMedium<GaussianPsd<T, 3>, Dipole> {
         GaussianPsd::<T, 3>::isotropic(T::lit(2e-3), T::lit(ell)).unwrap(),
         Dipole,
     )
+}
+
+/// The `f64` packet with the numbers of an `f32` one (the frame renormalised: `f32` unit
+/// vectors are not unit to `f64`'s 256 ε, a ~1e-7 change).
+pub fn widened(p: &WavePacket<f32>) -> WavePacket<f64> {
+    let f = p.frame();
+    let fr = Frame::from_direction_and_x(f.k().map(f64::from), f.x().map(f64::from)).unwrap();
+    let s = p.stokes().vector().map(f64::from);
+    let c = |ch| CoherenceShape::new(p.shape(ch).map(f64::from)).unwrap();
+    let out = WavePacket::new(
+        Stokes::new(s[0], s[1], s[2], s[3]).unwrap(),
+        c(gmueller::packet::Channel::X),
+        c(gmueller::packet::Channel::Y),
+        fr,
+        f64::from(p.wavelength()),
+    )
+    .unwrap();
+    let inv = f64::from(p.inverse_longitudinal_variance());
+    if inv > 0.0 {
+        out.with_longitudinal_coherence(inv.sqrt().recip()).unwrap()
+    } else {
+        out
+    }
 }
 
 pub fn turned(d: &Vector3<f64>, t: f64, phi: f64) -> Vector3<f64> {
