@@ -15,6 +15,7 @@ mod architecture;
 mod bad_input;
 mod bsdf_eval;
 mod bsdf_extremes;
+mod bsdf_f32;
 mod bsdf_furnace;
 mod bsdf_reciprocity;
 mod bsdf_rough;

@@ -297,10 +297,15 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
             // No magnitude to fold; a 0 entry stays 0 rather than 0 · ∞ = NaN.
             u.map(|x| if x == T::zero() { x } else { x * e })
         } else {
-            // An overflow stays an overflow (±∞), but an entry that is exactly 0 stays 0 rather
-            // than becoming 0 · ∞ = NaN.
             let e = (ln_e + self.ln_s0 + u[0].ln()).exp();
-            (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
+            if e <= T::MAX {
+                // An entry that is exactly 0 stays 0 rather than becoming 0 · ∞ = NaN.
+                (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
+            } else {
+                // S0 itself overflows (±∞: brighter than the type), but a polarized entry
+                // may not: each from its own logarithm, so an entry ≤ MAX stays finite.
+                u.map(|x| beyond_scale(x, ln_e + self.ln_s0))
+            }
         })
     }
 }
@@ -415,10 +420,23 @@ pub(crate) fn flush_subnormal<T: Real, const R: usize, const C: usize>(
     }
 }
 
+/// `x · e^{ln_e}` for a scale `e^{ln_e}` beyond the largest number of `T`, from the entry's
+/// own logarithm, `sign(x) e^{ln_e + ln|x|}`: finite where the product is representable, `±∞`
+/// where it is not, and 0 (not `0 · ∞ = NaN`) for `x = 0`.
+#[inline]
+pub(crate) fn beyond_scale<T: Real>(x: T, ln_e: T) -> T {
+    if x == T::zero() {
+        x
+    } else {
+        (ln_e + x.abs().ln()).exp().copysign(x)
+    }
+}
+
 /// `m · e^{ln_e}` for the BSDF form: 0 when the scale, or every entry of the result, is below
 /// the smallest normal number (a matrix cannot keep the digits of a subnormal scale entry by
-/// entry, and 0 is a valid Mueller matrix), `±∞` for the nonzero entries beyond the largest
-/// (zeros stay 0).
+/// entry, and 0 is a valid Mueller matrix); for a scale beyond the largest number each entry
+/// from its own logarithm ([`beyond_scale`]: `±∞` only where the entry itself is beyond it,
+/// zeros stay 0).
 #[inline]
 pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
     m: nalgebra::SMatrix<T, R, C>,
@@ -428,7 +446,7 @@ pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
     if e >= T::MIN_POSITIVE && e <= T::MAX {
         flush_subnormal(m * e)
     } else if e > T::MAX {
-        m.map(|x| if x == T::zero() { x } else { x * e })
+        m.map(|x| beyond_scale(x, ln_e))
     } else {
         nalgebra::SMatrix::zeros()
     }
