@@ -98,6 +98,7 @@ use crate::frame::Frame;
 use crate::interaction::{
     CoherenceLevel, CoherenceWeights, FirstOrder, Geometry, Kernel, MuellerResponse, Pbsdf,
     PolarizationModel, PreparedPacket, RoughSurface, RoughnessLevel, RoughnessWeights, Throughput,
+    flush_to_normal, throughput_scaled,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -538,21 +539,31 @@ where
         LobeSampler::new(setup).map_err(|reason| Error::Unrealizable { reason })
     }
 
-    /// The integral of a Dirac lobe of geometry `g` and PSD weight `w`: `α M_part T w`.
+    /// The integral of a Dirac lobe of geometry `g` and PSD weight `w`, times `factor`:
+    /// `α M_part T w · factor`, its scale `α w factor` taken as one exponential (`α` may be far
+    /// below the smallest number of `T` while the weight is not) and the result's small
+    /// entries under the rule of [`Throughput::flushed`].
     fn delta_integral(
         &self,
         g: &Geometry<T>,
         lobe: &SampledLobe,
         w: T,
         t: &Mueller<T>,
+        factor: T,
     ) -> Mueller<T> {
         let m = match lobe.part {
             Part::Specular => self.material.specular.mueller(g),
             Part::Scattered => self.material.scatter.mueller(g),
         };
         let v = g.phase_factor();
-        let alpha = (-(v * v) * self.material.psd.variance()).exp();
-        Mueller((m * *t).0 * (alpha * w))
+        let ln_alpha = -(v * v) * self.material.psd.variance();
+        let mt = (m * *t).0;
+        let aw = ln_alpha.exp() * w;
+        if aw >= T::MIN_POSITIVE && aw <= T::MAX {
+            Mueller(flush_to_normal(mt * aw * factor))
+        } else {
+            Mueller(throughput_scaled(mt, ln_alpha + w.ln() + factor.ln()))
+        }
     }
 
     /// The Monte Carlo weight of an exit direction `s` drawn by this packet's
@@ -571,13 +582,13 @@ where
         let flux = g.cos_o() / g.cos_i();
         let weight = if s.lobe.delta {
             let t = Mueller(incident.prepared.t);
-            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &t);
-            Pol::Throughput::<T>::from_mueller(&m).scaled(flux / s.pdf)
+            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &t, flux / s.pdf);
+            Pol::Throughput::<T>::from_mueller(&m)
         } else {
             let v = self
                 .kernel
                 .evaluate_mueller_prepared(self.material, &incident.prepared, &g);
-            v.total().scaled(flux / s.pdf)
+            v.total().scaled(flux / s.pdf).flushed()
         };
         Ok((weight, g))
     }
@@ -602,15 +613,21 @@ where
             // The delta's integral over ŝ: (k_o² cos θ_o)/(k_i² cos θ_i) times its integral over r̂.
             let ratio = g.relative_index();
             let jac = ratio * ratio * g.cos_o() / g.cos_i();
-            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &Mueller::identity());
-            return Ok((
-                Pol::Throughput::<T>::from_mueller(&m).scaled(jac / s.pdf),
-                g,
-            ));
+            let m = self.delta_integral(
+                &g,
+                &s.lobe,
+                s.delta_weight,
+                &Mueller::identity(),
+                jac / s.pdf,
+            );
+            return Ok((Pol::Throughput::<T>::from_mueller(&m), g));
         }
         let light = self.surface_packet(Stokes::unpolarized(T::one())?, s.direction, coherence)?;
         let v = self.eval(&self.prepare(&light)?, exit)?;
-        Ok((v.response.total().scaled(T::one() / s.pdf), v.geometry))
+        Ok((
+            v.response.total().scaled(T::one() / s.pdf).flushed(),
+            v.geometry,
+        ))
     }
 
     /// Draws an exit direction for the prepared packet and weighs it ([`Bsdf::exit_sampler`],

@@ -432,21 +432,64 @@ pub(crate) fn beyond_scale<T: Real>(x: T, ln_e: T) -> T {
     }
 }
 
-/// `m · e^{ln_e}` for the BSDF form: 0 when the scale, or every entry of the result, is below
-/// the smallest normal number (a matrix cannot keep the digits of a subnormal scale entry by
-/// entry, and 0 is a valid Mueller matrix); for a scale beyond the largest number each entry
-/// from its own logarithm ([`beyond_scale`]: `±∞` only where the entry itself is beyond it,
-/// zeros stay 0).
+/// The rule for small entries of every throughput of the BSDF form (and of the renderer
+/// layer's weights):
+/// - 0 when every entry is below the smallest normal number (as [`flush_subnormal`]: such a
+///   matrix has lost the digits that keep it valid, and 0 is a valid Mueller matrix);
+/// - when the largest entry is at least `MIN_POSITIVE/ε` (f32: 9.9e-32, f64: 1.0e-292), every
+///   entry below `MIN_POSITIVE` set to 0: that moves `M S` by at most `11 MIN_POSITIVE S0 ≤
+///   11 ε max|M| S0`, inside the validity slack `64 ε M₀₀ S0` of the product's rounding;
+/// - in between, unchanged: a subnormal entry there carries up to all of the polarization of
+///   its row (zeroing it could leave `M S` invalid by a sizeable fraction of `M₀₀`), and it is
+///   exact to half a subnormal step, `ε MIN_POSITIVE/2`, within the same slack.
+#[inline]
+pub(crate) fn flush_to_normal<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+) -> nalgebra::SMatrix<T, R, C> {
+    let largest = m.amax();
+    if largest >= T::MIN_POSITIVE / T::EPSILON {
+        m.map(|x| if x.abs() < T::MIN_POSITIVE { T::zero() } else { x })
+    } else if largest >= T::MIN_POSITIVE {
+        m
+    } else {
+        nalgebra::SMatrix::zeros()
+    }
+}
+
+/// `m · e^{ln_e}` (the medium's phase matrices): 0 when the scale, or every entry of the
+/// result, is below the smallest normal number (a matrix cannot keep the digits of a subnormal
+/// scale entry by entry, and 0 is a valid Mueller matrix); for a scale beyond the largest
+/// number each entry from its own logarithm ([`beyond_scale`]: `±∞` only where the entry
+/// itself is beyond it, zeros stay 0).
 #[inline]
 pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
     m: nalgebra::SMatrix<T, R, C>,
     ln_e: T,
 ) -> nalgebra::SMatrix<T, R, C> {
+    scaled_then(m, ln_e, flush_subnormal)
+}
+
+/// `m · e^{ln_e}` for the kernel's BSDF form and the renderer layer's weights: as
+/// [`unit_scaled`], with no subnormal entry left ([`flush_to_normal`]).
+#[inline]
+pub(crate) fn throughput_scaled<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+    ln_e: T,
+) -> nalgebra::SMatrix<T, R, C> {
+    scaled_then(m, ln_e, flush_to_normal)
+}
+
+#[inline(always)]
+fn scaled_then<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+    ln_e: T,
+    flush: fn(nalgebra::SMatrix<T, R, C>) -> nalgebra::SMatrix<T, R, C>,
+) -> nalgebra::SMatrix<T, R, C> {
     let e = ln_e.exp();
     if e >= T::MIN_POSITIVE && e <= T::MAX {
-        flush_subnormal(m * e)
+        flush(m * e)
     } else if e > T::MAX {
-        m.map(|x| beyond_scale(x, ln_e))
+        flush(m.map(|x| beyond_scale(x, ln_e)))
     } else {
         nalgebra::SMatrix::zeros()
     }
