@@ -8,6 +8,10 @@
 //!   normal `f32` number, and 0 where it is below. The issue's case — the reflected specular
 //!   delta of very rough glass seen from inside, `α ≈ 5·10⁻⁴³` — was a matrix of subnormal
 //!   entries in `f32`. (`tests/bsdf_extremes.rs` checks the rule on every lobe and weight.)
+//! - **Flags that tell the truth** for the packet at hand (`Bsdf::incident_flags`): where the
+//!   section of a very wide coherence is not representable the kernel and the exit sampler
+//!   fall back to the plane wave, whose specular lobe and grating orders are deltas; the
+//!   static `Bsdf::flags` did not say so.
 
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, DirectionSample, Part, SurfaceCoherence};
@@ -143,4 +147,145 @@ fn delta_weights_across_the_normal_range_are_flushed_consistently() {
     }
     println!("f32 weights kept {kept}, flushed to 0 {zero}");
     assert!(kept > 50 && zero > 50, "{kept} {zero}");
+}
+
+/// What the exit sampler draws and `eval` returns for one prepared packet agrees with
+/// `Bsdf::incident_flags`: a delta draw only with `DELTA`, a non-delta specular draw only with
+/// `COHERENT_SPECULAR`, and with `DELTA` (no `COHERENT_SPECULAR`) `eval`'s specular lobe is 0
+/// at the specular direction. Returns whether the packet's section was representable, or
+/// `None` where the packet or the sampler could not be built.
+fn flags_case<T: Real>(width_over_lambda: f64, theta: f64, grating: bool) -> Option<bool> {
+    use gmueller::bsdf::LobeFlags;
+    use gmueller::interaction::{Full, Partial, RoughConductor, RoughDielectric};
+    use gmueller::psd::Grating;
+    use num_complex::Complex;
+    let lambda = 0.5;
+    let f = Frame::<T>::from_normal(Vector3::new(0.1, -0.2, 1.0).map(T::lit)).unwrap();
+    let t = theta.to_radians();
+    let to_source = (f.x() * T::lit(-t.sin()) + f.k() * T::lit(t.cos())).normalize();
+    let mirror = (f.x() * T::lit(t.sin()) + f.k() * T::lit(t.cos())).normalize();
+    let kernel = Kernel::<Full, Partial>::default();
+    let run = |b: &dyn Fn(
+        &WavePacket<T>,
+    ) -> Option<(LobeFlags, Vec<(bool, Part)>, T, bool)>|
+     -> Option<bool> {
+        let c = SurfaceCoherence::new(T::lit(width_over_lambda * lambda)).ok()?;
+        let packet = c
+            .packet(
+                Stokes::unpolarized(T::one()).unwrap(),
+                to_source,
+                &f,
+                T::lit(lambda),
+            )
+            .ok()?;
+        let (flags, draws, specular, section) = b(&packet)?;
+        let what = format!("w {width_over_lambda:e} λ, θ {theta}°, grating {grating}: {flags:?}");
+        for (delta, part) in draws {
+            if delta {
+                assert!(flags.contains(LobeFlags::DELTA), "{what}: a delta drawn");
+            } else if part == Part::Specular {
+                assert!(
+                    flags.contains(LobeFlags::COHERENT_SPECULAR),
+                    "{what}: a specular lobe drawn"
+                );
+            }
+        }
+        if !flags.contains(LobeFlags::COHERENT_SPECULAR) {
+            assert!(specular == T::zero(), "{what}: eval's specular lobe {specular:?}");
+        }
+        Some(section)
+    };
+    let probe = |b: &dyn Probe<T>, p: &WavePacket<T>| b.probe(p, mirror);
+    if grating {
+        let g = Grating::<T, 2>::sinusoidal_height(
+            T::lit(0.02),
+            T::lit(3.0),
+            &nalgebra::Vector2::new(T::one(), T::lit(0.3)),
+        )
+        .unwrap();
+        let m = RoughConductor::new(g, Complex::new(T::lit(0.2), T::lit(3.5))).unwrap();
+        let b = Bsdf::new(&m, kernel, f, T::lit(lambda)).unwrap();
+        run(&|p| probe(&b, p))
+    } else {
+        let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.01), T::lit(2.0)).unwrap();
+        let m = RoughDielectric::new(psd, T::lit(1.5)).unwrap();
+        let b = Bsdf::new(&m, kernel, f, T::lit(lambda)).unwrap();
+        run(&|p| probe(&b, p))
+    }
+}
+
+/// One BSDF's answers for [`flags_case`]: its flags for the packet, the lobes of 200 draws,
+/// `eval`'s specular `M₀₀` at the mirror direction, and whether the section exists.
+trait Probe<T: Real> {
+    fn probe(
+        &self,
+        packet: &WavePacket<T>,
+        mirror: Vector3<T>,
+    ) -> Option<(gmueller::bsdf::LobeFlags, Vec<(bool, Part)>, T, bool)>;
+}
+
+impl<T, P, Sp, Sc, Pol, Coh, Rough> Probe<T> for Bsdf<'_, T, P, Sp, Sc, Pol, Coh, Rough>
+where
+    T: Real,
+    P: gmueller::bsdf::SamplingPsd<T>,
+    Sp: gmueller::bsdf::Interface<T>,
+    Sc: gmueller::interaction::Pbsdf<T>,
+    Pol: gmueller::interaction::PolarizationModel,
+    Coh: gmueller::interaction::CoherenceWeights<T, P>,
+    Rough: gmueller::interaction::RoughnessWeights<T, P, Coh>,
+{
+    fn probe(
+        &self,
+        packet: &WavePacket<T>,
+        mirror: Vector3<T>,
+    ) -> Option<(gmueller::bsdf::LobeFlags, Vec<(bool, Part)>, T, bool)> {
+        use gmueller::interaction::Throughput;
+        let inc = self.prepare(packet).ok()?;
+        let flags = self.incident_flags(&inc);
+        let sampler = self.exit_sampler(&inc).ok()?;
+        let mut draws = Vec::new();
+        for i in 0..200 {
+            let u = T::lit((f64::from(i) + 0.5) / 200.0);
+            if let Some(s) = sampler.sample(u, [T::lit(0.3), T::lit(0.6)]) {
+                draws.push((s.lobe.delta, s.lobe.part));
+            }
+        }
+        let specular = self.eval(&inc, mirror).ok()?.response.specular.m00();
+        Some((flags, draws, specular, inc.prepared().section().is_some()))
+    }
+}
+
+/// Issue 36 (3): coherence widths 10³…10¹⁵ λ (half decades), incidence 0°, 30°, 70°, rough
+/// glass and a metal height grating, `Full · Partial`, f32 and f64: the flags of every
+/// prepared packet are truthful ([`flags_case`]). In `f32` the section stops being
+/// representable at 10¹¹ λ (its entries `1/w²` are then ~10⁻²³ µm⁻² and their products
+/// underflow): there the sampler draws the plane wave's deltas, and `Bsdf::flags` (static)
+/// said `COHERENT_SPECULAR` without `DELTA`.
+#[test]
+fn incident_flags_tell_the_truth_past_the_section() {
+    for (name, run) in [
+        ("f32", flags_case::<f32> as fn(f64, f64, bool) -> Option<bool>),
+        ("f64", flags_case::<f64>),
+    ] {
+        let mut fallback_from = f64::INFINITY;
+        let mut built = 0;
+        for k in 6..=30 {
+            let w = 10f64.powf(f64::from(k) / 2.0);
+            for theta in [0.0, 30.0, 70.0] {
+                for grating in [false, true] {
+                    if let Some(section) = run(w, theta, grating) {
+                        built += 1;
+                        if !section {
+                            fallback_from = fallback_from.min(w);
+                        }
+                    }
+                }
+            }
+        }
+        println!("{name}: {built} packets sampled; plane-wave fallback from w = {fallback_from:e} λ");
+        if name == "f32" {
+            assert!(fallback_from <= 1e12, "{fallback_from:e}");
+        }
+        assert!(built > 20);
+    }
 }

@@ -21,6 +21,7 @@ mod bsdf_reciprocity;
 mod bsdf_rough;
 mod bsdf_sampling;
 mod extremes;
+mod extremes_f32;
 mod extremes_sampling;
 mod frame;
 mod fresnel;

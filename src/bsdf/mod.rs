@@ -264,14 +264,35 @@ where
         &self.surface
     }
 
-    /// The lobes this BSDF has ([`LobeFlags`]).
+    /// The lobes this BSDF has at the kernel's coherence level ([`LobeFlags`]): what every
+    /// packet sees whose section `Ξ` is representable in `T` (the tested ranges). A packet
+    /// whose section over- or underflows is evaluated and sampled at the plane-wave level,
+    /// with Dirac lobes: [`Bsdf::incident_flags`] gives the flags of a prepared packet.
     #[must_use]
     pub fn flags(&self) -> LobeFlags {
+        self.flags_at(Coh::LEVEL == CoherenceLevel::PlaneWave)
+    }
+
+    /// The lobes for the prepared packet `incident`, as [`Bsdf::eval`] and
+    /// [`Bsdf::exit_sampler`] treat it: [`Bsdf::flags`], except for a packet whose section `Ξ`
+    /// of the coherence by the surface is not representable in `T` (`f32`: a coherence width
+    /// of ~10¹¹ λ or more; [`crate::interaction::PreparedPacket::section`] is `None`), which
+    /// the kernel and the sampler take at the plane-wave level: its specular lobe (and a
+    /// grating's orders) are then [`LobeFlags::DELTA`], left out of `eval` and drawn as deltas
+    /// — a renderer that skips multiple importance sampling on deltas must ask here.
+    #[must_use]
+    pub fn incident_flags(&self, incident: &Incident<T, Pol, Coh>) -> LobeFlags {
+        let plane = Coh::LEVEL == CoherenceLevel::PlaneWave
+            || (Coh::USES_SHAPE && incident.prepared.section().is_none());
+        self.flags_at(plane)
+    }
+
+    /// The lobe flags with (`delta`) or without the plane wave's Dirac lobes.
+    fn flags_at(&self, delta: bool) -> LobeFlags {
         let mut f = LobeFlags::REFLECTION;
         if self.eta.is_some() {
             f = f | LobeFlags::TRANSMISSION;
         }
-        let delta = Coh::LEVEL == CoherenceLevel::PlaneWave;
         f = f | if delta {
             LobeFlags::DELTA
         } else {
