@@ -170,3 +170,4 @@ fn kirchhoff_series_far_tails_are_finite_in_f32() {
     println!("series compared {compared} (ln Σ below −10⁵: {deep}), worst {worst:.3} of the bound");
     assert!(compared > 20_000 && deep > 100, "{compared} {deep}");
 }
+
