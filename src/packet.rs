@@ -821,5 +821,9 @@ fn bound_conditioning<T: Real>(x: &Matrix2<T>, y: &Matrix2<T>) -> T {
         + 2.0 * h[(0, 1)].abs() * mag[(0, 1)])
         / dh;
     let k = 0.5 * kappa(&x) + 0.5 * kappa(&y) + kh;
-    T::lit(if k.is_finite() && k > 0.0 { k } else { f64::INFINITY })
+    T::lit(if k.is_finite() && k > 0.0 {
+        k
+    } else {
+        f64::INFINITY
+    })
 }

@@ -189,7 +189,11 @@ where
         let inc = b.prepare(&packet).unwrap();
         let v = b.eval(&inc, exit).unwrap();
         let s_in = Vector4::new(1.0, p.stokes[0], p.stokes[1], p.stokes[2]).map(T::lit);
-        for m in [v.response.specular, v.response.scattered, v.response.total()] {
+        for m in [
+            v.response.specular,
+            v.response.scattered,
+            v.response.total(),
+        ] {
             let m00 = m.m00();
             prop_assert!(m00.is_finite() && m00 >= T::zero(), "{name}: M00 {m00:?}");
             prop_assert!(m.is_finite(), "{name}: {m:?}");

@@ -33,10 +33,16 @@ use nalgebra::{Matrix4, Vector3, Vector4};
 fn assert_clean<T: Real>(what: &str, m: &Matrix4<T>) {
     let mm = m.map(|x| x.to_f64());
     let (n, min) = (mm.amax(), T::MIN_POSITIVE.to_f64());
-    assert!(n == 0.0 || n >= min, "{what}: every entry subnormal: {mm:e}");
+    assert!(
+        n == 0.0 || n >= min,
+        "{what}: every entry subnormal: {mm:e}"
+    );
     if n >= min / T::EPSILON.to_f64() {
         for a in mm.iter().map(|x| x.abs()) {
-            assert!(a == 0.0 || a >= min, "{what}: subnormal entry {a:e} in {mm:e}");
+            assert!(
+                a == 0.0 || a >= min,
+                "{what}: subnormal entry {a:e} in {mm:e}"
+            );
         }
     }
     if n == 0.0 {
@@ -106,7 +112,11 @@ fn reflected_delta<T: Real>(sigma: f64, theta: f64) -> [Matrix4<T>; 2] {
 #[test]
 fn the_issue_delta_weight_is_flushed() {
     let [f64_fwd, f64_back] = reflected_delta::<f64>(0.354, 23.3);
-    println!("f64 M00: forward {:e}, backward {:e}", f64_fwd[(0, 0)], f64_back[(0, 0)]);
+    println!(
+        "f64 M00: forward {:e}, backward {:e}",
+        f64_fwd[(0, 0)],
+        f64_back[(0, 0)]
+    );
     for m in [f64_fwd, f64_back] {
         assert!(m[(0, 0)] > 1e-43 && m[(0, 0)] < 1e-42);
         assert_clean("f64", &m);
@@ -136,7 +146,10 @@ fn delta_weights_across_the_normal_range_are_flushed_consistently() {
                 assert_clean(&what, w);
                 let (a, b) = (f64::from(g[(0, 0)]), w[(0, 0)]);
                 if b >= min * (1.0 + 1e-4) {
-                    assert!((a - b).abs() <= 1e-4 * b + 16.0 * min, "{what}: {a:e} vs {b:e}");
+                    assert!(
+                        (a - b).abs() <= 1e-4 * b + 16.0 * min,
+                        "{what}: {a:e} vs {b:e}"
+                    );
                     kept += 1;
                 } else if b < min / (1.0 + 1e-4) {
                     assert_eq!(a, 0.0, "{what}: f64 {b:e}");
@@ -264,7 +277,10 @@ where
 #[test]
 fn incident_flags_tell_the_truth_past_the_section() {
     for (name, run) in [
-        ("f32", flags_case::<f32> as fn(f64, f64, bool) -> Option<bool>),
+        (
+            "f32",
+            flags_case::<f32> as fn(f64, f64, bool) -> Option<bool>,
+        ),
         ("f64", flags_case::<f64>),
     ] {
         let mut fallback_from = f64::INFINITY;
@@ -282,7 +298,9 @@ fn incident_flags_tell_the_truth_past_the_section() {
                 }
             }
         }
-        println!("{name}: {built} packets sampled; plane-wave fallback from w = {fallback_from:e} λ");
+        println!(
+            "{name}: {built} packets sampled; plane-wave fallback from w = {fallback_from:e} λ"
+        );
         if name == "f32" {
             assert!(fallback_from <= 1e12, "{fallback_from:e}");
         }

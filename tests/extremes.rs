@@ -1671,9 +1671,8 @@ fn same_light_f64(s: &Scene, b32: &Built<f32>) -> Built<f64> {
 /// them within 1e-3 rad of the normal (exactly normal or 1e-6…1e-3 rad off), exits at the
 /// specular direction or a few coherence-lobe widths from it, one coherence shape.
 fn bright_scene(rng: &mut common::SplitMix64) -> Scene {
-    let lu = |r: &mut common::SplitMix64, lo: f64, hi: f64| {
-        (lo.ln() + r.unit() * (hi / lo).ln()).exp()
-    };
+    let lu =
+        |r: &mut common::SplitMix64, lo: f64, hi: f64| (lo.ln() + r.unit() * (hi / lo).ln()).exp();
     let lambda = lu(rng, 0.1, 100.0);
     let w = lu(rng, 1e-3, 1e6);
     let theta = match rng.unit() {
@@ -1689,13 +1688,21 @@ fn bright_scene(rng: &mut common::SplitMix64) -> Scene {
         let off = width * lu(rng, 1e-2, 6.0);
         Exit::General {
             theta_deg: (theta.to_radians() + off).min(1.5706).to_degrees(),
-            phi: if rng.unit() < 0.5 { 0.0 } else { (rng.unit() - 0.5) * 4.0 * off },
+            phi: if rng.unit() < 0.5 {
+                0.0
+            } else {
+                (rng.unit() - 0.5) * 4.0 * off
+            },
         }
     };
     Scene {
         lambda,
         width_over_lambda: w,
-        anisotropy: if rng.unit() < 0.5 { 1.0 } else { lu(rng, 1.0, 1e3) },
+        anisotropy: if rng.unit() < 0.5 {
+            1.0
+        } else {
+            lu(rng, 1.0, 1e3)
+        },
         shape_angle: rng.unit() * std::f64::consts::PI,
         ratio: 1.0,
         theta_i_deg: theta,
@@ -1735,8 +1742,15 @@ fn bright_lobes_overflow_exactly_beyond_the_type() {
         let e32 = f64::from(f32::EPSILON);
         let k = std::f64::consts::TAU / r32(s.lambda);
         let cos_i = b32.g.cos_i().to_f64();
-        let kappa = 10.0 * e32 * k * (s.ell_over_lambda * s.lambda).max(s.width_over_lambda * s.lambda / cos_i);
-        let xi = gmueller::interaction::surface_inverse_coherence(&b32.packet, Channel::Half, b32.g.surface());
+        let kappa = 10.0
+            * e32
+            * k
+            * (s.ell_over_lambda * s.lambda).max(s.width_over_lambda * s.lambda / cos_i);
+        let xi = gmueller::interaction::surface_inverse_coherence(
+            &b32.packet,
+            Channel::Half,
+            b32.g.surface(),
+        );
         let m_spec = xi.map_or(0.0, |xi| {
             let h = b32.g.h_t().map(f64::from);
             let c = xi.covariance().map(f64::from);
@@ -1763,13 +1777,21 @@ fn bright_lobes_overflow_exactly_beyond_the_type() {
                     } else {
                         (got.scattered.vector(), want.scattered.vector())
                     };
-                    let b = if part == 0 { 1e-3 * (1.0 + 0.5 * m_spec) } else { 1.0 };
+                    let b = if part == 0 {
+                        1e-3 * (1.0 + 0.5 * m_spec)
+                    } else {
+                        1.0
+                    };
                     // Within √ε₃₂ of the normal the exit's s/p frame differs between the
                     // precisions (`normal_incidence_switch_is_invisible_in_a_fixed_frame`):
                     // there only S0 is comparable.
                     let r = b32.g.exit().map(f64::from);
                     let theta_o = r.x.hypot(r.y).atan2(r.z.abs());
-                    let entries = if theta_o > 0.0 && theta_o < 1e-3 { 1 } else { 4 };
+                    let entries = if theta_o > 0.0 && theta_o < 1e-3 {
+                        1
+                    } else {
+                        4
+                    };
                     for i in 0..entries {
                         let (a, w) = (f64::from(got[i]), want[i]);
                         assert!(!a.is_nan(), "{name} part {part}: NaN, {s:?}");
@@ -1778,14 +1800,21 @@ fn bright_lobes_overflow_exactly_beyond_the_type() {
                         }
                         checked += 1;
                         if w.abs() < max / (1.0 + b) {
-                            assert!(a.is_finite(), "{name} part {part}[{i}]: f32 {a:e}, f64 {w:e}: {got:e} {want:e} {s:?}");
+                            assert!(
+                                a.is_finite(),
+                                "{name} part {part}[{i}]: f32 {a:e}, f64 {w:e}: {got:e} {want:e} {s:?}"
+                            );
                             if w.abs() > 0.5 * max {
                                 near += 1;
                                 worst = worst.max((a - w).abs() / w.abs() / b);
                             }
                             finite += 1;
                         } else if w.abs() > max * (1.0 + b) {
-                            assert_eq!(a, w.signum() * f64::INFINITY, "{name} part {part}[{i}]: f64 {w:e}: {s:?}");
+                            assert_eq!(
+                                a,
+                                w.signum() * f64::INFINITY,
+                                "{name} part {part}[{i}]: f64 {w:e}: {s:?}"
+                            );
                             inf += 1;
                         }
                     }
@@ -1831,7 +1860,10 @@ fn near_normal_overflow_is_the_f32_frames_light() {
     let same = same_light_f64(&s, &b32);
     let x32 = b32.packet.frame().x().map(f64::from);
     let turn = x32.dot(&own.packet.frame().x()).clamp(-1.0, 1.0).acos();
-    println!("the two precisions' packet frames differ by {:.3} rad", turn);
+    println!(
+        "the two precisions' packet frames differ by {:.3} rad",
+        turn
+    );
     assert!(turn > 0.1);
     for ((name, a), ((_, o), (_, w))) in all_levels(&b32)
         .into_iter()
@@ -1842,6 +1874,9 @@ fn near_normal_overflow_is_the_f32_frames_light() {
         }
         let (a, o, w) = (f64::from(a.specular.s0()), o.specular.s0(), w.specular.s0());
         println!("{name}: f32 {a:e}, f64 (own frame) {o:e}, f64 (f32's frame) {w:e}");
-        assert!(a == f64::INFINITY && o < 1e10 && w > 2.0 * f64::from(f32::MAX), "{name}");
+        assert!(
+            a == f64::INFINITY && o < 1e10 && w > 2.0 * f64::from(f32::MAX),
+            "{name}"
+        );
     }
 }

@@ -1098,13 +1098,25 @@ fn main_relations_f32() {
 /// `w` (10⁻³–10⁶ λ) and anisotropy up to 10⁶ at any angle, `Θ_y = r Θ_x` (`r` = 1 in a fifth
 /// of the draws, else 1–4), and a Stokes vector (`S0` scaled by 1e-30…1e12, half of them
 /// fully polarized) whose `|μ|` is `mu_factor` of the bound `√B` of these exact shapes.
-fn intended_packet(rng: &mut common::SplitMix64, mu_factor: f64) -> (Matrix2<f64>, Matrix2<f64>, Vector4<f64>) {
-    let lu = |r: &mut common::SplitMix64, lo: f64, hi: f64| (lo.ln() + r.unit() * (hi / lo).ln()).exp();
+fn intended_packet(
+    rng: &mut common::SplitMix64,
+    mu_factor: f64,
+) -> (Matrix2<f64>, Matrix2<f64>, Vector4<f64>) {
+    let lu =
+        |r: &mut common::SplitMix64, lo: f64, hi: f64| (lo.ln() + r.unit() * (hi / lo).ln()).exp();
     let lambda = lu(rng, 0.1, 100.0);
     let w = lu(rng, 1e-3, 1e6) * lambda;
-    let a = if rng.unit() < 0.5 { 1.0 } else { lu(rng, 1.0, 1e6) };
+    let a = if rng.unit() < 0.5 {
+        1.0
+    } else {
+        lu(rng, 1.0, 1e6)
+    };
     let (sn, cs) = (rng.unit() * std::f64::consts::PI).sin_cos();
-    let r = if rng.unit() < 0.2 { 1.0 } else { lu(rng, 1.0, 4.0) };
+    let r = if rng.unit() < 0.2 {
+        1.0
+    } else {
+        lu(rng, 1.0, 4.0)
+    };
     let rot = Matrix2::new(cs, -sn, sn, cs);
     let m = rot * Matrix2::new(w * w, 0.0, 0.0, w * w / a) * rot.transpose();
     let tx = Matrix2::new(m[(0, 0)], m[(0, 1)], m[(0, 1)], m[(1, 1)]);
@@ -1113,8 +1125,17 @@ fn intended_packet(rng: &mut common::SplitMix64, mu_factor: f64) -> (Matrix2<f64
     let (z, az) = (rng.unit() * 2.0 - 1.0, rng.unit() * std::f64::consts::TAU);
     let dop = if rng.unit() < 0.5 { 1.0 } else { rng.unit() };
     let rr = (1.0 - z * z).sqrt();
-    let scale = if rng.unit() < 0.5 { 1.0 } else { lu(rng, 1e-30, 1e12) };
-    let s = Vector4::new(1.0, dop * z, dop * rr * az.cos() * f, dop * rr * az.sin() * f) * scale;
+    let scale = if rng.unit() < 0.5 {
+        1.0
+    } else {
+        lu(rng, 1e-30, 1e12)
+    };
+    let s = Vector4::new(
+        1.0,
+        dop * z,
+        dop * rr * az.cos() * f,
+        dop * rr * az.sin() * f,
+    ) * scale;
     (tx, ty, s)
 }
 
@@ -1130,7 +1151,10 @@ fn sides(tx: &Matrix2<f64>, ty: &Matrix2<f64>, s: &Vector4<f64>) -> (f64, f64) {
 
 /// [`sides`] of a packet for the shapes it holds.
 fn held_sides<T: Real>(p: &WavePacket<T>) -> (f64, f64) {
-    let (x, y) = (p.shape(Channel::X).map(|v| v.to_f64()), p.shape(Channel::Y).map(|v| v.to_f64()));
+    let (x, y) = (
+        p.shape(Channel::X).map(|v| v.to_f64()),
+        p.shape(Channel::Y).map(|v| v.to_f64()),
+    );
     sides(&x, &y, &p.stokes().vector().map(|v| v.to_f64()))
 }
 
@@ -1151,7 +1175,11 @@ fn f32_packets_of_realizable_intent_are_accepted() {
         let shape = |m: Matrix2<f64>| CoherenceShape::new(m).unwrap();
         let intent = WavePacket::new(stokes64(s), shape(tx), shape(ty), frame_xyz(), 0.5);
         assert!(intent.is_ok(), "f64 intent refused: {tx} {ty} {s:?}");
-        let (x32, y32, s32) = (tx.map(|v| v as f32), ty.map(|v| v as f32), s.map(|v| v as f32));
+        let (x32, y32, s32) = (
+            tx.map(|v| v as f32),
+            ty.map(|v| v as f32),
+            s.map(|v| v as f32),
+        );
         let Ok(st32) = Stokes::new(s32[0], s32[1], s32[2], s32[3]) else {
             continue;
         };
@@ -1170,16 +1198,24 @@ fn f32_packets_of_realizable_intent_are_accepted() {
         let (lhs, rhs) = held_sides(&p);
         let k = p.realizability_conditioning().to_f64();
         let slack = 64.0 * f64::from(f32::EPSILON) + 8.0 * k * f64::EPSILON * rhs;
-        assert!(lhs <= rhs + slack, "held |S2 + iS3|²/4 = {lhs} > S_x S_y B = {rhs}");
+        assert!(
+            lhs <= rhs + slack,
+            "held |S2 + iS3|²/4 = {lhs} > S_x S_y B = {rhs}"
+        );
         if held != s32 {
             projected += 1;
             let moved = ((held[2] - s32[2]).abs().max((held[3] - s32[3]).abs()) as f64)
                 / f64::from(s32[2].abs().max(s32[3].abs()));
-            assert!(moved <= 4.0 * k * f64::from(f32::EPSILON), "moved {moved:e}, K {k:e}");
+            assert!(
+                moved <= 4.0 * k * f64::from(f32::EPSILON),
+                "moved {moved:e}, K {k:e}"
+            );
             worst_move = worst_move.max(moved);
         }
     }
-    println!("projected onto the bound: {projected} of 200000 (largest change of S2, S3: {worst_move:.2e})");
+    println!(
+        "projected onto the bound: {projected} of 200000 (largest change of S2, S3: {worst_move:.2e})"
+    );
     assert!(projected > 50, "{projected}");
 }
 
@@ -1193,7 +1229,10 @@ fn f32_packets_of_realizable_intent_are_accepted() {
 fn clearly_unrealizable_packets_are_refused() {
     fn refused<T: Real>(tx: Matrix2<f64>, ty: Matrix2<f64>, s: Vector4<f64>) -> Option<bool> {
         let l = |x: f64| T::lit(x);
-        let (cx, cy) = (CoherenceShape::new(tx.map(l)).ok()?, CoherenceShape::new(ty.map(l)).ok()?);
+        let (cx, cy) = (
+            CoherenceShape::new(tx.map(l)).ok()?,
+            CoherenceShape::new(ty.map(l)).ok()?,
+        );
         let st = Stokes::new(l(s[0]), l(s[1]), l(s[2]), l(s[3])).ok()?;
         Some(matches!(
             WavePacket::new(st, cx, cy, frame_xyz_t::<T>(), l(0.5)),
@@ -1205,7 +1244,8 @@ fn clearly_unrealizable_packets_are_refused() {
     for _ in 0..100_000 {
         let (tx, ty, s) = intended_packet(&mut rng, 1.0);
         let b = bound(&tx, &ty);
-        let at_bound = (s[2] * s[2] + s[3] * s[3]) >= (s[0] * s[0] - s[1] * s[1]) * b * (1.0 - 1e-9);
+        let at_bound =
+            (s[2] * s[2] + s[3] * s[3]) >= (s[0] * s[0] - s[1] * s[1]) * b * (1.0 - 1e-9);
         if !at_bound || b > 1.0 - 1e-3 {
             continue; // |μ| below the bound already, or equal shapes (B = 1: nothing beyond)
         }
@@ -1248,7 +1288,9 @@ fn clearly_unrealizable_packets_are_refused() {
             if name == "f32" {
                 // The same f32 inputs, |μ| about the bound: f64 accepts ⇒ f32 accepts.
                 let g = grow(s, (bh / b).sqrt() * (0.99 + 0.02 * rng.unit())).map(round);
-                if let (Some(a32), Some(a64)) = (refused::<f32>(hx, hy, g), refused::<f64>(hx, hy, g)) {
+                if let (Some(a32), Some(a64)) =
+                    (refused::<f32>(hx, hy, g), refused::<f64>(hx, hy, g))
+                {
                     assert!(a64 || !a32, "f32 refused what f64 accepts: {hx} {hy} {g:?}");
                     same += 1;
                 }
@@ -1264,5 +1306,8 @@ fn clearly_unrealizable_packets_are_refused() {
     println!(
         "refused beyond the reach: {beyond}; refused at √B (1 + 1e-3) in f32: {clearly}; same inputs compared: {same}"
     );
-    assert!(beyond > 10_000 && clearly > 5_000 && same > 5_000, "{beyond} {clearly} {same}");
+    assert!(
+        beyond > 10_000 && clearly > 5_000 && same > 5_000,
+        "{beyond} {clearly} {same}"
+    );
 }

@@ -448,7 +448,13 @@ pub(crate) fn flush_to_normal<T: Real, const R: usize, const C: usize>(
 ) -> nalgebra::SMatrix<T, R, C> {
     let largest = m.amax();
     if largest >= T::MIN_POSITIVE / T::EPSILON {
-        m.map(|x| if x.abs() < T::MIN_POSITIVE { T::zero() } else { x })
+        m.map(|x| {
+            if x.abs() < T::MIN_POSITIVE {
+                T::zero()
+            } else {
+                x
+            }
+        })
     } else if largest >= T::MIN_POSITIVE {
         m
     } else {
