@@ -27,9 +27,23 @@
 //! |μ|² ≤ √(|Θ_x| |Θ_y|) / |Θ_½|          (≤ 1, with equality iff Θ_x = Θ_y)
 //! ```
 //! [`WavePacket::new`] returns [`Error::Unrealizable`] when it is violated (beyond a rounding
-//! slack of `64 ε S0²` on `|S2 + iS3|²/4`) rather than clamping: a clamp would silently change
-//! the light's degree of polarization, and the caller (who chose the shapes) is the one who knows
-//! whether to shrink `|μ|` or make the shapes equal.
+//! slack of `64 ε S0²` on `|S2 + iS3|²/4`, and beyond the reach of the shapes' rounding, below)
+//! rather than clamping: a clamp would silently change the light's degree of polarization, and
+//! the caller (who chose the shapes) is the one who knows whether to shrink `|μ|` or make the
+//! shapes equal.
+//!
+//! **The shapes' rounding.** The bound of nearly singular shapes is ill-conditioned: rounding
+//! every entry of `Θ_x`, `Θ_y` by `δ` of itself moves `B = √(|Θ_x||Θ_y|)/|Θ_½|` by up to
+//! `K δ B`, `K` [`WavePacket::realizability_conditioning`] (about the anisotropy: `10⁶` for a
+//! `10⁶`-anisotropic shape turned by 45°). A renderer's `f32` shapes (rounded from its own
+//! numbers, or computed in `f32`) then hold a bound up to ~`K ε₃₂` (12 % at `K = 10⁶`) below the
+//! one it meant, and `|μ|` chosen at 0.999 of the intended bound was refused (issue 36: 4 953
+//! in-range packets). A packet with `|μ|² ≤ B (1 + 4 K ε)` is therefore accepted — it is
+//! realizable for shapes within four ulps per entry of the ones held — and its `S2`, `S3` are
+//! scaled onto the bound of the shapes held (`|μ|² = B`), so every packet is realizable for
+//! the matrices it carries. Beyond that reach it is refused; for well-conditioned shapes the
+//! reach is a few `ε` (`K = 2` for equal isotropic shapes), so `|μ| = √B (1 + 10⁻⁶)` is refused
+//! in `f64` (up to `K ≈ 2·10⁹`) and `|μ| = √B (1 + 10⁻³)` in `f32` up to `K ≈ 4000`.
 //!
 //! # Sources (van Cittert–Zernike)
 //! A distant incoherent source with angular radiance profile `I(θ)` (θ the small-angle offset
@@ -175,6 +189,28 @@ impl<T: Real> WavePacket<T> {
     /// [`Stokes::new`], so every accepted Stokes vector is realizable with `Θ_x = Θ_y`).
     pub const REALIZABILITY_SLACK_ULPS: f64 = 64.0;
 
+    /// How many ulps of rounding the shapes' entries may carry (module docs, "Realizability"):
+    /// `|μ|²` up to `B (1 + SHAPE_ROUNDING_ULPS · K ε)` is projected onto the bound `B` of the
+    /// shapes held, `K` the bound's condition number ([`WavePacket::realizability_conditioning`]).
+    pub const SHAPE_ROUNDING_ULPS: f64 = 4.0;
+
+    /// The condition number `K` of the realizability bound `B = √(|Θ_x||Θ_y|)/|Θ_½|` under
+    /// relative perturbations of the shapes' entries: a change of every entry by `δ` of itself
+    /// moves `B` by at most `K δ` of itself (to first order).
+    ///
+    /// # Formula
+    /// ```text
+    /// K = ½ κ(Θ_x) + ½ κ(Θ_y) + κ_½,   κ(Θ) = (|Θ₁₁Θ₂₂| + Θ₁₂²)/|Θ|
+    /// κ_½ = [ |h₁₁| m₂₂ + |h₂₂| m₁₁ + 2 |h₁₂| m₁₂ ] / |Θ_½|,   h = Θ_½,  m_ij = (|x_ij| + |y_ij|)/2
+    /// ```
+    /// 2 for equal isotropic shapes; about the anisotropy for elongated ones (`10⁶` at an
+    /// anisotropy of `10⁶` turned by 45°).
+    #[must_use]
+    pub fn realizability_conditioning(&self) -> T {
+        let scale = pow2_scale(self.shape_x.amax().max(self.shape_y.amax()));
+        bound_conditioning(&(self.shape_x / scale), &(self.shape_y / scale))
+    }
+
     /// A packet from its classical Stokes vector (irradiance, in `frame`), the transverse
     /// coherence shapes of its x and y components, its frame (x̂, ŷ, k̂ = propagation direction)
     /// and its wavelength (length, > 0). Longitudinal coherence is unbounded (`σ_zz = ∞`) until
@@ -182,7 +218,9 @@ impl<T: Real> WavePacket<T> {
     ///
     /// # Errors
     /// [`Error::OutOfRange`] for a non-positive or non-finite wavelength;
-    /// [`Error::Unrealizable`] if `|μ|² > √(|Θ_x||Θ_y|)/|Θ_½|` (module docs, "Realizability").
+    /// [`Error::Unrealizable`] if `|μ|² > √(|Θ_x||Θ_y|)/|Θ_½|` by more than the rounding of
+    /// the shapes reaches (module docs, "Realizability"; within it `S2`, `S3` are scaled onto
+    /// the bound).
     ///
     /// # Examples
     /// ```
@@ -207,7 +245,7 @@ impl<T: Real> WavePacket<T> {
         wavelength: T,
     ) -> Result<Self, Error> {
         let k = wavenumber(wavelength)?;
-        let p = Self {
+        let mut p = Self {
             stokes,
             shape_x: shape_x.0,
             shape_y: shape_y.0,
@@ -216,7 +254,7 @@ impl<T: Real> WavePacket<T> {
             k,
             distance: None,
         };
-        p.check_realizable()?;
+        p.realize()?;
         Ok(p)
     }
 
@@ -414,7 +452,9 @@ impl<T: Real> WavePacket<T> {
         Ok(self)
     }
 
-    fn check_realizable(&self) -> Result<(), Error> {
+    /// Checks the realizability bound (module docs, "Realizability"), projecting onto it a
+    /// packet that exceeds it by no more than the rounding of its shapes.
+    fn realize(&mut self) -> Result<(), Error> {
         // The bound is scale-invariant: normalize first, since |Θ| over- or underflows f32 for
         // entries beyond ~1e19 or below ~1e-19 (length²) while the ratio is harmless.
         let scale = pow2_scale(self.shape_x.amax().max(self.shape_y.amax()));
@@ -439,13 +479,25 @@ impl<T: Real> WavePacket<T> {
         let half = T::lit(0.5);
         let rhs = ((n[0] + n[1]) * half) * ((n[0] - n[1]) * half) * bound;
         let tol = T::lit(Self::REALIZABILITY_SLACK_ULPS) * T::EPSILON;
-        if lhs > rhs + tol {
-            return Err(Error::Unrealizable {
-                reason: "|μ|² exceeds √(|Θx||Θy|)/|Θ½|: x and y components with different \
-                         coherence shapes cannot be this strongly correlated",
-            });
+        if lhs <= rhs + tol {
+            return Ok(());
         }
-        Ok(())
+        // The shapes' entries are known to a few ulps (rounded to T, or computed in T), and
+        // the bound of nearly singular shapes moves by `K ε` per ulp of their entries: within
+        // `SHAPE_ROUNDING_ULPS · K ε` of it, the packet is realizable for shapes its own
+        // represent, and |μ| is scaled onto the bound of the shapes held (module docs).
+        let k = bound_conditioning(&nx, &ny);
+        let reach = T::lit(Self::SHAPE_ROUNDING_ULPS) * T::EPSILON * k;
+        if lhs <= rhs * (T::one() + reach) + tol {
+            let f = (rhs / lhs).sqrt();
+            let v = self.stokes.0;
+            self.stokes = Stokes(nalgebra::Vector4::new(v[0], v[1], v[2] * f, v[3] * f));
+            return Ok(());
+        }
+        Err(Error::Unrealizable {
+            reason: "|μ|² exceeds √(|Θx||Θy|)/|Θ½|: x and y components with different \
+                     coherence shapes cannot be this strongly correlated",
+        })
     }
 
     /// The classical Stokes vector (ξ = 0) in the packet frame.
@@ -751,4 +803,27 @@ fn wavenumber<T: Real>(wavelength: T) -> Result<T, Error> {
         });
     }
     Ok(k)
+}
+
+/// `K` of [`WavePacket::realizability_conditioning`] for the shapes `x`, `y` (scaled by a
+/// common power of two), in `f64`.
+fn bound_conditioning<T: Real>(x: &Matrix2<T>, y: &Matrix2<T>) -> T {
+    let (x, y) = (x.map(|v| v.to_f64()), y.map(|v| v.to_f64()));
+    let kappa = |m: &Matrix2<f64>| {
+        let d = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+        ((m[(0, 0)] * m[(1, 1)]).abs() + (m[(0, 1)] * m[(1, 0)]).abs()) / d
+    };
+    let h = (x + y) * 0.5;
+    let mag = (x.abs() + y.abs()) * 0.5;
+    let dh = h[(0, 0)] * h[(1, 1)] - h[(0, 1)] * h[(1, 0)];
+    let kh = (h[(0, 0)].abs() * mag[(1, 1)]
+        + h[(1, 1)].abs() * mag[(0, 0)]
+        + 2.0 * h[(0, 1)].abs() * mag[(0, 1)])
+        / dh;
+    let k = 0.5 * kappa(&x) + 0.5 * kappa(&y) + kh;
+    T::lit(if k.is_finite() && k > 0.0 {
+        k
+    } else {
+        f64::INFINITY
+    })
 }

@@ -13,6 +13,9 @@
 //!   positive and equal to `pdf(direction)`, with a finite weight that is never refused — for
 //!   uniforms inside `[0, 1)`
 //!   and on and beyond its boundary (0, the largest `T` below 1, 1, −10⁻³, ±∞, NaN);
+//! - no throughput (`eval`'s lobes and their total, every weight, delta lobes included) has a
+//!   subnormal entry (`Throughput::flushed` leaves it unchanged), and every weight maps a valid
+//!   Stokes vector to a valid one (issue 36);
 //! - no call panics. Most cases build (counted and asserted).
 
 use crate::common;
@@ -187,10 +190,16 @@ where
         let inc = b.prepare(&packet).unwrap();
         let v = b.eval(&inc, exit).unwrap();
         let s_in = Vector4::new(1.0, p.stokes[0], p.stokes[1], p.stokes[2]).map(T::lit);
-        for m in [v.response.specular, v.response.scattered] {
+        for m in [
+            v.response.specular,
+            v.response.scattered,
+            v.response.total(),
+        ] {
             let m00 = m.m00();
             prop_assert!(m00.is_finite() && m00 >= T::zero(), "{name}: M00 {m00:?}");
             prop_assert!(m.is_finite(), "{name}: {m:?}");
+            // No subnormal entry (`Throughput::flushed` leaves such a throughput unchanged).
+            prop_assert_eq!(m.flushed(), m, "{}: a subnormal entry", name);
             // The raw product M S, valid to its rounding: `|S_pol| ≤ S0 + 64 ε M₀₀ s0`.
             let light = Pol::Throughput::<T>::light(&Stokes::from_vector_unchecked(s_in));
             let out = m.apply(&light);
@@ -273,6 +282,17 @@ where
                     w.is_finite() && w.m00() >= T::zero(),
                     "{name}: weight {w:?}"
                 );
+                // No subnormal entry, and a valid Stokes action (issue 36: a delta weight of
+                // 5e-43 in f32 had subnormal entries and |S_pol| > S0).
+                prop_assert_eq!(w.flushed(), w, "{}: a subnormal weight entry", name);
+                let light = Pol::Throughput::<T>::light(&Stokes::from_vector_unchecked(s_in));
+                let out = w.apply(&light);
+                if let Some(st) = Pol::Throughput::<T>::light_stokes(&out) {
+                    prop_assert!(
+                        valid(&st.vector(), w.m00().to_f64()),
+                        "{name}: weight · S invalid, {out:?}"
+                    );
+                }
             }
         }
         Ok(())

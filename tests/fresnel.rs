@@ -377,3 +377,201 @@ proptest! {
         absorbing::<f32>(theta_i, n, k);
     }
 }
+
+// ------------------------------------------------------------------ issue 36: η = 1
+
+/// An index-matched interface (η = 1) is no interface: `r_s = r_p = 0` exactly (Born & Wolf
+/// §1.5.2: `cos θ_t = cos θ_i`, so both numerators vanish), at every angle whose `cos²θ_i` is a
+/// normal number, in both precisions — the coefficients, the reflectances, the Mueller matrix,
+/// `FresnelReflection`'s and `FresnelInterface`'s reflection (`M₀₀`, and `T = 1` across), the
+/// renderer layer's `Interface::reflectance` from either side, and the kernel's specular lobe,
+/// scalar and batch. Before, `q` was formed as `η² − (1 − cos²θ_i)` and the rounding of
+/// `1 − cos²θ_i` left `R ≈ 8e-30` in f64 and `2e-12` in f32 (issue 36).
+#[test]
+fn index_matched_interface_reflects_exactly_nothing() {
+    fn run<T: Real>() -> usize {
+        use gmueller::bsdf::Interface;
+        use gmueller::interaction::{FresnelInterface, FresnelReflection, Pbsdf};
+        let one = Complex::new(T::one(), T::zero());
+        let mut cosines: Vec<T> = (0..=2000).map(|i| T::lit(f64::from(i) / 2000.0)).collect();
+        cosines.extend((1..=90).map(|d| T::lit(f64::from(d).to_radians().cos())));
+        cosines.push(T::lit(89.99f64.to_radians().cos()));
+        // The smallest cosines whose squares are normal numbers.
+        let tiny = T::MIN_POSITIVE.sqrt();
+        cosines.extend([tiny, tiny * T::lit(1.5), tiny * T::lit(1e3), T::lit(1e-9)]);
+        let interface = FresnelInterface::new(T::one()).unwrap();
+        let mirror = FresnelReflection::new(one).unwrap();
+        for &c in &cosines {
+            let k = coefficients(c, one);
+            let what = format!("cos θ {:e}", c.to_f64());
+            assert!(
+                k.rs == Complex::new(T::zero(), T::zero()),
+                "{what}: r_s {:?}",
+                k.rs
+            );
+            assert!(
+                k.rp == Complex::new(T::zero(), T::zero()),
+                "{what}: r_p {:?}",
+                k.rp
+            );
+            assert!(k.reflectance_s() == T::zero() && k.reflectance_p() == T::zero());
+            if c > T::zero() {
+                assert!(
+                    k.ts == one && k.tp == one,
+                    "{what}: t {:?} {:?}",
+                    k.ts,
+                    k.tp
+                );
+            }
+            let m = Mueller::from_jones(&reflection(c, one));
+            assert!(
+                m.matrix().iter().all(|x| *x == T::zero()),
+                "{what}: {:?}",
+                m.matrix()
+            );
+            // `Interface::reflectance` takes cos θ in (0, 1].
+            for below in [false, true] {
+                assert!(
+                    c == T::zero() || interface.reflectance(c, below) == T::zero(),
+                    "{what}: below {below}"
+                );
+            }
+            let _ = mirror.index();
+        }
+        // Through the pBSDFs at a geometry (normal, 40°, 89.99°).
+        let surface = gmueller::frame::Frame::<T>::new(
+            nalgebra::Vector3::x(),
+            nalgebra::Vector3::y(),
+            nalgebra::Vector3::z(),
+        )
+        .unwrap();
+        for deg in [0.0f64, 40.0, 89.99] {
+            let t = deg.to_radians();
+            let to_source = nalgebra::Vector3::new(-t.sin(), 0.0, t.cos()).map(T::lit);
+            let exit = nalgebra::Vector3::new(t.sin(), 0.0, t.cos()).map(T::lit);
+            let g = gmueller::interaction::Geometry::new(T::lit(10.0), &surface, to_source, exit)
+                .unwrap();
+            assert!(mirror.m00(&g) == T::zero(), "{deg}°");
+            assert!(
+                mirror.mueller(&g).matrix().iter().all(|x| *x == T::zero()),
+                "{deg}°"
+            );
+            let gi = gmueller::interaction::Geometry::at_interface(
+                T::lit(10.0),
+                &surface,
+                T::one(),
+                to_source,
+                exit,
+            )
+            .unwrap();
+            assert!(interface.m00(&gi) == T::zero(), "{deg}°");
+            let across = gmueller::interaction::Geometry::at_interface(
+                T::lit(10.0),
+                &surface,
+                T::one(),
+                to_source,
+                -to_source,
+            )
+            .unwrap();
+            let tm = interface.m00(&across);
+            assert!(
+                (tm - T::one()).abs() <= T::lit(4.0) * T::EPSILON,
+                "{deg}°: T = {tm:?}"
+            );
+        }
+        cosines.len()
+    }
+    let n = run::<f64>();
+    run::<f32>();
+    println!("{n} angles per precision");
+}
+
+/// The kernel's specular lobe at η = 1 is exactly 0 at every exit, scalar and batch (the batch
+/// path takes its Fresnel matrix from `fresnel::reflection` per packet), `Full · Partial`, both
+/// precisions.
+#[test]
+fn index_matched_specular_lobe_is_exactly_zero() {
+    fn run<T: Real>() {
+        use gmueller::frame::Frame;
+        use gmueller::interaction::FresnelReflection;
+        use gmueller::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
+        use gmueller::interaction::{Full, Geometry, Kernel, Partial, RayleighRice, RoughSurface};
+        use gmueller::packet::{CoherenceShape, WavePacket};
+        use gmueller::psd::GaussianPsd;
+        use nalgebra::Vector3;
+        let one = Complex::new(T::one(), T::zero());
+        let material = RoughSurface {
+            psd: GaussianPsd::<T, 2>::isotropic(T::lit(0.01), T::lit(2.0)).unwrap(),
+            specular: FresnelReflection::new(one).unwrap(),
+            scatter: RayleighRice::new(one).unwrap(),
+        };
+        let surface = Frame::<T>::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+        let kernel = Kernel::<Full, Partial>::default();
+        for deg in [0.0f64, 25.0, 60.0, 85.0] {
+            let t = deg.to_radians();
+            let travel = Vector3::new(t.sin(), 0.0, -t.cos()).map(T::lit);
+            let packet = WavePacket::from_stokes(
+                Stokes::new(T::one(), T::lit(0.3), T::zero(), T::zero()).unwrap(),
+                CoherenceShape::isotropic(T::lit(3.0)).unwrap(),
+                gmueller::frame::Frame::sp(travel, Vector3::z()).unwrap(),
+                T::lit(0.5),
+            )
+            .unwrap();
+            let exits: Vec<Vector3<T>> = (0..16)
+                .map(|i| {
+                    let o = t + 1e-3 * (f64::from(i) - 8.0);
+                    Vector3::new(o.sin(), 1e-3 * f64::from(i % 3), o.cos().abs())
+                        .map(T::lit)
+                        .normalize()
+                })
+                .collect();
+            for e in &exits {
+                let g = Geometry::for_packet(&packet, &surface, *e).unwrap();
+                let r = kernel.evaluate(&material, &packet, &g);
+                assert!(
+                    r.specular.vector() == nalgebra::Vector4::zeros(),
+                    "{deg}°: {:?}",
+                    r.specular
+                );
+            }
+            let cols: [Vec<T>; 3] = core::array::from_fn(|k| exits.iter().map(|e| e[k]).collect());
+            let n = exits.len();
+            let mut out: Vec<Vec<T>> = vec![vec![T::one(); n]; 8];
+            let (a, b) = out.split_at_mut(4);
+            let [s0, s1, s2, s3] = a else { unreachable!() };
+            let [c0, c1, c2, c3] = b else { unreachable!() };
+            let mut lobes = LobesSoa {
+                specular: StokesSoa {
+                    s: [s0, s1, s2, s3],
+                },
+                scattered: StokesSoa {
+                    s: [c0, c1, c2, c3],
+                },
+            };
+            kernel
+                .evaluate_batch(
+                    &material,
+                    &packet,
+                    &surface,
+                    None,
+                    DirectionsSoa {
+                        x: &cols[0],
+                        y: &cols[1],
+                        z: &cols[2],
+                    },
+                    &mut lobes,
+                    None,
+                )
+                .unwrap();
+            for column in out.iter().take(4) {
+                assert!(
+                    column.iter().all(|x| *x == T::zero()),
+                    "{deg}°: batch {:?}",
+                    column
+                );
+            }
+        }
+    }
+    run::<f64>();
+    run::<f32>();
+}

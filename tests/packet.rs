@@ -1091,3 +1091,224 @@ fn main_relations_f64() {
 fn main_relations_f32() {
     main_relations::<f32>(F32);
 }
+
+// ------------------------------------------------------------------ issue 36: f32 shapes
+
+/// One two-shape packet of the §7 ranges as a renderer means it, in `f64`: `Θ_x` of width
+/// `w` (10⁻³–10⁶ λ) and anisotropy up to 10⁶ at any angle, `Θ_y = r Θ_x` (`r` = 1 in a fifth
+/// of the draws, else 1–4), and a Stokes vector (`S0` scaled by 1e-30…1e12, half of them
+/// fully polarized) whose `|μ|` is `mu_factor` of the bound `√B` of these exact shapes.
+fn intended_packet(
+    rng: &mut common::SplitMix64,
+    mu_factor: f64,
+) -> (Matrix2<f64>, Matrix2<f64>, Vector4<f64>) {
+    let lu =
+        |r: &mut common::SplitMix64, lo: f64, hi: f64| (lo.ln() + r.unit() * (hi / lo).ln()).exp();
+    let lambda = lu(rng, 0.1, 100.0);
+    let w = lu(rng, 1e-3, 1e6) * lambda;
+    let a = if rng.unit() < 0.5 {
+        1.0
+    } else {
+        lu(rng, 1.0, 1e6)
+    };
+    let (sn, cs) = (rng.unit() * std::f64::consts::PI).sin_cos();
+    let r = if rng.unit() < 0.2 {
+        1.0
+    } else {
+        lu(rng, 1.0, 4.0)
+    };
+    let rot = Matrix2::new(cs, -sn, sn, cs);
+    let m = rot * Matrix2::new(w * w, 0.0, 0.0, w * w / a) * rot.transpose();
+    let tx = Matrix2::new(m[(0, 0)], m[(0, 1)], m[(0, 1)], m[(1, 1)]);
+    let ty = tx * r;
+    let f = bound(&tx, &ty).sqrt() * mu_factor;
+    let (z, az) = (rng.unit() * 2.0 - 1.0, rng.unit() * std::f64::consts::TAU);
+    let dop = if rng.unit() < 0.5 { 1.0 } else { rng.unit() };
+    let rr = (1.0 - z * z).sqrt();
+    let scale = if rng.unit() < 0.5 {
+        1.0
+    } else {
+        lu(rng, 1e-30, 1e12)
+    };
+    let s = Vector4::new(
+        1.0,
+        dop * z,
+        dop * rr * az.cos() * f,
+        dop * rr * az.sin() * f,
+    ) * scale;
+    (tx, ty, s)
+}
+
+/// The two sides of the realizability test on `S/S0`: `|S2 + iS3|²/4` and `S_x S_y B`
+/// (`WavePacket::new` accepts `lhs ≤ rhs (1 + 4 K ε) + 64 ε`, module docs), in `f64` with
+/// nalgebra determinants of the given shapes.
+fn sides(tx: &Matrix2<f64>, ty: &Matrix2<f64>, s: &Vector4<f64>) -> (f64, f64) {
+    let n = s / s[0];
+    let lhs = 0.25 * (n[2] * n[2] + n[3] * n[3]);
+    let rhs = 0.25 * (1.0 + n[1]) * (1.0 - n[1]) * bound(tx, ty);
+    (lhs, rhs)
+}
+
+/// [`sides`] of a packet for the shapes it holds.
+fn held_sides<T: Real>(p: &WavePacket<T>) -> (f64, f64) {
+    let (x, y) = (
+        p.shape(Channel::X).map(|v| v.to_f64()),
+        p.shape(Channel::Y).map(|v| v.to_f64()),
+    );
+    sides(&x, &y, &p.stokes().vector().map(|v| v.to_f64()))
+}
+
+/// Issue 36 (4): the packets a renderer means — `|μ|` at 0.999 of the bound of its exact
+/// shapes, accepted in `f64` — built in `f32` (every input rounded once). Before, 215 of
+/// 200 000 were refused (both precisions refuse them on the rounded inputs: the rounded shapes
+/// of an anisotropy near 10⁶ hold a bound up to ~`K ε₃₂` lower). Now every one is accepted,
+/// realizable for the shapes it holds (`|S2 + iS3|²/4 ≤ S_x S_y B + 64 ε S0²`, by the
+/// projection where it was beyond), `S2`, `S3` moved by at
+/// most `4 K ε` of themselves and `S0`, `S1` not at all.
+#[test]
+fn f32_packets_of_realizable_intent_are_accepted() {
+    let mut rng = common::SplitMix64(36);
+    let frame32 = frame_xyz_t::<f32>();
+    let (mut projected, mut worst_move) = (0, 0.0f64);
+    for _ in 0..200_000 {
+        let (tx, ty, s) = intended_packet(&mut rng, 0.999);
+        let shape = |m: Matrix2<f64>| CoherenceShape::new(m).unwrap();
+        let intent = WavePacket::new(stokes64(s), shape(tx), shape(ty), frame_xyz(), 0.5);
+        assert!(intent.is_ok(), "f64 intent refused: {tx} {ty} {s:?}");
+        let (x32, y32, s32) = (
+            tx.map(|v| v as f32),
+            ty.map(|v| v as f32),
+            s.map(|v| v as f32),
+        );
+        let Ok(st32) = Stokes::new(s32[0], s32[1], s32[2], s32[3]) else {
+            continue;
+        };
+        let p = WavePacket::new(
+            st32,
+            CoherenceShape::new(x32).unwrap(),
+            CoherenceShape::new(y32).unwrap(),
+            frame32,
+            0.5f32,
+        );
+        let p = p.unwrap_or_else(|e| panic!("f32 refused {x32} {y32} {s32:?}: {e}"));
+        let held = p.stokes().vector();
+        assert_eq!((held[0], held[1]), (s32[0], s32[1]));
+        // Realizable for the shapes held: lhs ≤ rhs up to the 64 ε slack (and the rounding
+        // of this f64 check's own bound, a few K ε₆₄).
+        let (lhs, rhs) = held_sides(&p);
+        let k = p.realizability_conditioning().to_f64();
+        let slack = 64.0 * f64::from(f32::EPSILON) + 8.0 * k * f64::EPSILON * rhs;
+        assert!(
+            lhs <= rhs + slack,
+            "held |S2 + iS3|²/4 = {lhs} > S_x S_y B = {rhs}"
+        );
+        if held != s32 {
+            projected += 1;
+            let moved = ((held[2] - s32[2]).abs().max((held[3] - s32[3]).abs()) as f64)
+                / f64::from(s32[2].abs().max(s32[3].abs()));
+            assert!(
+                moved <= 4.0 * k * f64::from(f32::EPSILON),
+                "moved {moved:e}, K {k:e}"
+            );
+            worst_move = worst_move.max(moved);
+        }
+    }
+    println!(
+        "projected onto the bound: {projected} of 200000 (largest change of S2, S3: {worst_move:.2e})"
+    );
+    assert!(projected > 50, "{projected}");
+}
+
+/// Clearly unrealizable packets are still refused: `|μ|² = B (1 + 4 K ε)(1 + 10⁻³)` (just past
+/// the reach of the shapes' rounding) in both precisions over the same draws as above, and
+/// `|μ| = √B (1 + 10⁻³)` in `f32` wherever `4 K ε₃₂ < 10⁻³` (the issue's "clearly") — both where
+/// `10⁻³ S_x S_y B` exceeds the absolute slack `64 ε S0²` (twice). And on
+/// the very same `f32` inputs (`|μ|` from 0.99 to 1.01 of the bound) `f32` accepts every
+/// packet `f64` accepts.
+#[test]
+fn clearly_unrealizable_packets_are_refused() {
+    fn refused<T: Real>(tx: Matrix2<f64>, ty: Matrix2<f64>, s: Vector4<f64>) -> Option<bool> {
+        let l = |x: f64| T::lit(x);
+        let (cx, cy) = (
+            CoherenceShape::new(tx.map(l)).ok()?,
+            CoherenceShape::new(ty.map(l)).ok()?,
+        );
+        let st = Stokes::new(l(s[0]), l(s[1]), l(s[2]), l(s[3])).ok()?;
+        Some(matches!(
+            WavePacket::new(st, cx, cy, frame_xyz_t::<T>(), l(0.5)),
+            Err(Error::Unrealizable { .. })
+        ))
+    }
+    let mut rng = common::SplitMix64(37);
+    let (mut beyond, mut clearly, mut same) = (0, 0, 0);
+    for _ in 0..100_000 {
+        let (tx, ty, s) = intended_packet(&mut rng, 1.0);
+        let b = bound(&tx, &ty);
+        let at_bound =
+            (s[2] * s[2] + s[3] * s[3]) >= (s[0] * s[0] - s[1] * s[1]) * b * (1.0 - 1e-9);
+        if !at_bound || b > 1.0 - 1e-3 {
+            continue; // |μ| below the bound already, or equal shapes (B = 1: nothing beyond)
+        }
+        let grow = |s: Vector4<f64>, f: f64| Vector4::new(s[0], s[1], s[2] * f, s[3] * f);
+        for (name, eps, round, t) in [
+            (
+                "f32",
+                f64::from(f32::EPSILON),
+                (|x: f64| f64::from(x as f32)) as fn(f64) -> f64,
+                refused::<f32> as fn(_, _, _) -> Option<bool>,
+            ),
+            ("f64", f64::EPSILON, |x: f64| x, refused::<f64>),
+        ] {
+            // The shapes as the type holds them, their bound and its conditioning K.
+            let (hx, hy) = (tx.map(round), ty.map(round));
+            let bh = bound(&hx, &hy);
+            let k = WavePacket::new(
+                Stokes::new(1.0, 0.0, 0.0, 0.0).unwrap(),
+                CoherenceShape::new(hx).unwrap(),
+                CoherenceShape::new(hy).unwrap(),
+                frame_xyz(),
+                0.5,
+            )
+            .unwrap()
+            .realizability_conditioning();
+            // |μ|² = B_held (1 + 4 K ε)(1 + 1e-3) (s has |μ|² = b).
+            let f = (bh / b * (1.0 + 4.0 * k * eps) * (1.0 + 1e-3)).sqrt();
+            let v = grow(s, f);
+            // Past the relative reach by 1e-3 of rhs, which must also exceed the absolute slack
+            // 64 ε (twice): nearly fully polarized light in S1 has S_x S_y → 0.
+            let (_, rhs) = sides(&hx, &hy, &s);
+            let clear = rhs * 1e-3 > 128.0 * eps;
+            if !clear || v[2] * v[2] + v[3] * v[3] > v[0] * v[0] {
+                continue;
+            }
+            if let Some(r) = t(hx, hy, v) {
+                assert!(r, "{name}: accepted |μ|²/B = {} (K {k:e})", f * f * b / bh);
+                beyond += 1;
+            }
+            if name == "f32" {
+                // The same f32 inputs, |μ| about the bound: f64 accepts ⇒ f32 accepts.
+                let g = grow(s, (bh / b).sqrt() * (0.99 + 0.02 * rng.unit())).map(round);
+                if let (Some(a32), Some(a64)) =
+                    (refused::<f32>(hx, hy, g), refused::<f64>(hx, hy, g))
+                {
+                    assert!(a64 || !a32, "f32 refused what f64 accepts: {hx} {hy} {g:?}");
+                    same += 1;
+                }
+                if 4.0 * k * eps < 1e-3
+                    && rhs * 1e-3 > 256.0 * eps
+                    && let Some(r) = t(hx, hy, grow(s, (bh / b).sqrt() * (1.0 + 1e-3)))
+                {
+                    assert!(r, "f32: |μ| = √B (1 + 1e-3) accepted (K {k:e})");
+                    clearly += 1;
+                }
+            }
+        }
+    }
+    println!(
+        "refused beyond the reach: {beyond}; refused at √B (1 + 1e-3) in f32: {clearly}; same inputs compared: {same}"
+    );
+    assert!(
+        beyond > 10_000 && clearly > 5_000 && same > 5_000,
+        "{beyond} {clearly} {same}"
+    );
+}

@@ -32,7 +32,7 @@ impl<T: Real> Interface<T> for FresnelInterface<T> {
     /// Real arithmetic for the real index (the form of [`fresnel::coefficients`], without its
     /// complex square root):
     /// ```text
-    /// q = η cos θ_t = √(η² − sin²θ)  (R = 1 where it is imaginary),
+    /// q = η cos θ_t = √((η² − 1) + c²)  (R = 1 where it is imaginary; 0 at η = 1),
     /// r_s = (c − q)/(c + q),   r_p = (η² c − q)/(η² c + q)
     /// ```
     #[inline]
@@ -43,9 +43,8 @@ impl<T: Real> Interface<T> for FresnelInterface<T> {
             self.relative_index()
         };
         let c = cos_theta.max(T::zero()).min(T::one());
-        let sin2 = (T::one() - c) * (T::one() + c);
         let e2 = eta * eta;
-        let q2 = e2 - sin2;
+        let q2 = (e2 - T::one()) + c * c;
         if q2 <= T::zero() {
             return T::one();
         }
@@ -86,9 +85,9 @@ mod tests {
                     let k = fresnel::coefficients(c, Complex::new(e, 0.0));
                     let want = 0.5 * (k.reflectance_s() + k.reflectance_p());
                     let got = f.reflectance(c, below);
-                    // Both round η² − sin²θ, whose cancellation near the critical angle (and
-                    // at grazing incidence for η → 1) amplifies rounding by 1/(η² − sin²θ).
-                    let q2 = (e * e - (1.0 - c * c)).abs();
+                    // Both round (η² − 1) + cos²θ, whose cancellation near the critical angle
+                    // amplifies rounding by 1/|η² − sin²θ|.
+                    let q2 = ((e * e - 1.0) + c * c).abs();
                     let tol = 1e-15 + 8.0 * f64::EPSILON / q2;
                     assert!(
                         (got - want).abs() <= tol,

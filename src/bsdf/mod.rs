@@ -134,7 +134,7 @@ use crate::frame::Frame;
 use crate::interaction::{
     CoherenceLevel, CoherenceWeights, FirstOrder, Geometry, Kernel, KernelOutput, MuellerResponse,
     Pbsdf, PolarizationModel, PreparedPacket, RoughSurface, RoughnessLevel, RoughnessWeights, Side,
-    Throughput,
+    Throughput, flush_to_normal, throughput_scaled,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -330,14 +330,35 @@ where
         &self.surface
     }
 
-    /// The lobes this BSDF has ([`LobeFlags`]).
+    /// The lobes this BSDF has at the kernel's coherence level ([`LobeFlags`]): what every
+    /// packet sees whose section `Ξ` is representable in `T` (the tested ranges). A packet
+    /// whose section over- or underflows is evaluated and sampled at the plane-wave level,
+    /// with Dirac lobes: [`Bsdf::incident_flags`] gives the flags of a prepared packet.
     #[must_use]
     pub fn flags(&self) -> LobeFlags {
+        self.flags_at(Coh::LEVEL == CoherenceLevel::PlaneWave)
+    }
+
+    /// The lobes for the prepared packet `incident`, as [`Bsdf::eval`] and
+    /// [`Bsdf::exit_sampler`] treat it: [`Bsdf::flags`], except for a packet whose section `Ξ`
+    /// of the coherence by the surface is not representable in `T` (`f32`: a coherence width
+    /// of ~10¹¹ λ or more; [`crate::interaction::PreparedPacket::section`] is `None`), which
+    /// the kernel and the sampler take at the plane-wave level: its specular lobe (and a
+    /// grating's orders) are then [`LobeFlags::DELTA`], left out of `eval` and drawn as deltas
+    /// — a renderer that skips multiple importance sampling on deltas must ask here.
+    #[must_use]
+    pub fn incident_flags(&self, incident: &Incident<T, Pol, Coh>) -> LobeFlags {
+        let plane = Coh::LEVEL == CoherenceLevel::PlaneWave
+            || (Coh::USES_SHAPE && incident.prepared.section().is_none());
+        self.flags_at(plane)
+    }
+
+    /// The lobe flags with (`delta`) or without the plane wave's Dirac lobes.
+    fn flags_at(&self, delta: bool) -> LobeFlags {
         let mut f = LobeFlags::REFLECTION;
         if self.eta.is_some() {
             f = f | LobeFlags::TRANSMISSION;
         }
-        let delta = Coh::LEVEL == CoherenceLevel::PlaneWave;
         f = f | if delta {
             LobeFlags::DELTA
         } else {
@@ -724,21 +745,31 @@ where
         LobeSampler::new(setup).map_err(|reason| Error::Unrealizable { reason })
     }
 
-    /// The integral of a Dirac lobe of geometry `g` and PSD weight `w`: `α M_part T w`.
+    /// The integral of a Dirac lobe of geometry `g` and PSD weight `w`, times `factor`:
+    /// `α M_part T w · factor`, its scale `α w factor` taken as one exponential (`α` may be far
+    /// below the smallest number of `T` while the weight is not) and the result's small
+    /// entries under the rule of [`Throughput::flushed`].
     fn delta_integral(
         &self,
         g: &Geometry<T>,
         lobe: &SampledLobe,
         w: T,
         t: &Mueller<T>,
+        factor: T,
     ) -> Mueller<T> {
         let m = match lobe.part {
             Part::Specular => self.material.specular.mueller(g),
             Part::Scattered => self.material.scatter.mueller(g),
         };
         let v = g.phase_factor();
-        let alpha = (-(v * v) * self.material.psd.variance()).exp();
-        Mueller((m * *t).0 * (alpha * w))
+        let ln_alpha = -(v * v) * self.material.psd.variance();
+        let mt = (m * *t).0;
+        let aw = ln_alpha.exp() * w;
+        if aw >= T::MIN_POSITIVE && aw <= T::MAX {
+            Mueller(flush_to_normal(mt * aw * factor))
+        } else {
+            Mueller(throughput_scaled(mt, ln_alpha + w.ln() + factor.ln()))
+        }
     }
 
     /// The Monte Carlo weight of an exit direction `s` drawn by this packet's
@@ -757,15 +788,15 @@ where
         let flux = g.cos_o() / g.cos_i();
         let weight = if s.lobe.delta {
             let t = Mueller(incident.prepared.t);
-            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &t);
-            Pol::Throughput::<T>::from_mueller(&m).scaled(flux / s.pdf)
+            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &t, flux / s.pdf);
+            Pol::Throughput::<T>::from_mueller(&m)
         } else {
             let v = incident.normalise(self.kernel.evaluate_mueller_prepared(
                 self.material,
                 &incident.prepared,
                 &g,
             ));
-            v.total().scaled(flux / s.pdf)
+            v.total().scaled(flux / s.pdf).flushed()
         };
         Ok((weight, g))
     }
@@ -790,15 +821,21 @@ where
             // The delta's integral over ŝ: (k_o² cos θ_o)/(k_i² cos θ_i) times its integral over r̂.
             let ratio = g.relative_index();
             let jac = ratio * ratio * g.cos_o() / g.cos_i();
-            let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &Mueller::identity());
-            return Ok((
-                Pol::Throughput::<T>::from_mueller(&m).scaled(jac / s.pdf),
-                g,
-            ));
+            let m = self.delta_integral(
+                &g,
+                &s.lobe,
+                s.delta_weight,
+                &Mueller::identity(),
+                jac / s.pdf,
+            );
+            return Ok((Pol::Throughput::<T>::from_mueller(&m), g));
         }
         let light = self.surface_packet(Stokes::unpolarized(T::one())?, s.direction, coherence)?;
         let v = self.eval(&self.prepare(&light)?, exit)?;
-        Ok((v.response.total().scaled(T::one() / s.pdf), v.geometry))
+        Ok((
+            v.response.total().scaled(T::one() / s.pdf).flushed(),
+            v.geometry,
+        ))
     }
 
     /// Draws an exit direction for the prepared packet and weighs it ([`Bsdf::exit_sampler`],

@@ -149,7 +149,7 @@ pub use section::surface_inverse_coherence;
 
 // The per-packet machinery the random medium (`crate::medium`) shares with the surface kernel.
 pub(crate) use polarization::onto_cone;
-pub(crate) use prepared::{Plan, unit_scaled};
+pub(crate) use prepared::{Plan, flush_to_normal, throughput_scaled, unit_scaled};
 
 #[cfg(doc)]
 use crate::psd::{BlurMethod, Psd};

@@ -297,10 +297,15 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
             // No magnitude to fold; a 0 entry stays 0 rather than 0 · ∞ = NaN.
             u.map(|x| if x == T::zero() { x } else { x * e })
         } else {
-            // An overflow stays an overflow (±∞), but an entry that is exactly 0 stays 0 rather
-            // than becoming 0 · ∞ = NaN.
             let e = (ln_e + self.ln_s0 + u[0].ln()).exp();
-            (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
+            if e <= T::MAX {
+                // An entry that is exactly 0 stays 0 rather than becoming 0 · ∞ = NaN.
+                (u / u[0]).map(|x| if x == T::zero() { x } else { x * e })
+            } else {
+                // S0 itself overflows (±∞: brighter than the type), but a polarized entry
+                // may not: each from its own logarithm, so an entry ≤ MAX stays finite.
+                u.map(|x| beyond_scale(x, ln_e + self.ln_s0))
+            }
         })
     }
 }
@@ -415,20 +420,82 @@ pub(crate) fn flush_subnormal<T: Real, const R: usize, const C: usize>(
     }
 }
 
-/// `m · e^{ln_e}` for the BSDF form: 0 when the scale, or every entry of the result, is below
-/// the smallest normal number (a matrix cannot keep the digits of a subnormal scale entry by
-/// entry, and 0 is a valid Mueller matrix), `±∞` for the nonzero entries beyond the largest
-/// (zeros stay 0).
+/// `x · e^{ln_e}` for a scale `e^{ln_e}` beyond the largest number of `T`, from the entry's
+/// own logarithm, `sign(x) e^{ln_e + ln|x|}`: finite where the product is representable, `±∞`
+/// where it is not, and 0 (not `0 · ∞ = NaN`) for `x = 0`.
+#[inline]
+pub(crate) fn beyond_scale<T: Real>(x: T, ln_e: T) -> T {
+    if x == T::zero() {
+        x
+    } else {
+        (ln_e + x.abs().ln()).exp().copysign(x)
+    }
+}
+
+/// The rule for small entries of every throughput of the BSDF form (and of the renderer
+/// layer's weights):
+/// - 0 when every entry is below the smallest normal number (as [`flush_subnormal`]: such a
+///   matrix has lost the digits that keep it valid, and 0 is a valid Mueller matrix);
+/// - when the largest entry is at least `MIN_POSITIVE/ε` (f32: 9.9e-32, f64: 1.0e-292), every
+///   entry below `MIN_POSITIVE` set to 0: that moves `M S` by at most `11 MIN_POSITIVE S0 ≤
+///   11 ε max|M| S0`, inside the validity slack `64 ε M₀₀ S0` of the product's rounding;
+/// - in between, unchanged: a subnormal entry there carries up to all of the polarization of
+///   its row (zeroing it could leave `M S` invalid by a sizeable fraction of `M₀₀`), and it is
+///   exact to half a subnormal step, `ε MIN_POSITIVE/2`, within the same slack.
+#[inline]
+pub(crate) fn flush_to_normal<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+) -> nalgebra::SMatrix<T, R, C> {
+    let largest = m.amax();
+    if largest >= T::MIN_POSITIVE / T::EPSILON {
+        m.map(|x| {
+            if x.abs() < T::MIN_POSITIVE {
+                T::zero()
+            } else {
+                x
+            }
+        })
+    } else if largest >= T::MIN_POSITIVE {
+        m
+    } else {
+        nalgebra::SMatrix::zeros()
+    }
+}
+
+/// `m · e^{ln_e}` (the medium's phase matrices): 0 when the scale, or every entry of the
+/// result, is below the smallest normal number (a matrix cannot keep the digits of a subnormal
+/// scale entry by entry, and 0 is a valid Mueller matrix); for a scale beyond the largest
+/// number each entry from its own logarithm ([`beyond_scale`]: `±∞` only where the entry
+/// itself is beyond it, zeros stay 0).
 #[inline]
 pub(crate) fn unit_scaled<T: Real, const R: usize, const C: usize>(
     m: nalgebra::SMatrix<T, R, C>,
     ln_e: T,
 ) -> nalgebra::SMatrix<T, R, C> {
+    scaled_then(m, ln_e, flush_subnormal)
+}
+
+/// `m · e^{ln_e}` for the kernel's BSDF form and the renderer layer's weights: as
+/// [`unit_scaled`], with no subnormal entry left ([`flush_to_normal`]).
+#[inline]
+pub(crate) fn throughput_scaled<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+    ln_e: T,
+) -> nalgebra::SMatrix<T, R, C> {
+    scaled_then(m, ln_e, flush_to_normal)
+}
+
+#[inline(always)]
+fn scaled_then<T: Real, const R: usize, const C: usize>(
+    m: nalgebra::SMatrix<T, R, C>,
+    ln_e: T,
+    flush: fn(nalgebra::SMatrix<T, R, C>) -> nalgebra::SMatrix<T, R, C>,
+) -> nalgebra::SMatrix<T, R, C> {
     let e = ln_e.exp();
     if e >= T::MIN_POSITIVE && e <= T::MAX {
-        flush_subnormal(m * e)
+        flush(m * e)
     } else if e > T::MAX {
-        m.map(|x| if x == T::zero() { x } else { x * e })
+        flush(m.map(|x| beyond_scale(x, ln_e)))
     } else {
         nalgebra::SMatrix::zeros()
     }

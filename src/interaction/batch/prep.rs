@@ -9,6 +9,7 @@ use super::stages::rayleigh_rice::TransmissionConsts;
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::interaction::geometry::{self, Geometry};
+use crate::interaction::pbsdf::Scale;
 use crate::numerics::{HYPOT_PLAIN, principal_sqrt};
 use crate::packet::WavePacket;
 use crate::psd::{GaussianPsd, Psd};
@@ -34,12 +35,16 @@ pub(crate) struct Incidence<T: Real> {
     pub(crate) cos_i: T,
     pub(crate) si2: T,
     pub(crate) e: Complex<T>,
-    pub(crate) em1: Complex<T>,
-    pub(crate) neg_em1: Complex<T>,
     pub(crate) qi: Complex<T>,
-    pub(crate) d1: Complex<T>,
-    pub(crate) d3: Complex<T>,
-    pub(crate) neg_em1_qi: Complex<T>,
+    /// The Rayleigh–Rice factors' scale `1/t, 1/t², 1/t³` (`RayleighRice`'s `Scale`) and the
+    /// per-packet terms scaled by it, with the scalar's operations: `(ε − 1)/t²`, its
+    /// negation, `D₁/t`, `D₃/t²` and `−(ε − 1)/t² · q_i/t`.
+    pub(crate) scale: Scale<T>,
+    pub(crate) em1s: Complex<T>,
+    pub(crate) neg_em1s: Complex<T>,
+    pub(crate) d1s: Complex<T>,
+    pub(crate) d3s: Complex<T>,
+    pub(crate) neg_em1s_qis: Complex<T>,
     /// `Im ε = 0`: the modulus in `q_o` is `|Re(ε) − sin²θ_o|`.
     pub(crate) real_eps: bool,
     /// The scalar `hypot` in `q_o` takes its plain branch for every exit (or `Im ε = 0`): the
@@ -107,7 +112,8 @@ impl<T: Real> Incidence<T> {
         let em1 = e - one;
         let d1 = qi + cos_i;
         let d3 = e * cos_i + qi;
-        let neg_em1_qi = -em1 * qi;
+        let scale = Scale::of(e);
+        let em1s = em1 * scale.inv2;
         // `hypot(Re ε − sin²θ_o, Im ε)` takes its plain branch for every θ_o when Im ε ≠ 0 lies
         // in [1e-18, 1e18] and |Re ε| + 1 ≤ 1e18; with Im ε = 0 it is |Re ε − sin²θ_o| exactly.
         let (lo, hi) = (T::lit(HYPOT_PLAIN.0), T::lit(HYPOT_PLAIN.1));
@@ -126,12 +132,13 @@ impl<T: Real> Incidence<T> {
             cos_i,
             si2,
             e,
-            em1,
-            neg_em1: -em1,
             qi,
-            d1,
-            d3,
-            neg_em1_qi,
+            scale,
+            em1s,
+            neg_em1s: -em1s,
+            d1s: d1 * scale.inv,
+            d3s: d3 * scale.inv2,
+            neg_em1s_qis: -em1s * (qi * scale.inv),
             real_eps,
             plain_q: real_eps || plain,
             eim2: e.im * e.im,

@@ -106,10 +106,11 @@ pub(super) fn relative_to_source<T: Real>(eta: T, g: &Geometry<T>) -> T {
     }
 }
 
-/// `sin²θ_i ≥ η²`: no transmitted beam.
+/// `sin²θ_i ≥ η²`: no transmitted beam. As `(η² − 1) + cos²θ_i ≤ 0`, the form
+/// [`fresnel::coefficients`] takes the square root of, so both agree on the branch.
 #[inline]
 fn total_internal_reflection<T: Real>(cos_i: T, eta: T) -> bool {
-    (T::one() - cos_i) * (T::one() + cos_i) >= eta * eta
+    (eta * eta - T::one()) + cos_i * cos_i <= T::zero()
 }
 
 /// `√η diag(t_s, t_p)` in the s/p frames of the incident and the Snell direction; `None` under

@@ -23,6 +23,7 @@ pub use fresnel_reflection::FresnelReflection;
 pub use ideal_diffuse::IdealDiffuse;
 pub use phase_screen::PhaseScreen;
 pub use rayleigh_rice::RayleighRice;
+pub(crate) use rayleigh_rice::Scale;
 pub use tangent_plane::TangentPlane;
 
 use num_complex::Complex;

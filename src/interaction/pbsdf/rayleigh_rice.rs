@@ -140,14 +140,51 @@ fn reflection_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Comple
     // D₄ = ε cos θ_o + q_o. Two complex reciprocals (one real division each) give all four
     // pairings: 1/(D₃D₂) = D₁D₄/(D₁D₂·D₃D₄), 1/(D₁D₄) = D₂D₃/(D₁D₂·D₃D₄).
     let (d1, d2, d3, d4) = (qi + ci, qo + co, e * ci + qi, e * co + qo);
-    let inv_ss = recip(d1 * d2);
-    let inv_pp = recip(d3 * d4);
+    // Every quantity of size |η|ⁿ is divided by tⁿ, t a power of two near |η| ([`Scale`]):
+    // exact, so the factors are those of the unscaled formulas bit for bit wherever those
+    // neither overflow nor underflow — and they did: |D₃D₄|² ~ |ε|⁴ overflows f32 from
+    // |η| ≈ 10⁴·⁵ (1/(D₃D₄) became 0, and with it pp, ps, sp: a conductor of κ = 10⁵ lost 75 %
+    // of its scattered light), and 1/(D₁D₂D₃D₄) ~ |ε|⁻³ underflows it from |η| ≈ 10⁶.
+    let k = Scale::of(e);
+    let em1s = em1 * k.inv2;
+    let inv_ss = recip((d1 * k.inv) * (d2 * k.inv));
+    let inv_pp = recip((d3 * k.inv2) * (d4 * k.inv2));
     let both = inv_ss * inv_pp;
-    let ss = em1 * inv_ss * cphi;
-    let pp = em1 * (e * (si2 * so2).sqrt() - qo * qi * cphi) * inv_pp;
-    let ps = -em1 * qi * (d1 * d4 * both) * sphi;
-    let sp = -em1 * qo * (d2 * d3 * both) * sphi;
+    let ss = em1s * inv_ss * cphi;
+    let pp = em1s * ((e * (si2 * so2).sqrt() - qo * qi * cphi) * k.inv2) * inv_pp;
+    let ps = -em1s * (qi * k.inv) * ((d1 * k.inv) * (d4 * k.inv2) * both) * sphi;
+    let sp = -em1s * (qo * k.inv) * ((d2 * k.inv) * (d3 * k.inv2) * both) * sphi;
     Matrix2::new(ss, ps, sp, pp)
+}
+
+/// `1/t`, `1/t²`, `1/t³` for `t` the power of two nearest below `√|ε|` (at least 1; taken
+/// from `max(|Re ε|, |Im ε|)`), the scale of the Rayleigh–Rice factors' terms: `q`, `D₁`,
+/// `D₂` are of size `t`, `ε − 1`, `D₃`, `D₄` of `t²` (`D₄` up to `t³` in transmission).
+/// Powers of two, so scaling by them is exact.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Scale<T> {
+    pub(crate) inv: T,
+    pub(crate) inv2: T,
+    pub(crate) inv3: T,
+}
+
+impl<T: Real> Scale<T> {
+    #[inline]
+    pub(crate) fn of(e: Complex<T>) -> Self {
+        let m = e.re.abs().max(e.im.abs()).to_f64();
+        let inv = if m >= 4.0 && m.is_finite() {
+            // 2^−⌊½ log₂ m⌋ from the exponent field (m ≥ 4 is normal).
+            let exp = ((m.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+            T::lit(f64::from_bits(((1023 - exp / 2) as u64) << 52))
+        } else {
+            T::one()
+        };
+        Self {
+            inv,
+            inv2: inv * inv,
+            inv3: inv * inv * inv,
+        }
+    }
 }
 
 /// Elson's transmission factors (one interface) for the relative permittivity `e` seen from
@@ -176,10 +213,15 @@ fn transmission_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Comp
     // s-type denominators D₁ = q_i + cos θ_i, D₂ = q_o + a_o; p-type D₃ = q_i + ε cos θ_i,
     // D₄ = q_o + ε a_o.
     let (d1, d2, d3, d4) = (qi + ci, qo + ao, qi + e * ci, qo + e * ao);
-    let ss = em1 * cphi * recip(d1 * d2);
-    let pp = em1 * index * (qi * ao * cphi + kappa * si2.sqrt()) * recip(d3 * d4);
-    let ps = -em1 * qi * sphi * recip(d3 * d2);
-    let sp = em1 * index * ao * sphi * recip(d1 * d4);
+    // Scaled as in `reflection_factors` (`D₄` by t³): the unscaled numerator of pp is of size
+    // |η|⁵ and overflowed f32 from |η| ≈ 10⁷·⁵, |D₃D₄|² from |η| ≈ 10³·⁵.
+    let k = Scale::of(e);
+    let (em1s, index_s) = (em1 * k.inv2, index * k.inv);
+    let (d1s, d2s, d3s, d4s) = (d1 * k.inv, d2 * k.inv, d3 * k.inv2, d4 * k.inv3);
+    let ss = em1s * cphi * recip(d1s * d2s);
+    let pp = em1s * index_s * ((qi * ao * cphi + kappa * si2.sqrt()) * k.inv2) * recip(d3s * d4s);
+    let ps = -em1s * (qi * k.inv) * sphi * recip(d3s * d2s);
+    let sp = em1s * index_s * (ao * k.inv) * sphi * recip(d1s * d4s);
     Matrix2::new(ss, ps, sp, pp)
 }
 
@@ -197,8 +239,8 @@ impl<T: Real> Pbsdf<T> for RayleighRice<T> {
     }
 }
 
-/// `1/z = z̄/|z|²` with one real division (for the O(1)–O(|ε|²) denominator products of
-/// [`RayleighRice::factors`]: `|z|²` stays finite for `|ε|` up to ~10⁷⁵ in f64, ~10⁹ in f32).
+/// `1/z = z̄/|z|²` with one real division (for the denominator products of
+/// [`RayleighRice::factors`], scaled to size O(1) by [`Scale`]).
 #[inline]
 fn recip<T: Real>(z: Complex<T>) -> Complex<T> {
     let inv = T::one() / z.norm_sqr();

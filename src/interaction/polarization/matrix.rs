@@ -17,7 +17,7 @@ use super::super::coherence::CoherenceWeights;
 use super::super::geometry::Geometry;
 use super::super::material::RoughSurface;
 use super::super::pbsdf::Pbsdf;
-use super::super::prepared::{PreparedPacket, flush_subnormal, unit_scaled};
+use super::super::prepared::{PreparedPacket, flush_to_normal, throughput_scaled};
 use super::super::roughness::RoughnessWeights;
 use super::response::MuellerResponse;
 use super::{Front, front};
@@ -63,14 +63,14 @@ where
     let (attenuation, ln_front) = front.scatter::<Rough>();
     let kd = roughness.scatter_weight(coherence, psd, super::psd_xi(g, xi).as_ref(), g);
     match prepared.unit_linear_scale(kd, attenuation, g.eta) {
-        Some(e) => flush_subnormal(u() * e),
+        Some(e) => flush_to_normal(u() * e),
         None => {
             let ld = ln_front
                 + roughness.log_scatter_weight(coherence, psd, super::psd_xi(g, xi).as_ref(), g);
             if is_dark(ld) {
                 nalgebra::SMatrix::zeros()
             } else {
-                unit_scaled(u(), ld)
+                throughput_scaled(u(), ld)
             }
         }
     }
@@ -100,7 +100,7 @@ where
     let specular = if is_dark(ls) {
         T::zero()
     } else {
-        unit_scaled(Matrix1::new(material.specular.m00(g) * g.cos_o), ls)[0]
+        throughput_scaled(Matrix1::new(material.specular.m00(g) * g.cos_o), ls)[0]
     };
     let scattered = one_weight_scatter(coherence, roughness, psd, prepared, g, &f, || {
         Matrix1::new(material.scatter.m00(g) * g.cos_o)
@@ -137,7 +137,7 @@ where
     let ls = ln_front + coherence.log_specular_weight(prepared.sections[2].as_ref(), &g.h_t);
     let t = prepared.t * g.cos_o;
     let specular = if Coh::USES_SHAPE && !is_dark(ls) {
-        unit_scaled(material.specular.mueller(g).0 * t, ls)
+        throughput_scaled(material.specular.mueller(g).0 * t, ls)
     } else {
         Matrix4::zeros()
     };
@@ -206,6 +206,6 @@ fn part<T: Real>(
     if is_dark(ln) {
         Matrix4::zeros()
     } else {
-        unit_scaled(pbsdf() * (d * cos_o), ln)
+        throughput_scaled(pbsdf() * (d * cos_o), ln)
     }
 }

@@ -301,6 +301,15 @@ pub trait Throughput<T: Real>: Copy + Debug + PartialEq + sealed::Sealed {
     /// `factor · self`.
     #[must_use]
     fn scaled(&self, factor: T) -> Self;
+    /// `self` under the rule for small entries of every throughput the kernel's BSDF form and
+    /// [`crate::bsdf`] return: 0 when every entry is below the smallest normal number
+    /// (`MIN_POSITIVE`); the entries below it set to 0 when the largest entry is at least
+    /// `MIN_POSITIVE/ε` (f32: 9.9e-32, f64: 1.0e-292; the change is below `11 ε` of the
+    /// largest entry, within the rounding of `M S`); unchanged in between, where a subnormal
+    /// entry may carry the polarization of its row and is exact to `ε MIN_POSITIVE/2`. So a
+    /// subnormal entry occurs only beside a largest entry in `[MIN_POSITIVE, MIN_POSITIVE/ε)`.
+    #[must_use]
+    fn flushed(&self) -> Self;
     /// `true` when every entry is finite.
     #[must_use]
     fn is_finite(&self) -> bool;
@@ -354,6 +363,10 @@ impl<T: Real> Throughput<T> for Mueller<T> {
     #[inline]
     fn scaled(&self, factor: T) -> Self {
         Mueller(self.0 * factor)
+    }
+    #[inline]
+    fn flushed(&self) -> Self {
+        Mueller(crate::interaction::flush_to_normal(self.0))
     }
     #[inline]
     fn is_finite(&self) -> bool {
@@ -412,6 +425,15 @@ impl<T: Real> Throughput<T> for T {
         *self * factor
     }
     #[inline]
+    fn flushed(&self) -> Self {
+        // One entry: the first rule alone.
+        if self.abs() < T::MIN_POSITIVE {
+            T::zero()
+        } else {
+            *self
+        }
+    }
+    #[inline]
     fn is_finite(&self) -> bool {
         nalgebra::ComplexField::is_finite(self)
     }
@@ -463,9 +485,11 @@ impl<T: Real> Throughput<T> for T {
 /// `BSDF::eval` returns `f · |cos θ|` of the sampled direction), so a backward tracer's
 /// throughput update for a light direction drawn with pdf `p(ŝ)` is `M/p(ŝ)`.
 ///
-/// A value whose scale is below the smallest normal number of `T` is flushed to 0 (a matrix
-/// cannot carry the log-space scale of [`crate::interaction::Kernel::evaluate`], which keeps a
-/// far tail of a bright packet: for that use the Stokes form).
+/// Small entries follow [`Throughput::flushed`]: a value whose entries are all below the
+/// smallest normal number of `T` is 0 (a matrix cannot carry the log-space scale of
+/// [`crate::interaction::Kernel::evaluate`], which keeps a far tail of a bright packet: for that
+/// use the Stokes form), and a subnormal entry beside a largest entry of at least
+/// `MIN_POSITIVE/ε` is 0.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MuellerResponse<T: Real, M> {
     /// The coherent specular (direct) lobe, attenuation included.
@@ -479,10 +503,11 @@ pub struct MuellerResponse<T: Real, M> {
 }
 
 impl<T: Real, M: Throughput<T>> MuellerResponse<T, M> {
-    /// `specular + scattered`.
+    /// `specular + scattered`, without subnormal entries ([`Throughput::flushed`]: the two
+    /// lobes have none, but their sum can cancel into the subnormal range).
     #[must_use]
     pub fn total(&self) -> M {
-        self.specular.plus(&self.scattered)
+        self.specular.plus(&self.scattered).flushed()
     }
 
     /// Both lobes multiplied by `factor` (the attenuation unchanged), e.g. `1/pdf`.

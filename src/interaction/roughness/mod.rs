@@ -481,6 +481,13 @@ impl GaussianTerms {
 
 /// The terms `ln t_n = ln(w_n/g) + ln K[p_n]` of one evaluation, with a two-entry memory (the
 /// bisection and the sum ask for neighbours).
+///
+/// The terms, the search for the largest and the sum are in `f64` whatever `T` (only the
+/// final logarithm is rounded to `T`): in the far tails of a long-correlated surface the
+/// logarithms reach ~10⁶ (ℓ ≈ 10⁷ λ, `vσ` ≈ 70, 0.5° off the specular direction: −1.24·10⁶),
+/// where an `f32` spacing of 0.125 is wider than the step between neighbouring orders — the
+/// mode search stopped on a plateau of equal rounded terms thousands of orders below the
+/// largest, and the sum, relative to that term, overflowed to `+∞` (issue 36).
 struct Terms<'a, T: Real, P, Coh> {
     coherence: &'a Coh,
     psd: &'a P,
@@ -488,7 +495,7 @@ struct Terms<'a, T: Real, P, Coh> {
     h_t: &'a Vector2<T>,
     g: f64,
     ln_g: f64,
-    memo: [(u64, T); 2],
+    memo: [(u64, f64); 2],
     next: usize,
     /// The closed form of every order's weight, where the PSD is a Gaussian and the
     /// coherence weight its closed form.
@@ -515,7 +522,7 @@ where
             h_t,
             g,
             ln_g: g.ln(),
-            memo: [(0, T::zero()); 2],
+            memo: [(0, 0.0); 2],
             next: 0,
             gaussian: if CoherenceWeights::<T, P::Power>::closed_form_gaussian(coherence) {
                 psd.gaussian_spectrum()
@@ -526,8 +533,8 @@ where
         }
     }
 
-    /// `ln t_n` (`n ≥ 1`).
-    fn at(&mut self, n: u64) -> T {
+    /// `ln t_n` (`n ≥ 1`), in `f64`.
+    fn at(&mut self, n: u64) -> f64 {
         if let Some(&(_, t)) = self.memo.iter().find(|(m, _)| *m == n) {
             return t;
         }
@@ -538,31 +545,32 @@ where
             } else {
                 -self.g + (nf - 1.0) * self.ln_g - ln_factorial(n)
             };
-            T::lit(lw + gt.ln_k(nf))
+            lw + gt.ln_k(nf)
         } else if n == 1 {
             // w_1/g = e^{−g} = α, and p_1 = p: the first-order term.
-            T::lit(-self.g)
+            -self.g
                 + CoherenceWeights::<T, P>::log_scatter_weight(
                     self.coherence,
                     self.psd,
                     self.xi,
                     self.h_t,
                 )
+                .to_f64()
         } else {
             let nf = n as f64;
             // ln(w_n/g) = −g + (n − 1) ln g − ln n!, in f64 (the terms cancel to O(1) for g ≫ 1).
             let lw = -self.g + (nf - 1.0) * self.ln_g - ln_factorial(n);
             match self.psd.correlation_power(T::lit(nf)) {
                 Some(p) => {
-                    T::lit(lw)
-                        + CoherenceWeights::<T, P::Power>::log_scatter_weight(
-                            self.coherence,
-                            &p,
-                            self.xi,
-                            self.h_t,
-                        )
+                    lw + CoherenceWeights::<T, P::Power>::log_scatter_weight(
+                        self.coherence,
+                        &p,
+                        self.xi,
+                        self.h_t,
+                    )
+                    .to_f64()
                 }
-                None => neg_infinity(),
+                None => f64::NEG_INFINITY,
             }
         };
         self.memo[self.next] = (n, t);
@@ -616,53 +624,66 @@ where
         hi
     }
 
-    /// The sum to `tolerance` (module docs, "Truncation").
+    /// The sum to `tolerance` (module docs, "Truncation"), relative to the largest term met so
+    /// far (the mode of the log-concave terms; should rounding of the terms put a larger one
+    /// beside it, the sum is rescaled to that one instead of overflowing).
     fn sum(mut self, tolerance: f64) -> SeriesSum<T> {
         let m = self.mode();
-        let tm = self.at(m);
-        if !(tm > neg_infinity()) {
+        let t_mode = self.at(m);
+        let mut tm = t_mode;
+        if !(tm > f64::NEG_INFINITY) {
             return SeriesSum {
-                log_weight: if tm < T::zero() { neg_infinity() } else { tm },
+                log_weight: if tm < 0.0 { neg_infinity() } else { T::lit(tm) },
                 first: m,
                 last: m,
             };
         }
-        let half_tol = T::lit(0.5 * tolerance);
-        let mut s = T::one();
+        let half_tol = 0.5 * tolerance;
+        let mut s = 1.0_f64;
+        // `s · e^{tm}` is the sum so far.
+        let add = |t: f64, s: &mut f64, tm: &mut f64| -> f64 {
+            if t > *tm {
+                *s = *s * (*tm - t).exp() + 1.0;
+                *tm = t;
+                1.0
+            } else {
+                let rel = (t - *tm).exp();
+                *s += rel;
+                rel
+            }
+        };
         // Upward, then downward, each until the geometric bound on its rest is small.
         let (mut prev, mut n) = (tm, m);
         while n < MAX_ORDER {
             n += 1;
             let t = self.at(n);
-            if !(t > neg_infinity()) {
+            if !(t > f64::NEG_INFINITY) {
                 break;
             }
-            let rel = (t - tm).exp();
-            s += rel;
+            let rel = add(t, &mut s, &mut tm);
             let r = (t - prev).exp();
-            if r < T::one() && rel * r / (T::one() - r) <= half_tol * s {
+            if r < 1.0 && rel * r / (1.0 - r) <= half_tol * s {
                 break;
             }
             prev = t;
         }
         let last = n;
-        let (mut prev, mut n) = (tm, m);
+        let (mut prev, mut n) = (t_mode, m);
         while n > 1 {
             n -= 1;
             let t = self.at(n);
-            if !(t > neg_infinity()) {
+            if !(t > f64::NEG_INFINITY) {
                 break;
             }
-            let rel = (t - tm).exp();
-            s += rel;
+            let rel = add(t, &mut s, &mut tm);
             let d = (t - prev).exp();
-            if d < T::one() && rel * d / (T::one() - d) <= half_tol * s {
+            if d < 1.0 && rel * d / (1.0 - d) <= half_tol * s {
                 break;
             }
             prev = t;
         }
         SeriesSum {
-            log_weight: tm + s.ln(),
+            log_weight: T::lit(tm + s.ln()),
             first: n.min(m),
             last,
         }

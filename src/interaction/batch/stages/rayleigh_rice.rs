@@ -26,7 +26,8 @@ pub(crate) fn factors<S: Simd, F: Real>(
     let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
     let cx = Cx(s);
     let e = cx.splat::<F>(p.e);
-    let (d1, d3) = (cx.splat::<F>(p.d1), cx.splat::<F>(p.d3));
+    let (inv, inv2) = (c(p.scale.inv), c(p.scale.inv2));
+    let (d1s, d3s) = (cx.splat::<F>(p.d1s), cx.splat::<F>(p.d3s));
     let d2 = C {
         re: add(s, qo.re, cos_o),
         im: qo.im,
@@ -35,11 +36,12 @@ pub(crate) fn factors<S: Simd, F: Real>(
         re: add(s, mul(s, c(p.e.re), cos_o), qo.re),
         im: add(s, mul(s, c(p.e.im), cos_o), qo.im),
     };
-    let inv_ss = cx.recip::<F>(cx.mul::<F>(d1, d2));
-    let inv_pp = cx.recip::<F>(cx.mul::<F>(d3, d4));
+    let (d2s, d4s) = (cx.scale::<F>(d2, inv), cx.scale::<F>(d4, inv2));
+    let inv_ss = cx.recip::<F>(cx.mul::<F>(d1s, d2s));
+    let inv_pp = cx.recip::<F>(cx.mul::<F>(d3s, d4s));
     let both = cx.mul::<F>(inv_ss, inv_pp);
-    let em1 = cx.splat::<F>(p.em1);
-    let ss = cx.scale::<F>(cx.mul::<F>(em1, inv_ss), cos_phi);
+    let em1s = cx.splat::<F>(p.em1s);
+    let ss = cx.scale::<F>(cx.mul::<F>(em1s, inv_ss), cos_phi);
     let sq = F::vsqrt(s, mul(s, c(p.si2), so2));
     let qoqi = cx.scale::<F>(cx.mul::<F>(qo, cx.splat::<F>(p.qi)), cos_phi);
     let es = cx.scale::<F>(e, sq);
@@ -47,18 +49,18 @@ pub(crate) fn factors<S: Simd, F: Real>(
         re: sub(s, es.re, qoqi.re),
         im: sub(s, es.im, qoqi.im),
     };
-    let pp = cx.mul::<F>(cx.mul::<F>(em1, inner), inv_pp);
+    let pp = cx.mul::<F>(cx.mul::<F>(em1s, cx.scale::<F>(inner, inv2)), inv_pp);
     let ps = cx.scale::<F>(
         cx.mul::<F>(
-            cx.splat::<F>(p.neg_em1_qi),
-            cx.mul::<F>(cx.mul::<F>(d1, d4), both),
+            cx.splat::<F>(p.neg_em1s_qis),
+            cx.mul::<F>(cx.mul::<F>(d1s, d4s), both),
         ),
         sin_phi,
     );
     let sp = cx.scale::<F>(
         cx.mul::<F>(
-            cx.mul::<F>(cx.splat::<F>(p.neg_em1), qo),
-            cx.mul::<F>(cx.mul::<F>(d2, d3), both),
+            cx.mul::<F>(cx.splat::<F>(p.neg_em1s), cx.scale::<F>(qo, inv)),
+            cx.mul::<F>(cx.mul::<F>(d2s, d3s), both),
         ),
         sin_phi,
     );
@@ -66,10 +68,11 @@ pub(crate) fn factors<S: Simd, F: Real>(
 }
 
 /// The per-packet constants of [`transmission_factors`] besides the [`Incidence`]: `η = √ε`
-/// (principal branch) and `sin θ_i`.
+/// (principal branch) scaled by `1/t` ([`Incidence::scale`]) and `sin θ_i`.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct TransmissionConsts<F: Real> {
     pub(crate) index: Complex<F>,
+    pub(crate) index_s: Complex<F>,
     pub(crate) sin_i: F,
 }
 
@@ -78,9 +81,13 @@ impl<F: Real> TransmissionConsts<F> {
     /// or `None` unless `ε` is real (a dielectric interface): the lanes take `a_o`'s square
     /// root on the real axis only.
     pub(crate) fn new(p: &Incidence<F>) -> Option<Self> {
-        (p.e.im == F::zero()).then(|| Self {
-            index: principal_sqrt(p.e),
-            sin_i: p.si2.sqrt(),
+        (p.e.im == F::zero()).then(|| {
+            let index = principal_sqrt(p.e);
+            Self {
+                index,
+                index_s: index * p.scale.inv,
+                sin_i: p.si2.sqrt(),
+            }
         })
     }
 }
@@ -127,31 +134,33 @@ pub(crate) fn transmission_factors<S: Simd, F: Real>(
         im: F::vselect(s, nonneg, zero, F::vsqrt(s, mul(s, sub(s, abs_a, a), half))),
     };
     let e = cx.splat::<F>(p.e);
-    let em1 = cx.splat::<F>(p.em1);
-    let (d1, d3) = (cx.splat::<F>(p.d1), cx.splat::<F>(p.d3));
+    let em1s = cx.splat::<F>(p.em1s);
+    let (inv, inv2, inv3) = (c(p.scale.inv), c(p.scale.inv2), c(p.scale.inv3));
+    let (d1s, d3s) = (cx.splat::<F>(p.d1s), cx.splat::<F>(p.d3s));
     let sum = |a: C<F::V<S>>, b: C<F::V<S>>| C {
         re: add(s, a.re, b.re),
         im: add(s, a.im, b.im),
     };
-    let d2 = sum(qo, ao);
-    let d4 = sum(qo, cx.mul::<F>(e, ao));
+    let d2s = cx.scale::<F>(sum(qo, ao), inv);
+    let d4s = cx.scale::<F>(sum(qo, cx.mul::<F>(e, ao)), inv3);
     let ss = cx.mul::<F>(
-        cx.scale::<F>(em1, cos_phi),
-        cx.recip::<F>(cx.mul::<F>(d1, d2)),
+        cx.scale::<F>(em1s, cos_phi),
+        cx.recip::<F>(cx.mul::<F>(d1s, d2s)),
     );
-    let em1_index = cx.mul::<F>(em1, index);
+    let em1_index = cx.mul::<F>(em1s, cx.splat::<F>(t.index_s));
     let qi_ao = cx.scale::<F>(cx.mul::<F>(cx.splat::<F>(p.qi), ao), cos_phi);
+    let inner = cx.scale::<F>(sum(qi_ao, cx.scale::<F>(kappa, c(t.sin_i))), inv2);
     let pp = cx.mul::<F>(
-        cx.mul::<F>(em1_index, sum(qi_ao, cx.scale::<F>(kappa, c(t.sin_i)))),
-        cx.recip::<F>(cx.mul::<F>(d3, d4)),
+        cx.mul::<F>(em1_index, inner),
+        cx.recip::<F>(cx.mul::<F>(d3s, d4s)),
     );
     let ps = cx.mul::<F>(
-        cx.scale::<F>(cx.splat::<F>(p.neg_em1_qi), sin_phi),
-        cx.recip::<F>(cx.mul::<F>(d3, d2)),
+        cx.scale::<F>(cx.splat::<F>(p.neg_em1s_qis), sin_phi),
+        cx.recip::<F>(cx.mul::<F>(d3s, d2s)),
     );
     let sp = cx.mul::<F>(
-        cx.scale::<F>(cx.mul::<F>(em1_index, ao), sin_phi),
-        cx.recip::<F>(cx.mul::<F>(d1, d4)),
+        cx.scale::<F>(cx.mul::<F>(em1_index, cx.scale::<F>(ao, inv)), sin_phi),
+        cx.recip::<F>(cx.mul::<F>(d1s, d4s)),
     );
     [ss, ps, sp, pp]
 }
