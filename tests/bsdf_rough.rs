@@ -193,8 +193,11 @@ fn first_order_is_bit_identical_to_before() {
 /// had a roughness level) was `0x3c95_05d1_1780_54fb`. Recomputed when the renderer layer
 /// began to divide the coherent lobe by its mass over the propagating directions and
 /// `SurfaceCoherence::new` gained the horizon rule (issue 36): with both switched off (a mass
-/// of 1 and `SurfaceCoherence::fixed(3.0)` in `feed!`) that change still gave the old value.
-const FIRST_ORDER_FINGERPRINT: u64 = 0x6c03_7f4c_73e2_18e2;
+/// of 1 and `SurfaceCoherence::fixed(3.0)` in `feed!`) that change still gave the old value,
+/// and it gave `0x6c03_7f4c_73e2_18e2`. Recomputed again when `fresnel::coefficients` began to
+/// form `q² = (η² − 1) + cos²θ` (exact 0 at η = 1, issue 36): with that one change reverted the
+/// merged tree gave `0x6c03_7f4c_73e2_18e2` (checked).
+const FIRST_ORDER_FINGERPRINT: u64 = 0xa0d1_e19b_c3e7_02c3;
 
 type Glass = KirchhoffDielectric<f64, GaussianPsd<f64, 2>>;
 

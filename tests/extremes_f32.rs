@@ -222,9 +222,11 @@ fn rr_mueller<T: Real>(c: &RrCase) -> Option<[f64; 16]> {
 /// scaled by powers of two near `|η|` (bit for bit the old values wherever those were finite).
 /// 30 000 seeded cases — `η = n + iκ` with `n` 0.05–5 and κ 1–10⁸ ("κ alone"), real `η`
 /// 1–10⁸ in reflection and across an interface from either side, and `|η|` 1–10⁸ at any phase
-/// in the first quadrant — at incidence and exitance 0–80°: the `f32` Mueller matrix agrees
-/// with `f64` on the same `f32` inputs to `2·10⁻⁵` normwise (the `fresnel::reflection` row of
-/// docs/numerical.md's f32 table; the measured maximum is printed), and is finite.
+/// in the first quadrant — at incidence and exitance 0.01 rad–80°: the `f32` Mueller matrix
+/// agrees with `f64` on the same `f32` inputs to `2·10⁻⁵ (1 + κ)` normwise (the
+/// `fresnel::reflection` row of docs/numerical.md's f32 table; `κ` the condition numbers of the
+/// cosines across an interface, 0 in reflection; the measured maximum is printed: 1.35e-5,
+/// transmission 5.4e-6 ÷ (1 + κ), 3.3e-5 before dividing), and is finite.
 #[test]
 fn rayleigh_rice_f32_matches_f64_at_huge_indices() {
     let mut rng = SplitMix64(51);
@@ -247,8 +249,10 @@ fn rayleigh_rice_f32_matches_f64_at_huge_indices() {
             eta,
             transmit: family == 2,
             below: family == 2 && rng.unit() < 0.5,
-            theta_i: rng.unit() * 80f64.to_radians(),
-            theta_o: rng.unit() * 80f64.to_radians(),
+            // Away from the normal: within √ε₃₂ of it `Frame::sp` picks another s/p frame in
+            // f32 than in f64, so the matrices are of other frames (docs/numerical.md).
+            theta_i: 0.01 + rng.unit() * (80f64.to_radians() - 0.01),
+            theta_o: 0.01 + rng.unit() * (80f64.to_radians() - 0.01),
             phi_o: (rng.unit() - 0.5) * std::f64::consts::TAU,
         };
         let (Some(a), Some(b)) = (rr_mueller::<f32>(&c), rr_mueller::<f64>(&c)) else {
@@ -264,6 +268,22 @@ fn rayleigh_rice_f32_matches_f64_at_huge_indices() {
             .zip(&b)
             .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
             / scale;
+        // Across an interface the cosines `q_i = √(ε − sin²θ_i)` (ε seen from the source)
+        // and `a_o = √(1 − ε sin²θ_o)` are formed by cancellation near the critical angles:
+        // their condition numbers `κ` scale the bound (the interface rows of the f32 table
+        // in docs/numerical.md).
+        let kappa = if c.transmit {
+            let es = if c.below {
+                1.0 / (c.eta.0 * c.eta.0)
+            } else {
+                c.eta.0 * c.eta.0
+            };
+            1.0 / (1.0 - c.theta_i.sin().powi(2) / es).abs()
+                + 1.0 / (1.0 - c.theta_o.sin().powi(2) * es).abs()
+        } else {
+            0.0
+        };
+        let err = err / (1.0 + kappa);
         by_family[family] = by_family[family].max(err);
         if err > worst {
             worst = err;
@@ -272,8 +292,8 @@ fn rayleigh_rice_f32_matches_f64_at_huge_indices() {
         n += 1;
     }
     println!(
-        "{n} cases: worst normwise error {worst:.2e} ({worst_case:?}); by family (n + iκ, real \
-         reflection, real transmission, any phase) {by_family:?}"
+        "{n} cases: worst normwise error ÷ (1 + κ) {worst:.2e} ({worst_case:?}); by family \
+         (n + iκ, real reflection, real transmission, any phase) {by_family:?}"
     );
     assert!(worst <= 2e-5, "{worst:e}");
     assert!(n > 25_000);
