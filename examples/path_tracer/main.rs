@@ -81,6 +81,9 @@ pub(crate) struct Options {
     pub(crate) max_depth: usize,
     /// Surface coherence width (µm) assumed for sky and indirect light.
     pub(crate) sky_coherence: f32,
+    /// Widen it near the horizon by `SurfaceCoherence`'s horizon rule (the default); `false`
+    /// keeps the width fixed (`SurfaceCoherence::fixed`).
+    pub(crate) horizon_rule: bool,
     /// The sun's disk is split into this many packets per vertex (1: one packet along the
     /// centre with the whole disk's coherence).
     pub(crate) sun_split: usize,
@@ -111,6 +114,7 @@ impl Default for Options {
             wavelengths: 32,
             max_depth: 5,
             sky_coherence: 20.0,
+            horizon_rule: true,
             sun_split: 1,
             sun_solid_angle: SUN_SOLID_ANGLE,
             sampling: Sampling::Lobes,
@@ -333,7 +337,12 @@ fn trace(
     let cam = &scene.camera;
     let mut d = cam.direction(x, y, opts.width as f32 / opts.height as f32);
     let mut o = cam.origin;
-    let coherence = SurfaceCoherence::new(opts.sky_coherence).expect("coherence width");
+    let coherence = if opts.horizon_rule {
+        SurfaceCoherence::new(opts.sky_coherence)
+    } else {
+        SurfaceCoherence::fixed(opts.sky_coherence)
+    }
+    .expect("coherence width");
     let first = Kernel::<Full, Partial>::default();
     let series = KirchhoffSeries::new(1e-3).expect("series tolerance");
     let mut path = Path {
