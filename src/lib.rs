@@ -30,7 +30,10 @@
 //!   directions (reflection).
 //! - [`bsdf`]: the layer a renderer calls — the kernel as a BSDF (Mueller matrices per lobe in
 //!   documented frames, lobe flags), sampling and pdf in both tracing directions, and the
-//!   coherence one Monte Carlo sample of light carries (`docs/renderer.md`).
+//!   coherence one Monte Carlo sample of light carries (`docs/renderer.md`); [`bsdf::Material`],
+//!   one type for every surface with its model level chosen at run time, and
+//!   [`bsdf::PathThroughput`], a backward path's state.
+//! - [`prelude`]: the names a renderer uses, in one import.
 //! - [`medium`]: random media — S2.20 with n = 3 in first-Born form, as a volume path tracer
 //!   needs it: a scattering coefficient and a Mueller phase matrix for the incident packet's
 //!   coherence, with sampling and its exact pdf.
@@ -115,6 +118,7 @@ pub mod medium;
 pub mod mueller;
 mod numerics;
 pub mod packet;
+pub mod prelude;
 pub mod propagation;
 pub mod psd;
 pub mod real;

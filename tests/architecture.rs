@@ -28,6 +28,7 @@ const LAYERS: &[&str] = &[
     "bsdf",
     "medium",
     "verify",
+    "prelude",
 ];
 
 /// The submodules of `interaction`, bottom first.

@@ -18,6 +18,7 @@ mod bsdf_extremes;
 mod bsdf_f32;
 mod bsdf_furnace;
 mod bsdf_horizon;
+mod bsdf_material;
 mod bsdf_reciprocity;
 mod bsdf_rough;
 mod bsdf_sampling;

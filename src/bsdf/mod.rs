@@ -117,13 +117,17 @@ mod flags;
 mod horizon;
 mod interface;
 mod lobes;
+mod material;
 mod orders;
+mod path;
 mod sampler;
 pub mod sources;
 
 pub use flags::LobeFlags;
 pub use interface::Interface;
 pub use lobes::{PsdLobes, SamplingPsd};
+pub use material::{Material, ShadingPoint};
+pub use path::PathThroughput;
 pub use sampler::{DirectionSample, LobeSampler, Part, SampledLobe};
 pub use sources::{HORIZON_RULE_Q, SurfaceCoherence, area_light, distant_disk};
 

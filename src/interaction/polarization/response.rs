@@ -323,6 +323,11 @@ pub trait Throughput<T: Real>: Copy + Debug + PartialEq + sealed::Sealed {
     /// The throughput of a Mueller matrix at this level: the matrix itself, or its `M₀₀`.
     #[must_use]
     fn from_mueller(m: &Mueller<T>) -> Self;
+    /// The throughput as a Mueller matrix: the matrix itself, or `M₀₀` alone in the corner
+    /// (the intensity level acts on `S0` and leaves the light unpolarized). The inverse of
+    /// [`Throughput::from_mueller`] on this level's throughputs.
+    #[must_use]
+    fn to_mueller(&self) -> Mueller<T>;
     /// A light of this level from a Stokes vector: the vector itself, or its `S0`.
     #[must_use]
     fn light(s: &Stokes<T>) -> Self::Light;
@@ -379,6 +384,10 @@ impl<T: Real> Throughput<T> for Mueller<T> {
     #[inline]
     fn intensity(light: &Stokes<T>) -> T {
         light.s0()
+    }
+    #[inline]
+    fn to_mueller(&self) -> Mueller<T> {
+        *self
     }
     #[inline]
     fn from_mueller(m: &Mueller<T>) -> Self {
@@ -444,6 +453,12 @@ impl<T: Real> Throughput<T> for T {
     #[inline]
     fn intensity(light: &T) -> T {
         *light
+    }
+    #[inline]
+    fn to_mueller(&self) -> Mueller<T> {
+        let mut m = nalgebra::Matrix4::zeros();
+        m[(0, 0)] = *self;
+        Mueller(m)
     }
     #[inline]
     fn from_mueller(m: &Mueller<T>) -> Self {

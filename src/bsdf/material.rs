@@ -1,0 +1,666 @@
+//! One material type a renderer can hold: [`Material`], a rough surface with its model level
+//! chosen at run time, behind one object-safe interface.
+//!
+//! [`super::Bsdf`] is generic over the PSD, the two pBSDFs and the three model levels, so a
+//! scene with several material kinds needs generic vertex code with the layer's trait bounds.
+//! A [`Material`] owns its [`RoughSurface`] and the kernel of its [`Level`] (and roughness
+//! level), monomorphised once when it is built ([`Level::dispatch`], [`Level::dispatch_rough`]);
+//! a call costs one dynamic dispatch and then runs the static [`super::Bsdf`] of that choice, so
+//! the answers are those of the static form bit for bit (`tests/bsdf_material.rs`). Every
+//! throughput is a [`Mueller`] matrix: at the intensity level the matrix with `M₀₀` alone
+//! ([`Throughput::to_mueller`]), which acts on `S0` and leaves the light unpolarized.
+//!
+//! A call takes the shading point ([`ShadingPoint`]: frame and wavelength) and builds the
+//! static [`super::Bsdf`] there (a few comparisons; no allocation). The methods are those of a
+//! renderer's BSDF interface — eval, sample and pdf, forward (light to exit) and backward (exit
+//! to light) — with the conventions of [`super::Bsdf`]: `exit` is r̂, the unit direction the
+//! light leaves along (toward the camera in a backward tracer), `to_source` is ŝ, toward the
+//! light; weights map the incident s/p frame to [`crate::interaction::Geometry::exit_sp`].
+//!
+//! # Two-sided opaque surfaces
+//! An opaque material ([`Material::is_opaque`]: no transmission) is lit and seen from the side
+//! its frame's normal points to; [`super::Bsdf`] refuses the other side. With
+//! [`Material::two_sided`] the back reflects as the front does (Mitsuba's `twosided`): where
+//! the direction the call starts from — `exit` for the backward calls, the light's direction
+//! for the forward ones — lies below the surface, the call runs in the flipped frame
+//! `(x̂, −ŷ, −n̂)` (right-handed; the returned geometry's frames are those of that frame).
+//!
+//! # Examples
+//! ```
+//! use gmueller::bsdf::{Material, ShadingPoint, SurfaceCoherence};
+//! use gmueller::frame::Frame;
+//! use gmueller::interaction::{Level, RoughConductor, RoughDielectric};
+//! use gmueller::psd::GaussianPsd;
+//! use num_complex::Complex;
+//! use nalgebra::Vector3;
+//!
+//! let psd = GaussianPsd::<f32, 2>::isotropic(0.01, 2.0)?;
+//! // Materials of different kinds and levels in one collection.
+//! let materials = [
+//!     Material::new(RoughDielectric::new(psd, 1.5)?, Level::ALL[7]), // Full · Partial
+//!     Material::new(RoughConductor::new(psd, Complex::new(0.2, 3.5))?, Level::ALL[1])
+//!         .two_sided(true),
+//! ];
+//! let at = ShadingPoint::new(Frame::from_normal(Vector3::z())?, 0.5)?;
+//! let sky = SurfaceCoherence::new(20.0)?;
+//! let to_camera = Vector3::new(0.3, 0.1, 0.95).normalize();
+//! for m in &materials {
+//!     if let Some(s) = m.sample_incident(&at, to_camera, &sky, 0.3, [0.6, 0.2])? {
+//!         let pdf = m.pdf_incident(&at, to_camera, &sky, s.sample.direction)?;
+//!         assert!(s.sample.lobe.delta || (pdf - s.sample.pdf).abs() <= 1e-5 * pdf);
+//!         assert!(s.weight.matrix()[(0, 0)] >= 0.0);
+//!     }
+//! }
+//! // The back of the two-sided conductor reflects like its front.
+//! let below = Vector3::new(0.3, 0.1, -0.95).normalize();
+//! assert!(materials[1].sample_incident(&at, below, &sky, 0.3, [0.6, 0.2]).is_ok());
+//! assert!(materials[0].is_opaque() == false && materials[1].is_opaque());
+//! # Ok::<(), gmueller::Error>(())
+//! ```
+
+use core::fmt::Debug;
+
+use nalgebra::Vector3;
+
+use super::{Bsdf, BsdfSample, BsdfValue, Interface, LobeFlags, SamplingPsd, SurfaceCoherence};
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::interaction::{
+    CoherenceLevel, CoherenceWeights, FirstOrder, Full, Geometric, Incoherent, Intensity, Kernel,
+    Level, OneShape, Partial, Pbsdf, PlaneWave, PolarizationLevel, PolarizationModel, RoughSurface,
+    Roughness, RoughnessWeights, Throughput,
+};
+use crate::mueller::Mueller;
+use crate::packet::WavePacket;
+use crate::psd::{BlurMethod, ClosedForm, CorrelationPowers};
+use crate::real::Real;
+use crate::stokes::Stokes;
+
+/// Where a material is shaded: the shading frame (its `k` axis the normal n̂; for an
+/// interface, n̂ points into the medium above) and the wavelength in the medium above (µm; the
+/// vacuum wavelength for an object in air). As [`super::Bsdf::new`]'s `surface` and
+/// `wavelength`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadingPoint<T: Real> {
+    frame: Frame<T>,
+    wavelength: T,
+}
+
+impl<T: Real> ShadingPoint<T> {
+    /// The shading point of `frame` at `wavelength`.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless the wavelength is finite and positive (a material checks
+    /// its own wavenumbers when it is shaded, as [`super::Bsdf::new`]).
+    pub fn new(frame: Frame<T>, wavelength: T) -> Result<Self, Error> {
+        if !(wavelength > T::zero() && wavelength.is_finite()) {
+            return Err(Error::OutOfRange {
+                what: "wavelength at the shading point",
+                value: wavelength.to_f64(),
+                expected: "finite and > 0",
+            });
+        }
+        Ok(Self { frame, wavelength })
+    }
+
+    /// The shading frame.
+    #[must_use]
+    pub fn frame(&self) -> &Frame<T> {
+        &self.frame
+    }
+
+    /// The wavelength in the medium above.
+    #[must_use]
+    pub fn wavelength(&self) -> T {
+        self.wavelength
+    }
+
+    /// The point with its frame turned over, `(x̂, −ŷ, −n̂)` (right-handed).
+    fn flipped(&self) -> Self {
+        Self {
+            frame: self.frame.reversed(),
+            wavelength: self.wavelength,
+        }
+    }
+}
+
+/// A rough surface at a model level chosen at run time: what a renderer stores per material
+/// (module docs).
+#[derive(Debug)]
+pub struct Material<T: Real> {
+    model: Box<dyn Shade<T>>,
+    level: Level,
+    opaque: bool,
+    two_sided: bool,
+}
+
+impl<T: Real> Material<T> {
+    /// `surface` at the first-order `level` (Partial coherence blurs in closed form,
+    /// [`ClosedForm`]: Gaussian PSDs and their mixtures, gratings, smooth surfaces; other PSDs
+    /// take [`Material::with_blur`]).
+    #[must_use]
+    pub fn new<P, Sp, Sc>(surface: RoughSurface<P, Sp, Sc>, level: Level) -> Self
+    where
+        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        Sp: Interface<T> + Debug + Send + Sync + 'static,
+        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+        ClosedForm: BlurMethod<T, 2, P>,
+    {
+        Self::with_blur(surface, level, ClosedForm)
+    }
+
+    /// `surface` at the first-order `level`, Partial coherence blurring by `blur` (e.g.
+    /// [`crate::psd::GaussHermite`] for a K-correlation PSD).
+    #[must_use]
+    pub fn with_blur<P, Sp, Sc, B>(surface: RoughSurface<P, Sp, Sc>, level: Level, blur: B) -> Self
+    where
+        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        Sp: Interface<T> + Debug + Send + Sync + 'static,
+        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+        B: BlurMethod<T, 2, P> + Clone + Debug + Send + Sync + 'static,
+    {
+        let opaque = surface.specular.transmission_index().is_none();
+        Self {
+            model: build(surface, level, blur, FirstOrder),
+            level,
+            opaque,
+            two_sided: false,
+        }
+    }
+
+    /// `surface` at `level` and the roughness level `roughness` (beyond first order: the PSDs
+    /// whose autocorrelation powers are known, [`CorrelationPowers`]), Partial coherence
+    /// blurring in closed form.
+    #[must_use]
+    pub fn with_roughness<P, Sp, Sc>(
+        surface: RoughSurface<P, Sp, Sc>,
+        level: Level,
+        roughness: Roughness,
+    ) -> Self
+    where
+        P: SamplingPsd<T> + CorrelationPowers<T> + Debug + Send + Sync + 'static,
+        Sp: Interface<T> + Debug + Send + Sync + 'static,
+        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+        ClosedForm: BlurMethod<T, 2, P> + BlurMethod<T, 2, P::Power>,
+    {
+        let opaque = surface.specular.transmission_index().is_none();
+        let model = match roughness {
+            Roughness::FirstOrder => build(surface, level, ClosedForm, FirstOrder),
+            Roughness::Series(series) => build(surface, level, ClosedForm, series),
+            Roughness::Geometric => build(surface, level, ClosedForm, Geometric),
+        };
+        Self {
+            model,
+            level,
+            opaque,
+            two_sided: false,
+        }
+    }
+
+    /// `surface` evaluated by a kernel chosen by type (any blur method or roughness level).
+    #[must_use]
+    pub fn from_kernel<P, Sp, Sc, Pol, Coh, Rough>(
+        surface: RoughSurface<P, Sp, Sc>,
+        kernel: Kernel<Pol, Coh, Rough>,
+    ) -> Self
+    where
+        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        Sp: Interface<T> + Debug + Send + Sync + 'static,
+        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+        Pol: PolarizationModel + Send + Sync + 'static,
+        Coh: CoherenceWeights<T, P> + Send + Sync + 'static,
+        Rough: RoughnessWeights<T, P, Coh> + Send + Sync + 'static,
+    {
+        let opaque = surface.specular.transmission_index().is_none();
+        Self {
+            model: Box::new(Model { surface, kernel }),
+            level: Level::new(Pol::LEVEL, Coh::LEVEL),
+            opaque,
+            two_sided: false,
+        }
+    }
+
+    /// This material with its back reflecting as its front (opaque materials only; an
+    /// interface has two sides of its own and ignores it). Module docs.
+    #[must_use]
+    pub fn two_sided(mut self, two_sided: bool) -> Self {
+        self.two_sided = two_sided;
+        self
+    }
+
+    /// The model level.
+    #[must_use]
+    pub fn level(&self) -> Level {
+        self.level
+    }
+
+    /// `true` for a surface without transmission.
+    #[must_use]
+    pub fn is_opaque(&self) -> bool {
+        self.opaque
+    }
+
+    /// The lobes this material has at its level ([`super::Bsdf::flags`]).
+    #[must_use]
+    pub fn flags(&self) -> LobeFlags {
+        self.model.flags()
+    }
+
+    /// The shading point to run a call in: flipped for a two-sided opaque material where
+    /// `from` lies below the surface.
+    fn side(&self, at: &ShadingPoint<T>, from: &Vector3<T>) -> ShadingPoint<T> {
+        if self.two_sided && self.opaque && from.dot(&at.frame.k()) < T::zero() {
+            at.flipped()
+        } else {
+            *at
+        }
+    }
+
+    /// A packet arriving from `to_source` with the surface coherence `coherence`, carrying
+    /// `stokes` in the incident s/p frame, at the wavelength of the source's medium
+    /// ([`super::Bsdf::surface_packet`]: the horizon rule on both sides of an interface).
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::surface_packet`].
+    pub fn surface_packet(
+        &self,
+        at: &ShadingPoint<T>,
+        stokes: Stokes<T>,
+        to_source: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<WavePacket<T>, Error> {
+        self.model
+            .surface_packet(&self.side(at, &to_source), stokes, to_source, coherence)
+    }
+
+    /// A sample of a distant disk source of solid angle `Ω` along `to_source` (the sun), at
+    /// the wavelength of the source's medium ([`super::Bsdf::distant_packet`]).
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::distant_packet`].
+    pub fn distant_packet(
+        &self,
+        at: &ShadingPoint<T>,
+        stokes: Stokes<T>,
+        solid_angle: T,
+        to_source: Vector3<T>,
+    ) -> Result<WavePacket<T>, Error> {
+        self.model
+            .distant_packet(&self.side(at, &to_source), stokes, solid_angle, to_source)
+    }
+
+    /// The throughput for `light` leaving along `exit`, per lobe, in BSDF form
+    /// ([`super::Bsdf::eval`] of the prepared packet).
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::new`], [`super::Bsdf::prepare`] and [`super::Bsdf::eval`].
+    pub fn eval(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        exit: Vector3<T>,
+    ) -> Result<BsdfValue<T, Mueller<T>>, Error> {
+        let from = -light.frame().k();
+        self.model.eval(&self.side(at, &from), light, exit)
+    }
+
+    /// `M(ŝ → r̂)` for unpolarized light of unit irradiance arriving from `to_source` with the
+    /// surface coherence `coherence` and leaving along `exit` (what the backward weights
+    /// divide by the pdf: for multiple importance sampling and light sampling).
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::surface_packet`] and [`Material::eval`].
+    pub fn eval_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_source: Vector3<T>,
+    ) -> Result<BsdfValue<T, Mueller<T>>, Error> {
+        self.model
+            .eval_incident(&self.side(at, &exit), exit, coherence, to_source)
+    }
+
+    /// Draws the direction the light comes from for light leaving along `exit` with the
+    /// surface coherence `coherence`, with its weight ([`super::Bsdf::sample_incident`]).
+    /// `None` for an evanescent draw.
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::sample_incident`].
+    pub fn sample_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> Result<Option<BsdfSample<T, Mueller<T>>>, Error> {
+        self.model
+            .sample_incident(&self.side(at, &exit), exit, coherence, u_lobe, u)
+    }
+
+    /// The density (per solid angle) with which [`Material::sample_incident`] draws
+    /// `to_source` (0 for a Dirac lobe's direction).
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::incident_sampler`].
+    pub fn pdf_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_source: Vector3<T>,
+    ) -> Result<T, Error> {
+        self.model
+            .pdf_incident(&self.side(at, &exit), exit, coherence, to_source)
+    }
+
+    /// Draws an exit direction for `light` with its weight ([`super::Bsdf::sample_exit`]).
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::prepare`] and [`super::Bsdf::sample_exit`].
+    pub fn sample_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> Result<Option<BsdfSample<T, Mueller<T>>>, Error> {
+        let from = -light.frame().k();
+        self.model
+            .sample_exit(&self.side(at, &from), light, u_lobe, u)
+    }
+
+    /// The density with which [`Material::sample_exit`] draws `exit`.
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::prepare`] and [`super::Bsdf::exit_sampler`].
+    pub fn pdf_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        exit: Vector3<T>,
+    ) -> Result<T, Error> {
+        let from = -light.frame().k();
+        self.model.pdf_exit(&self.side(at, &from), light, exit)
+    }
+}
+
+/// The object-safe face of one monomorphised [`Model`].
+trait Shade<T: Real>: Send + Sync + Debug {
+    fn flags(&self) -> LobeFlags;
+    fn surface_packet(
+        &self,
+        at: &ShadingPoint<T>,
+        stokes: Stokes<T>,
+        to_source: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<WavePacket<T>, Error>;
+    fn distant_packet(
+        &self,
+        at: &ShadingPoint<T>,
+        stokes: Stokes<T>,
+        solid_angle: T,
+        to_source: Vector3<T>,
+    ) -> Result<WavePacket<T>, Error>;
+    fn eval(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        exit: Vector3<T>,
+    ) -> Result<BsdfValue<T, Mueller<T>>, Error>;
+    fn eval_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_source: Vector3<T>,
+    ) -> Result<BsdfValue<T, Mueller<T>>, Error>;
+    fn sample_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> Result<Option<BsdfSample<T, Mueller<T>>>, Error>;
+    fn pdf_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_source: Vector3<T>,
+    ) -> Result<T, Error>;
+    fn sample_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> Result<Option<BsdfSample<T, Mueller<T>>>, Error>;
+    fn pdf_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        exit: Vector3<T>,
+    ) -> Result<T, Error>;
+}
+
+/// A surface with its kernel.
+#[derive(Debug)]
+struct Model<P, Sp, Sc, Pol, Coh, Rough> {
+    surface: RoughSurface<P, Sp, Sc>,
+    kernel: Kernel<Pol, Coh, Rough>,
+}
+
+/// A value in BSDF form with Mueller throughputs.
+fn to_mueller<T: Real, M: Throughput<T>>(v: BsdfValue<T, M>) -> BsdfValue<T, Mueller<T>> {
+    let r = v.response;
+    BsdfValue {
+        response: crate::interaction::MuellerResponse {
+            specular: r.specular.to_mueller(),
+            scattered: r.scattered.to_mueller(),
+            attenuation: r.attenuation,
+            side: r.side,
+        },
+        geometry: v.geometry,
+    }
+}
+
+/// A sample with a Mueller weight.
+fn sample_to_mueller<T: Real, M: Throughput<T>>(s: BsdfSample<T, M>) -> BsdfSample<T, Mueller<T>> {
+    BsdfSample {
+        sample: s.sample,
+        weight: s.weight.to_mueller(),
+        geometry: s.geometry,
+    }
+}
+
+impl<T, P, Sp, Sc, Pol, Coh, Rough> Shade<T> for Model<P, Sp, Sc, Pol, Coh, Rough>
+where
+    T: Real,
+    P: SamplingPsd<T> + Debug + Send + Sync,
+    Sp: Interface<T> + Debug + Send + Sync,
+    Sc: Pbsdf<T> + Debug + Send + Sync,
+    Pol: PolarizationModel + Send + Sync,
+    Coh: CoherenceWeights<T, P> + Send + Sync,
+    Rough: RoughnessWeights<T, P, Coh> + Send + Sync,
+{
+    fn flags(&self) -> LobeFlags {
+        // The flags do not depend on the frame or the wavelength.
+        Frame::new(Vector3::x(), Vector3::y(), Vector3::z())
+            .and_then(|f| Bsdf::new(&self.surface, self.kernel.clone(), f, T::one()))
+            .map_or(LobeFlags::REFLECTION, |b| b.flags())
+    }
+
+    fn surface_packet(
+        &self,
+        at: &ShadingPoint<T>,
+        stokes: Stokes<T>,
+        to_source: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<WavePacket<T>, Error> {
+        Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?
+            .surface_packet(stokes, to_source, coherence)
+    }
+
+    fn distant_packet(
+        &self,
+        at: &ShadingPoint<T>,
+        stokes: Stokes<T>,
+        solid_angle: T,
+        to_source: Vector3<T>,
+    ) -> Result<WavePacket<T>, Error> {
+        Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?.distant_packet(
+            stokes,
+            solid_angle,
+            to_source,
+        )
+    }
+
+    fn eval(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        exit: Vector3<T>,
+    ) -> Result<BsdfValue<T, Mueller<T>>, Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        b.eval(&b.prepare(light)?, exit).map(to_mueller)
+    }
+
+    fn eval_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_source: Vector3<T>,
+    ) -> Result<BsdfValue<T, Mueller<T>>, Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        let light = b.surface_packet(Stokes::unpolarized(T::one())?, to_source, coherence)?;
+        b.eval(&b.prepare(&light)?, exit).map(to_mueller)
+    }
+
+    fn sample_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> Result<Option<BsdfSample<T, Mueller<T>>>, Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        Ok(b.sample_incident(exit, coherence, u_lobe, u)?
+            .map(sample_to_mueller))
+    }
+
+    fn pdf_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_source: Vector3<T>,
+    ) -> Result<T, Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        Ok(b.incident_sampler(exit, coherence)?.pdf(&to_source))
+    }
+
+    fn sample_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> Result<Option<BsdfSample<T, Mueller<T>>>, Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        Ok(b.sample_exit(&b.prepare(light)?, u_lobe, u)?
+            .map(sample_to_mueller))
+    }
+
+    fn pdf_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        exit: Vector3<T>,
+    ) -> Result<T, Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        Ok(b.exit_sampler(&b.prepare(light)?)?.pdf(&exit))
+    }
+}
+
+/// The boxed model of `surface` at `level` with the blur method `blur` (Partial coherence) and
+/// the roughness level `rough`: one monomorphised [`Model`] per arm.
+fn build<T, P, Sp, Sc, B, R>(
+    surface: RoughSurface<P, Sp, Sc>,
+    level: Level,
+    blur: B,
+    rough: R,
+) -> Box<dyn Shade<T>>
+where
+    T: Real,
+    P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+    Sp: Interface<T> + Debug + Send + Sync + 'static,
+    Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+    B: BlurMethod<T, 2, P> + Clone + Debug + Send + Sync + 'static,
+    R: RoughnessWeights<T, P, PlaneWave>
+        + RoughnessWeights<T, P, Partial<B>>
+        + RoughnessWeights<T, P, Incoherent>
+        + Send
+        + Sync
+        + 'static,
+{
+    use CoherenceLevel as C;
+    use PolarizationLevel as Pl;
+    fn boxed<T, P, Sp, Sc, Pol, Coh, R>(
+        surface: RoughSurface<P, Sp, Sc>,
+        kernel: Kernel<Pol, Coh, R>,
+    ) -> Box<dyn Shade<T>>
+    where
+        T: Real,
+        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        Sp: Interface<T> + Debug + Send + Sync + 'static,
+        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+        Pol: PolarizationModel + Send + Sync + 'static,
+        Coh: CoherenceWeights<T, P> + Send + Sync + 'static,
+        R: RoughnessWeights<T, P, Coh> + Send + Sync + 'static,
+    {
+        Box::new(Model { surface, kernel })
+    }
+    let (plane, partial) = (PlaneWave, Partial(blur));
+    match (level.polarization, level.coherence) {
+        (Pl::Intensity, C::PlaneWave) => boxed(
+            surface,
+            Kernel::<Intensity, _>::new(plane).with_roughness(rough),
+        ),
+        (Pl::Intensity, C::Partial) => boxed(
+            surface,
+            Kernel::<Intensity, _>::new(partial).with_roughness(rough),
+        ),
+        (Pl::Intensity, C::Incoherent) => boxed(
+            surface,
+            Kernel::<Intensity, _>::new(Incoherent).with_roughness(rough),
+        ),
+        (Pl::OneShape, C::PlaneWave) => boxed(
+            surface,
+            Kernel::<OneShape, _>::new(plane).with_roughness(rough),
+        ),
+        (Pl::OneShape, C::Partial) => boxed(
+            surface,
+            Kernel::<OneShape, _>::new(partial).with_roughness(rough),
+        ),
+        (Pl::OneShape, C::Incoherent) => boxed(
+            surface,
+            Kernel::<OneShape, _>::new(Incoherent).with_roughness(rough),
+        ),
+        (Pl::Full, C::PlaneWave) => {
+            boxed(surface, Kernel::<Full, _>::new(plane).with_roughness(rough))
+        }
+        (Pl::Full, C::Partial) => boxed(
+            surface,
+            Kernel::<Full, _>::new(partial).with_roughness(rough),
+        ),
+        (Pl::Full, C::Incoherent) => boxed(
+            surface,
+            Kernel::<Full, _>::new(Incoherent).with_roughness(rough),
+        ),
+    }
+}
