@@ -431,3 +431,44 @@ fn two_sided_back_is_the_front_turned_over() {
     let b = g2.sample_incident(&at, exit, &c, 0.3, [0.4, 0.5]).unwrap();
     assert_eq!(a, b);
 }
+
+/// An `Incident` prepared by one `Bsdf` serves another of the same material value, kernel,
+/// frame and wavelength bit for bit (the rule of `Incident`'s docs, "Reuse"): eval, the exit
+/// sampler and the forward weight, for rough glass from both sides and a conductor.
+#[test]
+fn an_incident_serves_every_bsdf_of_the_same_shading_point() {
+    use gmueller::interaction::{Full, Partial};
+    let psd = GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap();
+    let glass = RoughDielectric::new(psd, 1.5).unwrap();
+    let gold = RoughConductor::new(psd, Complex::new(0.2, 3.5)).unwrap();
+    let f = Frame::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap();
+    let c = SurfaceCoherence::new(10.0).unwrap();
+    let kernel = Kernel::<Full, Partial>::default();
+    let mut rng = Rng(23);
+    let mut checked = 0;
+    for _ in 0..50 {
+        let s = scene(&mut rng, false);
+        let (exit, source) = (local(&f, s.exit), local(&f, s.source));
+        let copy = glass.clone();
+        let (b1, b2) = (
+            Bsdf::new(&glass, kernel, f, 0.5).unwrap(),
+            Bsdf::new(&copy, kernel, f, 0.5).unwrap(),
+        );
+        let stokes = Stokes::new(1.0, 0.3, -0.2, 0.1).unwrap();
+        let inc = b1.prepare(&b1.surface_packet(stokes, source, &c).unwrap()).unwrap();
+        assert_eq!(b1.eval(&inc, exit).unwrap(), b2.eval(&inc, exit).unwrap());
+        let (u0, u) = (s.u[0], [s.u[1], s.u[2]]);
+        assert_eq!(
+            b1.sample_exit(&inc, u0, u).unwrap(),
+            b2.sample_exit(&inc, u0, u).unwrap()
+        );
+        let g = Bsdf::new(&gold, kernel, f, 0.5).unwrap();
+        let source_up = local(&f, [s.source[0], s.source[1], s.source[2].abs()]);
+        let inc = g.prepare(&g.surface_packet(stokes, source_up, &c).unwrap()).unwrap();
+        let copy = gold.clone();
+        let g2 = Bsdf::new(&copy, kernel, f, 0.5).unwrap();
+        assert_eq!(g.eval(&inc, exit).unwrap(), g2.eval(&inc, exit).unwrap());
+        checked += 1;
+    }
+    assert_eq!(checked, 50);
+}

@@ -192,6 +192,14 @@ pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh, Rough = FirstOrder> {
 
 /// A light packet prepared at a shading point ([`Bsdf::prepare`]): the kernel's per-packet
 /// work, the direction to the source and the medium it arrives in.
+///
+/// # Reuse
+/// An `Incident` borrows nothing: it serves every [`Bsdf`] with the same material (the same
+/// value: the one it was prepared with or a copy), kernel, shading frame and wavelength, which
+/// answer with it exactly as the one that prepared it (`tests/bsdf_material.rs`,
+/// `an_incident_serves_every_bsdf_of_the_same_shading_point`). With another frame, wavelength,
+/// kernel or material its numbers are of another shading point: the answers are wrong, and
+/// nothing checks it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Incident<T: Real, Pol, Coh> {
     prepared: PreparedPacket<T, Pol, Coh>,
