@@ -18,8 +18,9 @@ pub const D65_WHITE_XYZ: [f64; 3] = [0.9505, 1.0, 1.089];
 /// The CIE 1931 2° colour-matching functions `[x̄, ȳ, z̄]` at `lambda_um` (µm).
 ///
 /// Linear interpolation between the 1 nm rows of [`CIE1931_TABLE`] (360–830 nm), so the
-/// tabulated values are reproduced at `λ = 0.360, 0.361, …, 0.830` µm (exactly in `f64` and
-/// `f32`: `λ·1000` rounds to the integer there). `[0, 0, 0]` outside `[0.360, 0.830]` µm, where
+/// tabulated values are reproduced at `λ = 0.360, 0.361, …, 0.830` µm (exactly in `f64`, where
+/// `λ·1000` rounds to the integer; in `f32` to within 1e-6, as `λ` itself is rounded: `0.502_f32`
+/// is 501.99997 nm). `[0, 0, 0]` outside `[0.360, 0.830]` µm, where
 /// the table stops (the functions are below `1.3·10⁻⁴` of their peaks at both ends); NaN for a
 /// NaN wavelength.
 ///
@@ -53,7 +54,11 @@ pub fn cie1931<T: Real>(lambda_um: T) -> [T; 3] {
         return CIE1931_TABLE[last].map(T::lit);
     }
     let (a, b) = (CIE1931_TABLE[i], CIE1931_TABLE[i + 1]);
-    [lerp(a[0], b[0], t), lerp(a[1], b[1], t), lerp(a[2], b[2], t)]
+    [
+        lerp(a[0], b[0], t),
+        lerp(a[1], b[1], t),
+        lerp(a[2], b[2], t),
+    ]
 }
 
 /// `[∫x̄ dλ, ∫ȳ dλ, ∫z̄ dλ]` of [`cie1931`] (λ in µm): `[0.1068654, 0.1068569, 0.1068919]`.
@@ -136,7 +141,8 @@ pub fn linear_srgb_to_xyz<T: Real>(rgb: [T; 3]) -> [T; 3] {
 /// # Examples
 /// ```
 /// use gmueller::spectral::srgb_encode;
-/// assert_eq!(srgb_encode(1.0_f64), 1.0);
+/// assert!((srgb_encode(1.0_f64) - 1.0).abs() < 1e-15); // 1.055 − 0.055
+/// assert!((srgb_encode(0.001_f64) - 0.01292).abs() < 1e-15); // the linear segment
 /// assert!((srgb_encode(0.18_f64) - 0.4614).abs() < 1e-4); // middle grey
 /// ```
 #[must_use]

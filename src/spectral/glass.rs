@@ -139,7 +139,10 @@ impl<T: Real, const N: usize> Cauchy<T, N> {
     #[must_use]
     pub fn index(&self, lambda_um: T) -> T {
         let inv2 = T::one() / (lambda_um * lambda_um);
-        self.a.iter().rev().fold(T::zero(), |acc, &a| acc * inv2 + a)
+        self.a
+            .iter()
+            .rev()
+            .fold(T::zero(), |acc, &a| acc * inv2 + a)
     }
 }
 
@@ -180,7 +183,9 @@ impl Glass {
     #[must_use]
     pub fn source(self) -> &'static str {
         match self {
-            Glass::NBk7 => "SCHOTT optical glass catalogue 2018-06-01 (opticalglass 1.1.1 SCHOTT.xls)",
+            Glass::NBk7 => {
+                "SCHOTT optical glass catalogue 2018-06-01 (opticalglass 1.1.1 SCHOTT.xls)"
+            }
             Glass::FusedSilica => {
                 "I. H. Malitson, Interspecimen comparison of the refractive index of fused \
                  silica, J. Opt. Soc. Am. 55, 1205 (1965)"
