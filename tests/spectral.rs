@@ -413,8 +413,10 @@ fn metals_agree_with_the_example_path_tracers_table() {
 /// is largely Weaver et al.'s data, so this pair is not fully independent).
 #[test]
 fn metals_against_a_second_published_source() {
+    /// `(λ µm, n, κ)` of the second source.
+    type Point = (f64, f64, f64);
     #[rustfmt::skip]
-    let refs: [(Metal, f64, [(f64, f64, f64); 3]); 7] = [
+    let refs: [(Metal, f64, [Point; 3]); 7] = [
         (Metal::Au, 0.060, [(0.4959, 1.04, 1.833), (0.5486, 0.43, 2.455), (0.6595, 0.14, 3.697)]),
         (Metal::Ag, 0.040, [(0.4959, 0.05, 3.093), (0.5486, 0.06, 3.586), (0.6595, 0.05, 4.483)]),
         (Metal::Cu, 0.020, [(0.4959, 1.22, 2.564), (0.5486, 1.02, 2.577), (0.6595, 0.22, 3.747)]),

@@ -48,7 +48,6 @@ pub fn cie1931<T: Real>(lambda_um: T) -> [T; 3] {
     let i = u.floor();
     let t = u - i;
     // 0 ≤ i ≤ 470: the cast is exact.
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     let i = i.to_f64() as usize;
     if i == last {
         return CIE1931_TABLE[last].map(T::lit);

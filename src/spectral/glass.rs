@@ -161,7 +161,7 @@ pub enum Glass {
     /// Schott N-BK7 (borosilicate crown), catalogue of 2018-06-01; `n_d = 1.5168`,
     /// `V_d = 64.17`. Range: 0.3126–2.3254 µm, where the catalogue tabulates its indices.
     NBk7,
-    /// Fused silica (amorphous SiO₂), Malitson (1965) at 20 °C; `n_d = 1.4585`. Range:
+    /// Fused silica (amorphous silicon dioxide), Malitson (1965) at 20 °C; `n_d = 1.4585`. Range:
     /// 0.21–3.71 µm, where Malitson measured.
     FusedSilica,
 }
