@@ -31,7 +31,7 @@ fn reflectance(n: f64, k: f64) -> f64 {
     ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k)
 }
 
-/// `(a + b)/2` lies in `[min(a, b), max(a, b)]` up to `ulps` ulps of the larger.
+/// `v` lies in `[min(a, b), max(a, b)]` up to `ulps` ulps of the larger.
 fn between(v: f64, a: f64, b: f64, ulps: f64) -> bool {
     let slack = ulps * f64::EPSILON * a.abs().max(b.abs());
     v >= a.min(b) - slack && v <= a.max(b) + slack
