@@ -11,6 +11,8 @@
 //! - [`error`]: the [`Error`] returned by validated constructors.
 //! - [`jones`]: Jones vectors and matrices, standard polarization elements.
 //! - [`fresnel`]: Fresnel coefficients of dielectric and conducting interfaces as Jones matrices.
+//! - [`spectral`]: spectral data for renderers — the CIE 1931 colour-matching functions,
+//!   XYZ ↔ sRGB, measured complex indices of metals, glass dispersion (Sellmeier, Cauchy).
 //! - [`stack`]: the stack operator and Kronecker product, Lemma S1.1.
 //! - [`stokes`]: `A_mül` (S1.3), CSD matrices, Stokes and generalized Stokes vectors (S1.2).
 //! - [`mueller`]: classical and generalized Mueller matrices (S1.7) and their analysis;
@@ -123,6 +125,7 @@ pub mod propagation;
 pub mod psd;
 pub mod real;
 pub mod simd;
+pub mod spectral;
 pub mod stack;
 pub mod stokes;
 #[cfg(feature = "verify")]

@@ -7,7 +7,8 @@
 //! `eval` in both forms, both samplers with their draws, densities and weights) at every level
 //! on rough glass and a grating, and beyond first order (`Level::dispatch_rough`: every level ×
 //! first order, the Kirchhoff series, the geometric limit) on tangent-plane glass; and `Kernel::evaluate_batch` at every level (lanes and one
-//! exit at a time) and `plane_wave_rayleigh_rice`; the count must be zero.
+//! exit at a time) and `plane_wave_rayleigh_rice`; and the spectral data (`gmueller::spectral`);
+//! the count must be zero.
 //!
 //! The counting allocator needs `unsafe impl GlobalAlloc`: the crate's `[lints]` deny
 //! `unsafe_code` for every target and the library forbids it in `src/lib.rs`; this test file alone
@@ -652,4 +653,40 @@ fn medium_levels<T: Real>() {
 fn medium_allocates_nothing() {
     medium_levels::<f64>();
     medium_levels::<f32>();
+}
+
+/// `gmueller::spectral`: the colour-matching functions, XYZ ↔ sRGB and its transfer function,
+/// every metal's index (inside, outside and refused), every glass and user-built formulas.
+fn spectral_data<T: Real>() -> T {
+    use gmueller::spectral::{
+        Cauchy, Glass, Metal, Sellmeier, cie1931_integral, cie1931_normalized, linear_srgb_to_xyz,
+        srgb_decode, srgb_encode, xyz_to_linear_srgb,
+    };
+    let mut acc = T::zero();
+    for i in 0..200 {
+        let l = T::lit(0.25 + 0.004 * f64::from(i));
+        let rgb = xyz_to_linear_srgb(cie1931_normalized(black_box(l)));
+        let xyz = linear_srgb_to_xyz(rgb.map(|c| srgb_decode(srgb_encode(c.abs()))));
+        acc += xyz[1] + cie1931_integral::<T>()[0];
+        for metal in Metal::ALL {
+            acc += metal.index(l).im + metal.try_index(l).map_or(T::zero(), |z| z.re);
+        }
+        for glass in Glass::ALL {
+            acc += glass.index(l) + glass.try_index(l).unwrap_or(T::zero());
+        }
+        let s = Sellmeier::new([T::one()], [T::lit(0.01)]).unwrap();
+        let c = Cauchy::new([T::lit(1.5), T::lit(0.004)]).unwrap();
+        acc += s.index(l) + c.index(l);
+    }
+    acc
+}
+
+#[test]
+fn spectral_data_allocates_nothing() {
+    let (n, acc) = count(spectral_data::<f64>);
+    assert!(acc.is_finite());
+    assert_eq!(n, 0, "gmueller::spectral allocated {n} times (f64)");
+    let (n, acc) = count(spectral_data::<f32>);
+    assert!(acc.is_finite());
+    assert_eq!(n, 0, "gmueller::spectral allocated {n} times (f32)");
 }

@@ -19,6 +19,7 @@ const LAYERS: &[&str] = &[
     "mueller",
     "frame",
     "fresnel",
+    "spectral",
     "gaussian",
     "packet",
     "propagation",

@@ -61,6 +61,7 @@ mod roughness_series;
 mod roughness_tangent_plane;
 mod sampling;
 mod side_invariance;
+mod spectral;
 mod stack;
 mod stokes;
 mod verification_table;
