@@ -29,4 +29,5 @@ pub use crate::interaction::{
 };
 pub use crate::mueller::Mueller;
 pub use crate::psd::{GaussianMixturePsd, GaussianPsd, Grating, KCorrelation, Smooth};
+pub use crate::spectral::{Glass, Metal};
 pub use crate::stokes::Stokes;

@@ -455,7 +455,9 @@ fn an_incident_serves_every_bsdf_of_the_same_shading_point() {
             Bsdf::new(&copy, kernel, f, 0.5).unwrap(),
         );
         let stokes = Stokes::new(1.0, 0.3, -0.2, 0.1).unwrap();
-        let inc = b1.prepare(&b1.surface_packet(stokes, source, &c).unwrap()).unwrap();
+        let inc = b1
+            .prepare(&b1.surface_packet(stokes, source, &c).unwrap())
+            .unwrap();
         assert_eq!(b1.eval(&inc, exit).unwrap(), b2.eval(&inc, exit).unwrap());
         let (u0, u) = (s.u[0], [s.u[1], s.u[2]]);
         assert_eq!(
@@ -464,7 +466,9 @@ fn an_incident_serves_every_bsdf_of_the_same_shading_point() {
         );
         let g = Bsdf::new(&gold, kernel, f, 0.5).unwrap();
         let source_up = local(&f, [s.source[0], s.source[1], s.source[2].abs()]);
-        let inc = g.prepare(&g.surface_packet(stokes, source_up, &c).unwrap()).unwrap();
+        let inc = g
+            .prepare(&g.surface_packet(stokes, source_up, &c).unwrap())
+            .unwrap();
         let copy = gold.clone();
         let g2 = Bsdf::new(&copy, kernel, f, 0.5).unwrap();
         assert_eq!(g.eval(&inc, exit).unwrap(), g2.eval(&inc, exit).unwrap());

@@ -133,9 +133,10 @@ fn cie1931_matches_the_cie_5nm_table() {
 /// Against the multi-lobe analytic fit of Wyman, Sloan & Shirley, "Simple Analytic
 /// Approximations to the CIE XYZ Color Matching Functions", JCGT 2(2), 2013 (eq. 2; the fit of
 /// `examples/path_tracer/color.rs`), every 0.1 nm from 360 to 830 nm. The fit is not exact:
-/// measured largest differences 0.0148 (x̄, 631 nm), 0.0076 (ȳ, 528 nm), 0.0238 (z̄, 425 nm);
-/// the tolerances are these rounded up (a table shifted by 1 nm would differ by up to 0.03 in
-/// ȳ and 0.08 in z̄).
+/// measured largest differences 0.0148 (x̄, 631 nm), 0.0076 (ȳ, 528 nm), 0.0238 (z̄, 425 nm).
+/// One bound, 0.05 of the functions' peaks (≈ 1–1.8), for all three: it catches a table read
+/// in the wrong units, order or columns (differences of order 1), not a shift of a nanometre —
+/// the 5 nm spot values of `cie1931_matches_the_cie_5nm_table` pin the table to 5e-6.
 #[test]
 fn cie1931_is_close_to_the_wyman_sloan_shirley_fit() {
     fn g(l: f64, mu: f64, s1: f64, s2: f64) -> f64 {
@@ -158,10 +159,8 @@ fn cie1931_is_close_to_the_wyman_sloan_shirley_fit() {
             worst[j] = worst[j].max((v[j] - f[j]).abs());
         }
     }
-    let tol = [0.016, 0.008, 0.025];
-    for j in 0..3 {
-        assert!(worst[j] < tol[j], "component {j}: {worst:?}");
-    }
+    println!("largest |table − fit|: {worst:?}");
+    assert!(worst.iter().all(|w| *w < 0.05), "{worst:?}");
 }
 
 /// `∫ȳ dλ`: the trapezoid rule over the table computed here equals `cie1931_integral`, a fine
@@ -405,34 +404,37 @@ fn metals_agree_with_the_example_path_tracers_table() {
 /// Rev. B 12, 1293 (1975) for W.
 ///
 /// Optical constants of metals depend on the sample (film, bulk, preparation) and differ
-/// between authors by more than their stated errors, so the comparison is on the normal-
-/// incidence reflectance `R` with a tolerance per metal, set from the measured differences at
-/// these wavelengths and stated here: Au 0.056 (0.549 µm, on the steep edge of gold's
-/// absorption), Ag 0.036 (our table's `n` ≈ 0.13 against J&C's 0.05), Cu 0.016, Cr 0.125
-/// (Palik's chromium, `κ` 25–35 % above J&C's), Ni 0.045, Al 0.0062, W 0.0015 (Palik's tungsten
-/// is largely Weaver et al.'s data, so this pair is not fully independent).
+/// between authors by more than their stated errors — in the visible up to ~0.1–0.15 in
+/// normal-incidence reflectance for chromium (Palik's against Johnson & Christy's, `κ` 25–35 %
+/// apart). So the comparison is on `R` with one bound for every metal, `|ΔR| ≤ 0.15`, which
+/// catches what an extraction can get wrong (another metal's rows, ångström read as nm: both
+/// move `R` by 0.3 or more at these wavelengths) but not a sample's spread; the measured
+/// differences are printed (one run: Au 0.056, Ag 0.036, Cu 0.016, Cr 0.125, Ni 0.045, Al
+/// 0.0062, W 0.0015 — Palik's tungsten is largely Weaver et al.'s data, so that pair is not
+/// fully independent).
 #[test]
 fn metals_against_a_second_published_source() {
     /// `(λ µm, n, κ)` of the second source.
     type Point = (f64, f64, f64);
     #[rustfmt::skip]
-    let refs: [(Metal, f64, [Point; 3]); 7] = [
-        (Metal::Au, 0.060, [(0.4959, 1.04, 1.833), (0.5486, 0.43, 2.455), (0.6595, 0.14, 3.697)]),
-        (Metal::Ag, 0.040, [(0.4959, 0.05, 3.093), (0.5486, 0.06, 3.586), (0.6595, 0.05, 4.483)]),
-        (Metal::Cu, 0.020, [(0.4959, 1.22, 2.564), (0.5486, 1.02, 2.577), (0.6595, 0.22, 3.747)]),
-        (Metal::Cr, 0.130, [(0.496, 2.75, 3.30), (0.549, 3.18, 3.33), (0.659, 3.09, 3.34)]),
-        (Metal::Ni, 0.050, [(0.496, 1.82, 3.25), (0.549, 1.92, 3.61), (0.659, 1.99, 4.26)]),
-        (Metal::Al, 0.007, [(0.4428, 0.6079, 5.3676), (0.56357, 1.0728, 6.7839), (0.65225, 1.5724, 7.7354)]),
-        (Metal::W, 0.003, [(0.4921, 3.38, 2.664), (0.5489, 3.522, 2.739), (0.6572, 3.697, 2.943)]),
+    let refs: [(Metal, [Point; 3]); 7] = [
+        (Metal::Au, [(0.4959, 1.04, 1.833), (0.5486, 0.43, 2.455), (0.6595, 0.14, 3.697)]),
+        (Metal::Ag, [(0.4959, 0.05, 3.093), (0.5486, 0.06, 3.586), (0.6595, 0.05, 4.483)]),
+        (Metal::Cu, [(0.4959, 1.22, 2.564), (0.5486, 1.02, 2.577), (0.6595, 0.22, 3.747)]),
+        (Metal::Cr, [(0.496, 2.75, 3.30), (0.549, 3.18, 3.33), (0.659, 3.09, 3.34)]),
+        (Metal::Ni, [(0.496, 1.82, 3.25), (0.549, 1.92, 3.61), (0.659, 1.99, 4.26)]),
+        (Metal::Al, [(0.4428, 0.6079, 5.3676), (0.56357, 1.0728, 6.7839), (0.65225, 1.5724, 7.7354)]),
+        (Metal::W, [(0.4921, 3.38, 2.664), (0.5489, 3.522, 2.739), (0.6572, 3.697, 2.943)]),
     ];
-    for (metal, tol, points) in refs {
+    for (metal, points) in refs {
         let mut worst = 0.0_f64;
         for (l, n, k) in points {
             let ours = metal.index(l);
             let d = (reflectance(ours.re, ours.im) - reflectance(n, k)).abs();
             worst = worst.max(d);
         }
-        assert!(worst <= tol, "{metal:?}: |ΔR| = {worst} > {tol}");
+        println!("{metal:?}: |ΔR| = {worst:.4}");
+        assert!(worst <= 0.15, "{metal:?}: |ΔR| = {worst} > 0.15");
     }
     // Where the two sources agree closely, compare κ itself: copper and aluminium within 2 %.
     for (metal, l, k) in [(Metal::Cu, 0.5486_f64, 2.577), (Metal::Cu, 0.6595, 3.747)] {

@@ -3,22 +3,11 @@
 
 use std::path::Path;
 
-/// One lobe of the Wyman–Sloan–Shirley (2013) fit to the CIE 1931 2° matching functions.
-fn g(l: f32, mu: f32, s1: f32, s2: f32) -> f32 {
-    let t = (l - mu) / if l < mu { s1 } else { s2 };
-    (-0.5 * t * t).exp()
-}
+use gmueller::spectral;
 
-/// `(x̄, ȳ, z̄)` at `lambda` (µm): the multi-lobe fit of Wyman, Sloan & Shirley, "Simple
-/// Analytic Approximations to the CIE XYZ Color Matching Functions", JCGT 2(2), 2013.
+/// `(x̄, ȳ, z̄)` at `lambda` (µm): the CIE 1931 2° table (`gmueller::spectral`).
 pub(crate) fn cmf(lambda: f32) -> [f32; 3] {
-    let l = lambda * 1000.0;
-    [
-        1.056 * g(l, 599.8, 37.9, 31.0) + 0.362 * g(l, 442.0, 16.0, 26.7)
-            - 0.065 * g(l, 501.1, 20.4, 26.2),
-        0.821 * g(l, 568.8, 46.9, 40.5) + 0.286 * g(l, 530.9, 16.3, 31.1),
-        1.217 * g(l, 437.0, 11.8, 36.0) + 0.681 * g(l, 459.0, 26.0, 13.8),
-    ]
+    spectral::cie1931(lambda)
 }
 
 /// `∫ (x̄, ȳ, z̄) dλ` over `[lo, hi]` (µm), by the midpoint rule: the white of an equal-energy
@@ -37,24 +26,14 @@ pub(crate) fn cmf_integral(lo: f32, hi: f32) -> [f32; 3] {
 }
 
 /// Linear sRGB (D65) from XYZ already balanced so that the equal-energy white is `(1, 1, 1)`:
-/// the white is mapped to D65's `(0.9505, 1, 1.089)` first.
+/// the white is mapped to D65's first.
 pub(crate) fn xyz_to_linear_srgb(xyz: [f32; 3]) -> [f32; 3] {
-    let [x, y, z] = [xyz[0] * 0.9505, xyz[1], xyz[2] * 1.089];
-    [
-        3.2406 * x - 1.5372 * y - 0.4986 * z,
-        -0.9689 * x + 1.8758 * y + 0.0415 * z,
-        0.0557 * x - 0.2040 * y + 1.0570 * z,
-    ]
+    let w = spectral::D65_WHITE_XYZ;
+    spectral::xyz_to_linear_srgb([xyz[0] * w[0] as f32, xyz[1], xyz[2] * w[2] as f32])
 }
 
 fn gamma(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let v = if c <= 0.0031308 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (v * 255.0 + 0.5) as u8
+    (spectral::srgb_encode(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8
 }
 
 /// Per pixel: balanced XYZ, and the ȳ-weighted Stokes vector in the camera frame.

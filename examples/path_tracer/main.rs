@@ -45,19 +45,12 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
-use gmueller::frame::{Frame, frame_change_mueller};
-use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, KirchhoffSeries, Partial, Pbsdf, RoughSurface,
-    RoughnessWeights, Throughput,
-};
-use gmueller::mueller::Mueller;
-use gmueller::stokes::Stokes;
+use gmueller::prelude::*;
 use gmueller::verify::rng::SplitMix64;
 use nalgebra::Vector4;
 
 use color::Pixel;
-use scene::{Material, Materials, Metals, SUN_SOLID_ANGLE, Scene, V3};
+use scene::{Materials, SUN_SOLID_ANGLE, Scene, V3};
 
 const LAMBDA_MIN: f32 = 0.40;
 const LAMBDA_MAX: f32 = 0.70;
@@ -183,28 +176,20 @@ impl Rng {
     }
 }
 
-/// The per-path state: radiance so far (camera frame) and the throughput `t` from `frame`
-/// (where the light arrives at the last vertex) to the camera frame.
+/// The per-path state: radiance so far (camera frame) and the path's throughput and frame.
 struct Path {
     radiance: Vector4<f32>,
-    t: Mueller<f32>,
-    frame: Frame<f32>,
+    t: PathThroughput<f32>,
     invalid: usize,
 }
 
 impl Path {
-    /// Adds light `s` given in frame `from`, arriving after the last vertex's throughput.
-    fn add(&mut self, through: &Mueller<f32>, from: &Frame<f32>, s: &Stokes<f32>) {
-        let c = (self.t * frame_change_mueller(from, &self.frame) * *through * *s).vector();
-        // Below 1e-30 (near f32's subnormals, where the rounding of four products cannot keep
-        // |S| ≤ S0) a contribution is 30 orders under the image: dropped, not counted.
-        if c[0].abs() < 1e-30 && c.iter().all(|x| x.abs() < 1e-30) {
-            return;
-        }
-        // In f64: the squares of f32 values near 1e-22 are subnormal in f32.
-        let w = c.map(f64::from);
-        let pol = (w[1] * w[1] + w[2] * w[2] + w[3] * w[3]).sqrt();
-        if c.iter().all(|x| x.is_finite()) && pol <= w[0] * (1.0 + 1e-4) {
+    /// Adds light `s` through the vertex throughput `m` of geometry `g`; contributions below
+    /// 1e-30 (30 orders under the image) are dropped, non-finite ones counted.
+    fn add(&mut self, m: &Mueller<f32>, g: &Geometry<f32>, s: &Stokes<f32>) {
+        let c = self.t.contribution(m, g, s).vector();
+        if c[0].abs() < 1e-30 {
+        } else if c.iter().all(|x| x.is_finite()) {
             self.radiance += c;
         } else {
             self.invalid += 1;
@@ -223,22 +208,13 @@ struct At<'a> {
     coherence: &'a SurfaceCoherence<f32>,
 }
 
-/// One vertex on `material` with `kernel` (its roughness level): sun NEE into `path`, then the
-/// next direction (or `None`).
-fn vertex<P, Sp, Sc, R>(
-    material: &RoughSurface<P, Sp, Sc>,
-    kernel: Kernel<Full, Partial, R>,
+/// One vertex on `material`: sun NEE into `path`, then the next direction (or `None`).
+fn vertex(
+    material: &Material<f32>,
     at: &At<'_>,
     path: &mut Path,
     rng: &mut Rng,
-) -> Result<Option<V3>, gmueller::Error>
-where
-    P: SamplingPsd<f32>,
-    Sp: Interface<f32>,
-    Sc: Pbsdf<f32>,
-    Partial: CoherenceWeights<f32, P>,
-    R: RoughnessWeights<f32, P, Partial>,
-{
+) -> Result<Option<V3>, Error> {
     let At {
         scene,
         hit,
@@ -247,13 +223,12 @@ where
         opts,
         coherence,
     } = *at;
-    let frame = scene.shading_frame(hit);
-    let bsdf = Bsdf::new(material, kernel, frame, lambda)?;
-    let opaque = matches!(hit.material, Material::Gold | Material::Grating);
+    let sp = ShadingPoint::new(scene.shading_frame(hit), lambda)?;
     let n = hit.normal;
 
     // 2. The sun.
-    let lit = !(opaque && scene.sun.dot(&n) <= 0.0) && scene.sees_sun(&hit.point, &n);
+    let lit = !(material.is_opaque() && scene.sun.dot(&n) * r.dot(&n) <= 0.0)
+        && scene.sees_sun(&hit.point, &n);
     if lit {
         let k = opts.sun_split.max(1);
         let irradiance = Stokes::unpolarized(1.0 / k as f32)?;
@@ -266,52 +241,40 @@ where
                     opts.sun_solid_angle / k as f32,
                 )
             };
-            let packet = bsdf.distant_packet(irradiance, omega, dir)?;
-            let v = bsdf.eval(&bsdf.prepare(&packet)?, r)?;
-            path.add(&v.response.total(), v.geometry.exit_sp(), &packet.stokes());
+            let packet = material.distant_packet(&sp, irradiance, omega, dir)?;
+            let v = material.eval(&sp, &packet, r)?;
+            path.add(&v.response.total(), &v.geometry, &packet.stokes());
         }
     }
 
     // 3. The direction the light comes from.
     let (weight, g, s) = match opts.sampling {
         Sampling::Lobes => {
-            let mut sampler = bsdf.incident_sampler(r, coherence)?;
-            if hit.material == Material::Ground {
-                // Light from inside the black ground is absorbed there: draw reflection only.
-                let p = sampler.part_probabilities();
-                sampler = sampler.with_part_probabilities([p[0], p[1], 0.0, 0.0]);
-            }
-            let Some(s) = sampler.sample(rng.f(), [rng.f(), rng.f()]) else {
+            let u = [rng.f(), rng.f(), rng.f()];
+            let Some(s) = material.sample_incident(&sp, r, coherence, u[0], [u[1], u[2]])? else {
                 return Ok(None);
             };
-            let (w, g) = bsdf.incident_weight(r, coherence, &s)?;
-            (w, g, s.direction)
+            (s.weight, s.geometry, s.sample.direction)
         }
         Sampling::Uniform => {
             let (u1, u2) = (rng.f(), rng.f());
-            let (z, pdf) = if opaque {
-                (u1, 1.0 / std::f32::consts::TAU)
+            let (z, pdf) = if material.is_opaque() {
+                (u1 * r.dot(&n).signum(), 1.0 / std::f32::consts::TAU)
             } else {
                 (1.0 - 2.0 * u1, 0.25 / std::f32::consts::PI)
             };
             let rho = (1.0 - z * z).max(0.0).sqrt();
             let phi = std::f32::consts::TAU * u2;
-            let s = frame.x() * (rho * phi.cos()) + frame.y() * (rho * phi.sin()) + n * z;
+            let f = sp.frame();
+            let s = f.x() * (rho * phi.cos()) + f.y() * (rho * phi.sin()) + n * z;
             if z.abs() < 1e-6 {
                 return Ok(None);
             }
-            let light = bsdf.surface_packet(Stokes::unpolarized(1.0)?, s, coherence)?;
-            let v = bsdf.eval(&bsdf.prepare(&light)?, r)?;
+            let v = material.eval_incident(&sp, r, coherence, s)?;
             (v.response.total().scaled(1.0 / pdf), v.geometry, s)
         }
     };
-    // Light from inside the black ground is absorbed there.
-    if hit.material == Material::Ground && s.dot(&n) < 0.0 {
-        return Ok(None);
-    }
-    let weight = weight.scaled(opts.weight_scale);
-    path.t = path.t * frame_change_mueller(g.exit_sp(), &path.frame) * weight;
-    path.frame = *g.incident_sp();
+    path.t.advance(&weight.scaled(opts.weight_scale), &g);
     Ok(Some(s))
 }
 
@@ -343,19 +306,16 @@ fn trace(
         SurfaceCoherence::fixed(opts.sky_coherence)
     }
     .expect("coherence width");
-    let first = Kernel::<Full, Partial>::default();
-    let series = KirchhoffSeries::new(1e-3).expect("series tolerance");
     let mut path = Path {
         radiance: Vector4::zeros(),
-        t: Mueller::identity(),
-        frame: cam.frame(&d),
+        t: PathThroughput::new(cam.frame(&d)),
         invalid: 0,
     };
     let mut errors = 0;
     for _ in 0..opts.max_depth {
         let Some(hit) = scene.intersect(&o, &d) else {
             let (s, f) = scene.sky(&d, lambda);
-            path.add(&Mueller::identity(), &f, &s);
+            path.radiance += path.t.arriving(&f, &s).vector();
             break;
         };
         let r = -d;
@@ -367,15 +327,7 @@ fn trace(
             opts,
             coherence: &coherence,
         };
-        let step = match hit.material {
-            Material::Ground => vertex(&mats.ground, first, &at, &mut path, rng),
-            Material::Glass => vertex(&mats.glass, first, &at, &mut path, rng),
-            Material::Gold => match &mats.rough_gold {
-                Some(m) => vertex(m, first.with_roughness(series), &at, &mut path, rng),
-                None => vertex(&mats.gold, first, &at, &mut path, rng),
-            },
-            Material::Grating => vertex(&mats.grating, first, &at, &mut path, rng),
-        };
+        let step = vertex(mats.of(hit.material), &at, &mut path, rng);
         match step {
             Ok(Some(s)) => {
                 d = s;
@@ -389,12 +341,11 @@ fn trace(
         }
         // Russian roulette on the throughput's M00 (unbiased; it also keeps f32 throughputs
         // out of the subnormal range).
-        let m00 = path.t.matrix()[(0, 0)];
-        let survive = (m00 / 0.05).min(1.0);
+        let survive = (path.t.matrix().m00() / 0.05).min(1.0);
         if survive.is_nan() || survive <= 0.0 || rng.f() >= survive {
             break;
         }
-        path.t = path.t.scaled(1.0 / survive);
+        path.t.scale(1.0 / survive);
     }
     (path.radiance, path.invalid, errors)
 }
@@ -402,7 +353,6 @@ fn trace(
 /// Renders the scene.
 pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
     let start = Instant::now();
-    let metals = Metals::load();
     let bins = if opts.lambda.is_some() {
         1
     } else {
@@ -412,7 +362,7 @@ pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
     let mats: Vec<Materials> = (0..bins)
         .map(|b| {
             let centre = LAMBDA_MIN + (b as f32 + 0.5) * width_bin;
-            Materials::at(opts.lambda.unwrap_or(centre), &metals, opts.rough_gold)
+            Materials::at(opts.lambda.unwrap_or(centre), opts.rough_gold)
         })
         .collect();
     let white = color::cmf_integral(LAMBDA_MIN, LAMBDA_MAX);

@@ -1,13 +1,14 @@
 //! The scene: geometry (scene units: metres), materials (micro-geometry in µm) and the lights.
 //!
-//! - Ground `y = 0`: polished black glass (rough dielectric, η = 1.5, Gaussian PSD σ = 8 nm,
-//!   ℓ = 3 µm); what it transmits is absorbed below.
-//! - A rough glass sphere (η from a Cauchy fit to BK7, σ = 10 nm, ℓ = 2 µm): reflection and
-//!   transmission at both of its surfaces, from outside and from inside.
-//! - A rough gold sphere (σ = 12 nm, ℓ = 1.5 µm; n + iκ of gold, Mitsuba 3's tables); with
+//! - Ground `y = 0`: polished black glass (η = 1.5, Gaussian PSD σ = 8 nm, ℓ = 3 µm); what it
+//!   transmits is absorbed below, so it is the interface's reflection alone (an opaque
+//!   material of real index).
+//! - A rough glass sphere (η of Schott N-BK7, `gmueller::spectral::Glass::NBk7`, σ = 10 nm,
+//!   ℓ = 2 µm): reflection and transmission at both of its surfaces, from outside and inside.
+//! - A rough gold sphere (σ = 12 nm, ℓ = 1.5 µm; n + iκ of gold, `spectral::Metal::Au`); with
 //!   `--rough-gold σ` a much rougher one (σ in µm, same ℓ, the tangent-plane scatterer),
 //!   rendered beyond first order by the Kirchhoff series.
-//! - An aluminium plate (n + iκ of aluminium, same source) carrying a sinusoidal **height**
+//! - A two-sided aluminium plate (n + iκ of aluminium, same source) carrying a sinusoidal **height**
 //!   grating (amplitude 25 nm, period 2 µm), tilted so that the sun's first diffraction order
 //!   reaches the camera across the plate.
 //! - The sun (a disk of Ω = 6.8·10⁻⁵ sr, irradiance 1 across the beam, equal-energy spectrum)
@@ -15,10 +16,11 @@
 //!   the scattering plane with degree 0.75 sin²γ/(1 + cos²γ), γ the angle to the sun): both
 //!   illustrative, not measured.
 
-use gmueller::frame::Frame;
-use gmueller::interaction::{KirchhoffConductor, RoughConductor, RoughDielectric};
-use gmueller::psd::{GaussianPsd, Grating};
-use gmueller::stokes::Stokes;
+use gmueller::bsdf as gm;
+use gmueller::prelude::{
+    Frame, GaussianPsd, Glass, Grating, KirchhoffConductor, KirchhoffSeries, Level, Metal,
+    RoughConductor, RoughDielectric, Roughness, Stokes,
+};
 use nalgebra::{Vector2, Vector3};
 use num_complex::Complex;
 
@@ -60,63 +62,45 @@ struct Plate {
     half: [f32; 2],
 }
 
-/// The materials at one wavelength.
-pub(crate) struct Materials {
-    pub(crate) ground: RoughDielectric<f32, GaussianPsd<f32, 2>>,
-    pub(crate) glass: RoughDielectric<f32, GaussianPsd<f32, 2>>,
-    pub(crate) gold: RoughConductor<f32, GaussianPsd<f32, 2>>,
-    /// The gold sphere beyond first order (`--rough-gold σ`), if asked for.
-    pub(crate) rough_gold: Option<KirchhoffConductor<f32, GaussianPsd<f32, 2>>>,
-    pub(crate) grating: RoughConductor<f32, Grating<f32, 2>>,
-}
-
-/// The optical constants (`metals.csv`, from Mitsuba 3.9.1: `validation/peers/extract_metal_ior.py`).
-pub(crate) struct Metals {
-    rows: Vec<(String, f32, f32, f32)>,
-}
-
-impl Metals {
-    pub(crate) fn load() -> Self {
-        let rows = include_str!("metals.csv")
-            .lines()
-            .filter(|l| !l.starts_with('#') && !l.is_empty())
-            .map(|l| {
-                let f: Vec<&str> = l.split(',').collect();
-                let num = |i: usize| f[i].parse::<f32>().expect("metals.csv number");
-                (f[0].to_string(), num(1), num(2), num(3))
-            })
-            .collect();
-        Self { rows }
-    }
-
-    /// `n + iκ` of `metal` at `lambda` (µm), linear interpolation (clamped at the table's ends).
-    pub(crate) fn index(&self, metal: &str, lambda: f32) -> Complex<f32> {
-        let t: Vec<_> = self.rows.iter().filter(|r| r.0 == metal).collect();
-        let i = t.partition_point(|r| r.1 < lambda).clamp(1, t.len() - 1);
-        let (a, b) = (t[i - 1], t[i]);
-        let w = ((lambda - a.1) / (b.1 - a.1)).clamp(0.0, 1.0);
-        Complex::new(a.2 + w * (b.2 - a.2), a.3 + w * (b.3 - a.3))
-    }
-}
+/// The materials at one wavelength, indexed by [`Material`].
+pub(crate) struct Materials([gm::Material<f32>; 4]);
 
 impl Materials {
     /// The materials at `lambda`; `rough_gold` the rms height (µm) of a gold sphere rendered
     /// beyond first order, or `None` for the first-order one.
-    pub(crate) fn at(lambda: f32, metals: &Metals, rough_gold: Option<f32>) -> Self {
-        // BK7, Cauchy fit n = A + B/λ² (λ in µm).
-        let n_glass = 1.5046 + 0.00420 / (lambda * lambda);
+    pub(crate) fn at(lambda: f32, rough_gold: Option<f32>) -> Self {
         let psd = |s: f32, l: f32| GaussianPsd::isotropic(s, l).expect("valid PSD");
         let grating = Grating::sinusoidal_height(0.025, 2.0, &Vector2::x()).expect("grating");
-        Self {
-            ground: RoughDielectric::new(psd(0.008, 3.0), 1.5).expect("ground"),
-            glass: RoughDielectric::new(psd(0.010, 2.0), n_glass).expect("glass"),
-            gold: RoughConductor::new(psd(0.012, 1.5), metals.index("Au", lambda)).expect("gold"),
-            rough_gold: rough_gold.map(|sigma| {
-                KirchhoffConductor::new(psd(sigma, 1.5), metals.index("Au", lambda))
-                    .expect("rough gold")
-            }),
-            grating: RoughConductor::new(grating, metals.index("Al", lambda)).expect("aluminium"),
-        }
+        let level = Level::ALL[7]; // Full · Partial
+        let (au, al) = (Metal::Au.index(lambda), Metal::Al.index(lambda));
+        let gold = match rough_gold {
+            Some(sigma) => gm::Material::with_roughness(
+                KirchhoffConductor::new(psd(sigma, 1.5), au).expect("rough gold"),
+                level,
+                Roughness::Series(KirchhoffSeries::new(1e-3).expect("tolerance")),
+            ),
+            None => gm::Material::new(
+                RoughConductor::new(psd(0.012, 1.5), au).expect("gold"),
+                level,
+            ),
+        };
+        // Black glass: an interface of index 1.5 whose transmitted light is absorbed, i.e. a
+        // "conductor" of real index (Fresnel and Rayleigh–Rice reflection of the dielectric).
+        let black = RoughConductor::new(psd(0.008, 3.0), Complex::new(1.5, 0.0)).expect("ground");
+        let glass =
+            RoughDielectric::new(psd(0.010, 2.0), Glass::NBk7.index(lambda)).expect("glass");
+        let plate = RoughConductor::new(grating, al).expect("aluminium");
+        Self([
+            gm::Material::new(black, level),
+            gm::Material::new(glass, level),
+            gold,
+            gm::Material::new(plate, level).two_sided(true),
+        ])
+    }
+
+    /// The material of a hit.
+    pub(crate) fn of(&self, m: Material) -> &gm::Material<f32> {
+        &self.0[m as usize]
     }
 }
 

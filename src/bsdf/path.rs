@@ -92,12 +92,26 @@ impl<T: Real> PathThroughput<T> {
         Stokes::from_vector_unchecked(onto_cone(c))
     }
 
+    /// What the camera reads of `light` (Stokes, in frame `from`) arriving at the current
+    /// vertex directly — an emitter or the sky hit by the path's last ray: `T · C(from → F) ·
+    /// S`, projected onto the Stokes cone.
+    #[must_use]
+    pub fn arriving(&self, from: &Frame<T>, light: &Stokes<T>) -> Stokes<T> {
+        let c = self.t.0 * frame_change_mueller(from, &self.frame).0 * light.vector();
+        Stokes::from_vector_unchecked(onto_cone(c))
+    }
+
     /// Continues the path through a vertex of sample weight `weight` and geometry `g`
     /// ([`super::Material::sample_incident`]): `T ← T · C(exit_sp(g) → F) · W`, `F ←
     /// incident_sp(g)`.
     pub fn advance(&mut self, weight: &Mueller<T>, g: &Geometry<T>) {
         self.t = Mueller(self.t.0 * frame_change_mueller(g.exit_sp(), &self.frame).0 * weight.0);
         self.frame = *g.incident_sp();
+    }
+
+    /// Scales the throughput by `factor` (Russian roulette's `1/p_survive`).
+    pub fn scale(&mut self, factor: T) {
+        self.t = Mueller(self.t.0 * factor);
     }
 
     /// `true` while some light can still pass (`M₀₀ > 0`, finite): a renderer may stop the
