@@ -27,7 +27,6 @@ use gmueller::bsdf::{Bsdf, Incident, Interface, SamplingPsd, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
     CoherenceWeights, Full, Kernel, Partial, Pbsdf, Side, SmoothConductor, SmoothDielectric,
-    Throughput,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::stokes::Stokes;

@@ -23,7 +23,7 @@ use gmueller::stokes::Stokes;
 use nalgebra::{Vector2, Vector3};
 use num_complex::Complex;
 
-/// A small deterministic generator (SplitMix64).
+/// A small deterministic generator (`SplitMix64`).
 struct Rng(u64);
 impl Rng {
     fn unit(&mut self) -> f64 {

@@ -26,7 +26,6 @@ use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
     CoherenceWeights, Full, Kernel, Partial, Pbsdf, PlaneWave, RoughConductor, RoughDielectric,
-    Throughput,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;

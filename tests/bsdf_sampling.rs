@@ -198,7 +198,6 @@ fn rough_glass_backward_from_both_sides() {
 /// the draws come from a lobe twice as wide (without it: 43× the mean at 80°, 2 µm).
 #[test]
 fn grazing_backward_specular_weights_stay_bounded() {
-    use gmueller::interaction::Throughput;
     let f = frame();
     let m = RoughDielectric::new(GaussianPsd::isotropic(0.008, 3.0).unwrap(), 1.5).unwrap();
     let b = Bsdf::new(&m, Kernel::<Full, Partial>::default(), f, 0.55).unwrap();

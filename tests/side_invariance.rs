@@ -21,7 +21,7 @@ use gmueller::bsdf::Bsdf;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::{
-    FresnelInterface, Full, Kernel, Partial, RayleighRice, RoughDielectric, Throughput,
+    FresnelInterface, Full, Kernel, Partial, RayleighRice, RoughDielectric,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;

@@ -25,7 +25,7 @@ use std::fmt::Write as _;
 use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, Partial, Pbsdf, SmoothConductor, SmoothDielectric, Throughput,
+    CoherenceWeights, Full, Kernel, Partial, Pbsdf, SmoothConductor, SmoothDielectric,
 };
 use gmueller::stokes::Stokes;
 use gmueller::verify::rng::SplitMix64;
