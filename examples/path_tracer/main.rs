@@ -470,7 +470,12 @@ fn usage() -> ! {
 
 fn main() {
     let mut opts = Options::default();
-    let mut out = PathBuf::from("target/path_tracer");
+    // The workspace's target directory wherever the example is run from (was `./target`).
+    let mut out = option_env!("CARGO_TARGET_DIR").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"),
+        PathBuf::from,
+    );
+    out.push("path_tracer");
     let mut tradeoff = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
