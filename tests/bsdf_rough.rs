@@ -196,8 +196,11 @@ fn first_order_is_bit_identical_to_before() {
 /// of 1 and `SurfaceCoherence::fixed(3.0)` in `feed!`) that change still gave the old value,
 /// and it gave `0x6c03_7f4c_73e2_18e2`. Recomputed again when `fresnel::coefficients` began to
 /// form `q² = (η² − 1) + cos²θ` (exact 0 at η = 1, issue 36): with that one change reverted the
-/// merged tree gave `0x6c03_7f4c_73e2_18e2` (checked).
-const FIRST_ORDER_FINGERPRINT: u64 = 0xa0d1_e19b_c3e7_02c3;
+/// merged tree gave `0x6c03_7f4c_73e2_18e2` (checked), and it gave `0xa0d1_e19b_c3e7_02c3`.
+/// Recomputed once more when the lobe mass `E` took the Gauss–Hermite rule for
+/// `1/24 < t ≤ 1/12` (src/bsdf/horizon.rs): with that rule's range emptied the tree gave
+/// `0xa0d1_e19b_c3e7_02c3` (checked).
+const FIRST_ORDER_FINGERPRINT: u64 = 0x4f0f_b794_5b05_59fb;
 
 type Glass = KirchhoffDielectric<f64, GaussianPsd<f64, 2>>;
 
