@@ -198,8 +198,9 @@ pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh, Rough = FirstOrder> {
 /// value: the one it was prepared with or a copy), kernel, shading frame and wavelength, which
 /// answer with it exactly as the one that prepared it (`tests/bsdf_material.rs`,
 /// `an_incident_serves_every_bsdf_of_the_same_shading_point`). With another frame, wavelength,
-/// kernel or material its numbers are of another shading point: the answers are wrong, and
-/// nothing checks it.
+/// kernel or material its numbers are of another shading point and the answers are wrong:
+/// debug builds assert that the wavenumbers agree (`Kernel::evaluate_mueller_prepared`),
+/// release builds check nothing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Incident<T: Real, Pol, Coh> {
     prepared: PreparedPacket<T, Pol, Coh>,
