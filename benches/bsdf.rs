@@ -8,10 +8,13 @@
 //! - `exit_build+sample+pdf`: `Bsdf::exit_sampler` + `LobeSampler::sample` + `LobeSampler::pdf`
 //!   (forward: what a light tracer pays per bounce before evaluating);
 //! - `incident_build+sample+pdf`: `Bsdf::incident_sampler` + `sample` + `pdf` (backward);
-//! - `pdf`: `LobeSampler::pdf` of a built sampler (what MIS pays per light sample).
+//! - `pdf`: `LobeSampler::pdf` of a built sampler (what MIS pays per light sample);
+//! - `exit_sample+weight`: `Bsdf::sample_exit` (build, draw, weight: a forward bounce);
+//! - `incident_sample+weight`: `Bsdf::sample_incident` (build, draw, weight: a backward
+//!   bounce; the sample carries its pdf for MIS).
 //!
-//! The issue's budget is `build + draw + pdf ≤ 2 × evaluate_prepared` at the same level and
-//! precision. Each group also has one degenerate case (normal incidence).
+//! Issue 37's budget: a backward bounce (`incident_sample+weight`) at most 2 × `eval` at
+//! Full · Partial `f32`, 2.5 × at the intensity levels. Each group also has one degenerate case (normal incidence).
 //!
 //! Run: `cargo bench --bench bsdf -- --warm-up-time 0.5 --measurement-time 1.5`.
 use std::hint::black_box;
@@ -183,6 +186,27 @@ impl<T: Real> LevelVisitor<T, GaussianPsd<T, 2>> for Bench<'_, T> {
                 });
             },
         );
+        g.bench_function(BenchmarkId::new("exit_sample+weight", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                let u = uniforms[i];
+                black_box(b.sample_exit(black_box(&incidents[i]), u[0], [u[1], u[2]]))
+            });
+        });
+        g.bench_function(BenchmarkId::new("incident_sample+weight", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                let u = uniforms[i];
+                black_box(b.sample_incident(
+                    black_box(self.cases[i].exit),
+                    &coherence[i],
+                    u[0],
+                    [u[1], u[2]],
+                ))
+            });
+        });
         g.bench_function(BenchmarkId::new("pdf", &name), |bench| {
             let mut i = 0;
             bench.iter(|| {
