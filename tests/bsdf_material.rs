@@ -132,10 +132,9 @@ where
                 .ok()
                 .map(|m| bits([m.pdf(&source)])),
         );
-        let light = b.surface_packet(Stokes::unpolarized(T::one()).unwrap(), source, &c);
         out.push(
-            light
-                .and_then(|l| b.eval(&b.prepare(&l)?, exit))
+            b.prepare_surface(source, &c)
+                .and_then(|l| b.eval(&l, exit))
                 .ok()
                 .map(value),
         );

@@ -536,8 +536,8 @@ where
         to_source: Vector3<T>,
     ) -> Result<BsdfValue<T, Mueller<T>>, Error> {
         let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
-        let light = b.surface_packet(Stokes::unpolarized(T::one())?, to_source, coherence)?;
-        b.eval(&b.prepare(&light)?, exit).map(to_mueller)
+        b.eval(&b.prepare_surface(to_source, coherence)?, exit)
+            .map(to_mueller)
     }
 
     fn sample_incident(

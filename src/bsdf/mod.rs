@@ -444,7 +444,11 @@ where
         coherence: &SurfaceCoherence<T>,
     ) -> Result<T, Error> {
         let s = unit(*to_source, "direction to the source")?;
-        let k = self.wavenumber(&s)?;
+        Ok(self.width_of(&s, self.wavenumber(&s)?, coherence))
+    }
+
+    /// [`Bsdf::surface_width`] of the unit direction `s` in the medium of wavenumber `k`.
+    fn width_of(&self, s: &Vector3<T>, k: T, coherence: &SurfaceCoherence<T>) -> T {
         let cos = s.dot(&self.surface.k()).abs();
         let partner = self.eta.and_then(|eta| {
             let k_t = if s.dot(&self.surface.k()) > T::zero() {
@@ -456,10 +460,10 @@ where
             let sin2 = (T::one() - cos) * (T::one() + cos) * ratio * ratio;
             (sin2 < T::one()).then(|| ((T::one() - sin2).sqrt(), k_t))
         });
-        Ok(match partner {
+        match partner {
             Some(t) => coherence.combined(&[(cos, k), t]),
             None => coherence.combined(&[(cos, k)]),
-        })
+        }
     }
 
     /// A packet arriving from `to_source` with surface-isotropic coherence `coherence` at the
@@ -513,6 +517,37 @@ where
         }
         let facing = self.surface.facing(&s);
         let prepared = self.kernel.prepare(packet, &facing)?;
+        let from_below = s.dot(&self.surface.k()) < T::zero();
+        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below);
+        Ok(Incident {
+            prepared,
+            to_source: s,
+            facing,
+            from_below,
+            specular_mass,
+        })
+    }
+
+    /// What [`Bsdf::prepare`] gives for the packet [`Bsdf::surface_packet`] builds for
+    /// unpolarized light of unit irradiance arriving from `to_source` with the surface coherence
+    /// `coherence` — the light the backward weights ([`Bsdf::incident_weight`]) and
+    /// [`super::Material::eval_incident`] evaluate — without building the packet: its section
+    /// on the surface is `I/w²` with `w` the [`Bsdf::surface_width`] of `to_source`, its Stokes
+    /// vector `(1, 0, 0, 0)` in the incident s/p frame. The same numbers as the packet's path
+    /// up to rounding (`tests/bsdf_eval.rs`, `prepare_surface_is_the_surface_packet_prepared`).
+    ///
+    /// # Errors
+    /// As [`Bsdf::surface_width`].
+    pub fn prepare_surface(
+        &self,
+        to_source: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<Incident<T, Pol, Coh>, Error> {
+        let s = unit(to_source, "direction to the source")?;
+        let k = self.wavenumber(&s)?;
+        let width = self.width_of(&s, k, coherence);
+        let facing = self.surface.facing(&s);
+        let prepared = self.kernel.prepare_unpolarized_isotropic(k, width.recip());
         let from_below = s.dot(&self.surface.k()) < T::zero();
         let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below);
         Ok(Incident {
@@ -843,8 +878,7 @@ where
             );
             return Ok((Pol::Throughput::<T>::from_mueller(&m), g));
         }
-        let light = self.surface_packet(Stokes::unpolarized(T::one())?, s.direction, coherence)?;
-        let v = self.eval(&self.prepare(&light)?, exit)?;
+        let v = self.eval(&self.prepare_surface(s.direction, coherence)?, exit)?;
         Ok((
             v.response.total().scaled(T::one() / s.pdf).flushed(),
             v.geometry,

@@ -280,6 +280,19 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
         Ok(self.prepare_unchecked(packet, surface, &incident_sp))
     }
 
+    /// [`Kernel::prepare`] for unpolarized light of unit `S0` and wavenumber `k`, whose frame
+    /// is the incident s/p frame and whose coherence section on the surface is `I/w²`
+    /// (`inverse_width` = `1/w`): `PreparedPacket::unpolarized_isotropic`. The caller
+    /// vouches for the direction (the renderer layer's backward weights).
+    #[inline]
+    pub(crate) fn prepare_unpolarized_isotropic<T: Real>(
+        &self,
+        k: T,
+        inverse_width: T,
+    ) -> PreparedPacket<T, Pol, Coh> {
+        PreparedPacket::unpolarized_isotropic(k, inverse_width, Coh::USES_SHAPE)
+    }
+
     /// [`Kernel::prepare`] with the incident s/p frame already built.
     fn prepare_unchecked<T: Real>(
         &self,

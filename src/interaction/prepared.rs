@@ -172,6 +172,48 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
         }
     }
 
+    /// The per-packet work of unpolarized light of unit `S0` and wavenumber `k` whose frame is
+    /// the incident s/p frame and whose coherence section on the surface is isotropic,
+    /// `Ξ = I/w²` (`inverse_width` = `1/w`): what [`Self::new`] computes for the packet
+    /// `SurfaceCoherence::packet` builds (shape `diag(w², w² cos²θ_i)` in that frame, unbounded
+    /// longitudinal coherence), without the packet. Such a packet has one shape, so every
+    /// level's plan is the one-weight plan (the section `Ξ_½` alone, when the coherence model
+    /// uses shapes; no channel logarithms); its rotation `T` to the incident s/p frame is the
+    /// identity and `T S/S0 = (1, 0, 0, 0)`. The section is `None` where `1/w` is not a
+    /// positive finite number, as [`Self::new`] leaves it for a section it cannot represent.
+    #[inline]
+    pub(crate) fn unpolarized_isotropic(k: T, inverse_width: T, uses_shape: bool) -> Self {
+        let section = if uses_shape {
+            Gaussian::from_cholesky(nalgebra::Matrix2::new(
+                inverse_width,
+                T::zero(),
+                T::zero(),
+                inverse_width,
+            ))
+        } else {
+            None
+        };
+        let k_over_2pi = k / T::two_pi();
+        Self {
+            s0: T::one(),
+            ln_s0: T::zero(),
+            inv_lambda_sq: k_over_2pi * k_over_2pi,
+            dark_below: T::lit(ln_smallest_subnormal::<T>()),
+            two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
+            ln_sx: T::zero(),
+            ln_sy: T::zero(),
+            ln_c: T::zero(),
+            phase: (T::zero(), T::zero()),
+            t: Matrix4::identity(),
+            t_stokes: Vector4::new(T::one(), T::zero(), T::zero(), T::zero()),
+            sections: [None, None, section],
+            single_shape: true,
+            k,
+            ln_mu_max: T::zero(),
+            _levels: PhantomData,
+        }
+    }
+
     /// The `Full` level's effective Stokes vector `T v̂` (normalised) and the logarithm of
     /// its scale, from the channel weights `ln K_x`, `ln K_y`, `ln K_½`:
     /// ```text
