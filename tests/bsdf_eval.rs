@@ -1906,8 +1906,9 @@ fn lobe_flags_of_each_material_and_level() {
 /// and the specular masses within `64 ε`. The two paths compute the same function of the
 /// wavenumber and the width from inputs rounded differently (`k` through `2π/λ` and back, the
 /// section through the packet's frame, ŝ normalised in another order: a few ulps), so each
-/// entry must agree within `(8 ε ln MAX + 64 ε + 16 ε (|S_k| + |S_w| + |S_s|)) max|M|
-/// + 16 MIN_POSITIVE`, with `S_k = ∂ ln M₀₀/∂ ln λ`, `S_w = ∂ ln M₀₀/∂ ln w` and `S_s` the
+/// entry must agree within `t max|M| + 16 MIN_POSITIVE`,
+/// `t = 8 ε ln MAX + 64 ε + 16 ε (|S_k| + |S_w| + |S_s|)`,
+/// with `S_k = ∂ ln M₀₀/∂ ln λ`, `S_w = ∂ ln M₀₀/∂ ln w` and `S_s` the
 /// larger `|∂ ln M₀₀/∂ŝ|` along the two tangents, measured here by finite differences (in the
 /// tail of a narrow coherent lobe `M` is `e^{−q}` with `q` in the hundreds and these reach
 /// ~10³–10⁴).
