@@ -199,8 +199,11 @@ fn first_order_is_bit_identical_to_before() {
 /// merged tree gave `0x6c03_7f4c_73e2_18e2` (checked), and it gave `0xa0d1_e19b_c3e7_02c3`.
 /// Recomputed once more when the lobe mass `E` took the Gauss–Hermite rule for
 /// `1/24 < t ≤ 1/12` (src/bsdf/horizon.rs): with that rule's range emptied the tree gave
-/// `0xa0d1_e19b_c3e7_02c3` (checked).
-const FIRST_ORDER_FINGERPRINT: u64 = 0x4f0f_b794_5b05_59fb;
+/// `0xa0d1_e19b_c3e7_02c3` (checked), and it gave `0x4f0f_b794_5b05_59fb`. Recomputed when the
+/// horizon rule's root of a sum of squares (`SurfaceCoherence::combined`) moved from `hypot` to
+/// `f64` squares (issue 37, speed; widths within an ulp): with `hypot` restored the tree gave
+/// `0x4f0f_b794_5b05_59fb` (checked).
+const FIRST_ORDER_FINGERPRINT: u64 = 0x5b84_9c63_c514_385f;
 
 type Glass = KirchhoffDielectric<f64, GaussianPsd<f64, 2>>;
 

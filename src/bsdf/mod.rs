@@ -518,7 +518,7 @@ where
         let facing = self.surface.facing(&s);
         let prepared = self.kernel.prepare(packet, &facing)?;
         let from_below = s.dot(&self.surface.k()) < T::zero();
-        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below);
+        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, [true; 2]);
         Ok(Incident {
             prepared,
             to_source: s,
@@ -543,13 +543,24 @@ where
         to_source: Vector3<T>,
         coherence: &SurfaceCoherence<T>,
     ) -> Result<Incident<T, Pol, Coh>, Error> {
+        self.surface_incident(to_source, coherence, [true; 2])
+    }
+
+    /// [`Bsdf::prepare_surface`] with the specular mass of the sides in `sides` (reflected,
+    /// transmitted) alone; the others' are left at 1 (for a weight that reads one side).
+    fn surface_incident(
+        &self,
+        to_source: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        sides: [bool; 2],
+    ) -> Result<Incident<T, Pol, Coh>, Error> {
         let s = unit(to_source, "direction to the source")?;
         let k = self.wavenumber(&s)?;
         let width = self.width_of(&s, k, coherence);
         let facing = self.surface.facing(&s);
         let prepared = self.kernel.prepare_unpolarized_isotropic(k, width.recip());
         let from_below = s.dot(&self.surface.k()) < T::zero();
-        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below);
+        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, sides);
         Ok(Incident {
             prepared,
             to_source: s,
@@ -560,13 +571,14 @@ where
     }
 
     /// `E` per side for a prepared packet (module docs, "Near the horizon"): `E` of each
-    /// channel's section, averaged with the channels' intensities.
+    /// channel's section, averaged with the channels' intensities; 1 for a side not `wanted`.
     fn specular_mass(
         &self,
         prepared: &PreparedPacket<T, Pol, Coh>,
         s: &Vector3<T>,
         facing: &Frame<T>,
         from_below: bool,
+        wanted: [bool; 2],
     ) -> [T; 2] {
         let mut channels = [(0.0, Matrix2::<f64>::zeros()); 2];
         let count = match (prepared.channel_sections(), prepared.section()) {
@@ -604,11 +616,14 @@ where
                 T::one()
             }
         };
-        let transmitted = self.eta.map_or(T::one(), |eta| {
-            let eta = eta.to_f64();
-            mass(if from_below { k / eta } else { k * eta })
-        });
-        [mass(k), transmitted]
+        let transmitted = match self.eta {
+            Some(eta) if wanted[1] => {
+                let eta = eta.to_f64();
+                mass(if from_below { k / eta } else { k * eta })
+            }
+            _ => T::one(),
+        };
+        [if wanted[0] { mass(k) } else { T::one() }, transmitted]
     }
 
     /// The kernel in BSDF form for the prepared packet leaving along `exit`: `M(ŝ → r̂)` per
@@ -878,7 +893,10 @@ where
             );
             return Ok((Pol::Throughput::<T>::from_mueller(&m), g));
         }
-        let v = self.eval(&self.prepare_surface(s.direction, coherence)?, exit)?;
+        // Only the exit's side of the coherent lobe is evaluated: its mass alone.
+        let reflected = s.direction.dot(&self.surface.k()) * exit.dot(&self.surface.k()) > T::zero();
+        let light = self.surface_incident(s.direction, coherence, [reflected, !reflected])?;
+        let v = self.eval(&light, exit)?;
         Ok((
             v.response.total().scaled(T::one() / s.pdf).flushed(),
             v.geometry,

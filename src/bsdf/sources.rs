@@ -167,12 +167,16 @@ impl<T: Real> SurfaceCoherence<T> {
         if !self.horizon_rule {
             return self.width;
         }
-        let mut w = self.width;
+        // The root of the sum of squares in f64 (`hypot` costs several times more; squares
+        // of f32 values, or of f64 values up to 1e150, cannot overflow there; a larger f64
+        // width gives +∞, and the cap below then keeps the width itself).
+        let mut w2 = self.width.to_f64().powi(2);
         let mut k_max = T::zero();
         for &(cos_theta, k) in sides {
-            w = w.hypot(T::lit(HORIZON_RULE_Q) / (k * cos_theta * cos_theta));
+            w2 += (HORIZON_RULE_Q / (k * cos_theta * cos_theta).to_f64()).powi(2);
             k_max = k_max.max(k);
         }
+        let w = T::lit(w2.sqrt());
         let cap = (T::lit(32.0) * T::EPSILON * k_max)
             .recip()
             .min(T::MAX.sqrt() * T::lit(1e-3));
