@@ -762,7 +762,7 @@ where
         let cos_o = r.dot(&facing.k());
         // The width of light arriving along r̂'s mirror (the same angle, medium and Snell
         // partner as r̂): the reflected specular ŝ, and close to every ŝ the lobes reach.
-        let width = self.surface_width(&r, coherence)?;
+        let width = self.width_of(&r, k, coherence);
         let xi = Matrix2::identity() * (width * width).recip();
         let plane = Coh::LEVEL == CoherenceLevel::PlaneWave;
         // Where the horizon rule sets the width (its term above σ) away from the normal, the

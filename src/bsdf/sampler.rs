@@ -652,8 +652,9 @@ impl<'a, T: Real> LobeSampler<'a, T> {
         let map = &self.sides[side_index];
         // `delta`: the Dirac lobe's weight in the PSD and its share among its part's lobes.
         let share = T::lit(HORIZON_SHARE);
+        let chart = self.chart(side_index);
         let (direction, delta) = if part % 2 == 0 {
-            match (self.specular?, self.chart(side_index)) {
+            match (self.specular?, chart) {
                 (Specular::Delta, _) => (
                     map.direction(&Vector2::zeros())?,
                     Some((T::one(), T::one())),
@@ -693,7 +694,7 @@ impl<'a, T: Real> LobeSampler<'a, T> {
         };
         let (pdf, delta_weight) = match delta {
             Some((weight, share)) => (self.probs[part] * share, weight),
-            None => (self.pdf(&direction), T::zero()),
+            None => (self.density(&direction, Some((side_index, chart))), T::zero()),
         };
         // Every direction returned has a finite, positive density (a draw the density does not
         // see is rejected, as an evanescent one).
@@ -772,6 +773,13 @@ impl<'a, T: Real> LobeSampler<'a, T> {
     /// ```
     #[must_use]
     pub fn pdf(&self, direction: &Vector3<T>) -> T {
+        self.density(direction, None)
+    }
+
+    /// [`LobeSampler::pdf`], with the angle-chart lobe of one side already computed
+    /// (`known`: the side and its [`LobeSampler::chart`], as [`LobeSampler::sample`] has it).
+    #[inline]
+    fn density(&self, direction: &Vector3<T>, known: Option<(usize, Option<GaussLobe<T>>)>) -> T {
         let n = direction.norm();
         if !(n > T::zero() && n.is_finite()) {
             return T::zero();
@@ -783,7 +791,11 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             }
             let map = &self.sides[side];
             if let Some((h, cos)) = map.h_of(&d) {
-                let (h_share, chart) = match self.chart(side) {
+                let chart = match known {
+                    Some((known_side, chart)) if known_side == side => chart,
+                    _ => self.chart(side),
+                };
+                let (h_share, chart) = match chart {
                     Some(chart) => {
                         let (x, jac) = map.angle_of(&d);
                         let share = T::lit(HORIZON_SHARE);
