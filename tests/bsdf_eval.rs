@@ -1913,20 +1913,17 @@ fn lobe_flags_of_each_material_and_level() {
 /// tail of a narrow coherent lobe `M` is `e^{−q}` with `q` in the hundreds and these reach
 /// ~10³–10⁴).
 /// `b_h` is `b` at the wavelength `λ(1 + h)`. Returns whether the response is nonzero.
-fn prepare_surface_pair<T, P, Sp, Sc, Pol, Coh>(
-    b: &Bsdf<'_, T, P, Sp, Sc, Pol, Coh>,
-    b_h: (&Bsdf<'_, T, P, Sp, Sc, Pol, Coh>, f64),
+fn prepare_surface_pair<T, S, K>(
+    b: &Bsdf<'_, T, S, K>,
+    b_h: (&Bsdf<'_, T, S, K>, f64),
     s: Vector3<T>,
     r: Vector3<T>,
     c: &SurfaceCoherence<T>,
 ) -> bool
 where
     T: Real,
-    P: gmueller::bsdf::SamplingPsd<T>,
-    Sp: gmueller::bsdf::Interface<T>,
-    Sc: Pbsdf<T>,
-    Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, P>,
+    S: gmueller::bsdf::BsdfSurface<T>,
+    K: gmueller::bsdf::BsdfKernel<T, S::Psd>,
 {
     use gmueller::interaction::Throughput as _;
     let eps = T::EPSILON.to_f64();
@@ -1957,7 +1954,7 @@ where
     // The condition numbers, at the width the rule gives this direction (held fixed).
     let (bh, h) = b_h;
     let width = b.surface_width(&s, c).unwrap();
-    let m00 = |b: &Bsdf<'_, T, P, Sp, Sc, Pol, Coh>, w: f64, s: Vector3<T>| {
+    let m00 = |b: &Bsdf<'_, T, S, K>, w: f64, s: Vector3<T>| {
         let c = SurfaceCoherence::fixed(T::lit(w)).unwrap();
         let v = b.eval(&b.prepare_surface(s, &c).unwrap(), r).unwrap();
         v.response.total().to_mueller().matrix()[(0, 0)].to_f64()
@@ -1981,7 +1978,7 @@ where
     assert!(
         (ma - mw).amax() <= bound,
         "{}: prepare_surface {ma} vs packet {mw} (s {s:?}, r {r:?}, width {}, S {s_k} {s_w} {s_s})",
-        core::any::type_name::<Pol>(),
+        core::any::type_name::<K>(),
         c.width().to_f64()
     );
     scale > 0.0

@@ -16,6 +16,7 @@
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, DirectionSample, Part, SurfaceCoherence};
 use gmueller::frame::Frame;
+use gmueller::interaction::RoughSurface;
 use gmueller::interaction::{
     Kernel, KirchhoffDielectric, KirchhoffSeries, OneShape, PlaneWave, Side,
 };
@@ -237,7 +238,8 @@ trait Probe<T: Real> {
 /// `M₀₀` and whether the section exists.
 type ProbeAnswer<T> = (gmueller::bsdf::LobeFlags, Vec<(bool, Part)>, T, bool);
 
-impl<T, P, Sp, Sc, Pol, Coh, Rough> Probe<T> for Bsdf<'_, T, P, Sp, Sc, Pol, Coh, Rough>
+impl<T, P, Sp, Sc, Pol, Coh, Rough> Probe<T>
+    for Bsdf<'_, T, RoughSurface<P, Sp, Sc>, Kernel<Pol, Coh, Rough>>
 where
     T: Real,
     P: gmueller::bsdf::SamplingPsd<T>,

@@ -20,6 +20,7 @@ use crate::common;
 use common::rng::SplitMix64;
 use gmueller::bsdf::{Bsdf, Interface, LobeSampler, SamplingPsd, SurfaceCoherence};
 use gmueller::frame::Frame;
+use gmueller::interaction::RoughSurface;
 use gmueller::interaction::{
     CoherenceWeights, Full, Kernel, Partial, Pbsdf, PolarizationModel, RoughConductor,
     RoughDielectric, SmoothDielectric, Throughput,
@@ -60,7 +61,7 @@ fn mean_se(n: usize, seed: u64, x: &mut dyn FnMut(&mut SplitMix64) -> Option<f64
 
 /// The forward albedo of unpolarized light `packet` by `sample_exit` (the `M₀₀` of the weights).
 fn forward_albedo<P, Sp, Sc, Pol, Coh>(
-    b: &Bsdf<'_, f64, P, Sp, Sc, Pol, Coh>,
+    b: &Bsdf<'_, f64, RoughSurface<P, Sp, Sc>, Kernel<Pol, Coh>>,
     packet: &WavePacket<f64>,
     n: usize,
     seed: u64,
@@ -84,7 +85,7 @@ where
 /// The white-furnace radiance leaving along `exit` (unit radiance above, `η²` below) by
 /// `sample_incident`.
 fn backward_furnace<P, Sp, Sc, Pol, Coh>(
-    b: &Bsdf<'_, f64, P, Sp, Sc, Pol, Coh>,
+    b: &Bsdf<'_, f64, RoughSurface<P, Sp, Sc>, Kernel<Pol, Coh>>,
     exit: Vector3<f64>,
     coherence: &SurfaceCoherence<f64>,
     eta: f64,

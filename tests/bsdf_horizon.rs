@@ -25,6 +25,7 @@ use common::rng::SplitMix64;
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, Incident, Interface, SamplingPsd, SurfaceCoherence};
 use gmueller::frame::Frame;
+use gmueller::interaction::RoughSurface;
 use gmueller::interaction::{
     CoherenceWeights, Full, Kernel, Partial, Pbsdf, Side, SmoothConductor, SmoothDielectric,
 };
@@ -63,7 +64,7 @@ fn dir<T: Real>(f: &Frame<T>, deg: f64, phi: f64, side: f64) -> Vector3<T> {
 /// The coherences of the table: `(name, packet)`.
 #[allow(clippy::type_complexity)]
 fn coherences<T: Real, P, Sp, Sc>(
-    b: &Bsdf<'_, T, P, Sp, Sc, Full, Partial>,
+    b: &Bsdf<'_, T, RoughSurface<P, Sp, Sc>, Kernel<Full, Partial>>,
     s: Vector3<T>,
 ) -> Vec<(String, WavePacket<T>)>
 where
@@ -136,7 +137,7 @@ fn centre<T: Real>(f: &Frame<T>, s: &Vector3<T>, ratio: f64) -> Vector2<f64> {
 /// The albedos of the raw kernel lobe and of `Bsdf::eval` on `side` for the packet's Stokes
 /// vector `stokes` (the share of its power).
 fn lobe_albedos<T: Real, P, Sp, Sc>(
-    b: &Bsdf<'_, T, P, Sp, Sc, Full, Partial>,
+    b: &Bsdf<'_, T, RoughSurface<P, Sp, Sc>, Kernel<Full, Partial>>,
     material: &gmueller::interaction::RoughSurface<P, Sp, Sc>,
     inc: &Incident<T, Full, Partial>,
     stokes: &Stokes<T>,
@@ -393,7 +394,7 @@ fn forward_furnace_at_85_degrees_with_20_micrometres() {
 /// The backward white furnace (`sample_incident`, f32, unit radiance above and `η²` below):
 /// `(mean, s.e.)` for light leaving at `deg` under `c`.
 fn backward_f32<P, Sp, Sc>(
-    b: &Bsdf<'_, f32, P, Sp, Sc, Full, Partial>,
+    b: &Bsdf<'_, f32, RoughSurface<P, Sp, Sc>, Kernel<Full, Partial>>,
     deg: f64,
     c: &SurfaceCoherence<f32>,
     eta: f64,

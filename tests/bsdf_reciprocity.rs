@@ -18,6 +18,7 @@
 //!   `Bsdf::sample_exit` weights equals the quadrature of the albedo `∫ M₀₀ cos θ_o/cos θ_i dω_o`.
 
 use crate::common;
+use gmueller::interaction::RoughSurface;
 use gmueller::verify::check::reciprocal;
 
 use common::SplitMix64;
@@ -65,7 +66,7 @@ fn index(f: &Frame<f64>, v: &Vector3<f64>) -> f64 {
 /// The total BSDF `f(ŝ → r̂) = M/cos θ_i` (Mueller, incident s/p frame of ŝ to the exit s/p
 /// frame of r̂) for light from `s` with the surface coherence `c`.
 fn bsdf<P, Sp, Sc, Coh>(
-    b: &Bsdf<'_, f64, P, Sp, Sc, Full, Coh>,
+    b: &Bsdf<'_, f64, RoughSurface<P, Sp, Sc>, Kernel<Full, Coh>>,
     c: &SurfaceCoherence<f64>,
     s: Vector3<f64>,
     r: Vector3<f64>,
@@ -402,7 +403,7 @@ pub(crate) fn tangential(f: &Frame<f64>, d: &Vector3<f64>) -> Vector2<f64> {
 /// Swapped: the reciprocal BSDF times the light's cosine, `f(r̂ → ŝ) (n_r/n_s)² cos θ_s =
 /// M(r̂ → ŝ) (cos θ_s/cos θ_r) (n_r/n_s)²` — equal to `M(ŝ → r̂)` for plane waves.
 fn backward<P, Sp, Sc, Coh>(
-    b: &Bsdf<'_, f64, P, Sp, Sc, Full, Coh>,
+    b: &Bsdf<'_, f64, RoughSurface<P, Sp, Sc>, Kernel<Full, Coh>>,
     r: Vector3<f64>,
     c: &SurfaceCoherence<f64>,
     seed: u64,
@@ -577,7 +578,7 @@ fn forward_monte_carlo_matches_the_albedo() {
     let bm = Bsdf::new(&gold, kernel, f, LAMBDA).unwrap();
     fn albedo<P, Sp, Sc>(
         name: &str,
-        b: &Bsdf<'_, f64, P, Sp, Sc, Full, Partial>,
+        b: &Bsdf<'_, f64, RoughSurface<P, Sp, Sc>, Kernel<Full, Partial>>,
         s: Vector3<f64>,
         c: &SurfaceCoherence<f64>,
         seed: u64,

@@ -20,6 +20,7 @@ use common::rng::SplitMix64;
 use gmueller::bsdf::Bsdf;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
+use gmueller::interaction::RoughSurface;
 use gmueller::interaction::{
     FresnelInterface, Full, Kernel, Partial, RayleighRice, RoughDielectric,
 };
@@ -32,8 +33,12 @@ const LAMBDA: f64 = 0.5;
 const ETA: f64 = 1.5;
 
 type Glass = RoughDielectric<f64, GaussianPsd<f64, 2>>;
-type GlassBsdf<'m> =
-    Bsdf<'m, f64, GaussianPsd<f64, 2>, FresnelInterface<f64>, RayleighRice<f64>, Full, Partial>;
+type GlassBsdf<'m> = Bsdf<
+    'm,
+    f64,
+    RoughSurface<GaussianPsd<f64, 2>, FresnelInterface<f64>, RayleighRice<f64>>,
+    Kernel<Full, Partial>,
+>;
 
 /// σ² = 1e-4 µm², correlation ellipse of axes `ℓ` and `3ℓ` rotated by `angle`.
 fn psd(angle: f64, l: f64) -> GaussianPsd<f64, 2> {
@@ -138,7 +143,7 @@ fn the_samplers_scattered_lobes_follow_the_surface_from_either_side() {
     let [a, b] = bsdfs(&m_up, &m_down);
     let packet = packet(30.0);
     let n = 20_000;
-    let forward = |bs: &Bsdf<'_, f64, _, _, _, Full, Partial>| {
+    let forward = |bs: &Bsdf<'_, f64, RoughSurface<_, _, _>, Kernel<Full, Partial>>| {
         let inc = bs.prepare(&packet).unwrap();
         let sampler = bs
             .exit_sampler(&inc)
@@ -156,7 +161,7 @@ fn the_samplers_scattered_lobes_follow_the_surface_from_either_side() {
     };
     let r = Vector3::new(-0.26, -0.23, -0.93).normalize();
     let c = gmueller::bsdf::SurfaceCoherence::new(30.0).unwrap();
-    let backward = |bs: &Bsdf<'_, f64, _, _, _, Full, Partial>| {
+    let backward = |bs: &Bsdf<'_, f64, RoughSurface<_, _, _>, Kernel<Full, Partial>>| {
         let sampler = bs
             .incident_sampler(r, &c)
             .unwrap()

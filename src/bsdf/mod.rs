@@ -33,9 +33,9 @@
 //! throughput ([`BsdfSample`]).
 //!
 //! # Roughness
-//! The roughness level is `Bsdf`'s last type parameter, the kernel's
-//! (`Kernel<Pol, Coh, Rough>`, default [`FirstOrder`]: first-order results are bit for bit those
-//! of before the parameter existed). Beyond first order ([`crate::interaction::KirchhoffSeries`],
+//! The roughness level is the kernel's third type parameter (`Kernel<Pol, Coh, Rough>`,
+//! default [`crate::interaction::FirstOrder`]: first-order results are bit for bit those of
+//! before the parameter existed). Beyond first order ([`crate::interaction::KirchhoffSeries`],
 //! [`crate::interaction::Geometric`], [`crate::interaction::KirchhoffQuadrature`]) use a material
 //! with the tangent-plane scatterer, [`crate::interaction::KirchhoffDielectric`] or
 //! [`crate::interaction::KirchhoffConductor`]; [`Bsdf::eval`] is then the kernel's
@@ -118,6 +118,7 @@ mod horizon;
 mod interface;
 mod lobes;
 mod material;
+mod model;
 mod orders;
 mod path;
 mod sampler;
@@ -127,6 +128,7 @@ pub use flags::LobeFlags;
 pub use interface::Interface;
 pub use lobes::{PsdLobes, SamplingPsd};
 pub use material::{Material, ShadingPoint};
+pub use model::{BsdfKernel, BsdfSurface};
 pub use path::PathThroughput;
 pub use sampler::{DirectionSample, LobeSampler, Part, SampledLobe};
 pub use sources::{HORIZON_RULE_Q, SurfaceCoherence, area_light, distant_disk};
@@ -135,19 +137,27 @@ use nalgebra::{Matrix2, Vector3};
 
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::interaction::Pbsdf;
 use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, FirstOrder, Geometry, Kernel, KernelOutput, MuellerResponse,
-    Pbsdf, PolarizationModel, PreparedPacket, RoughSurface, RoughnessLevel, RoughnessWeights, Side,
-    Throughput, flush_to_normal, throughput_scaled,
+    CoherenceLevel, CoherenceModel, Geometry, KernelOutput, MuellerResponse, PolarizationModel,
+    PreparedPacket, RoughnessLevel, RoughnessModel, Side, Throughput, flush_to_normal,
+    throughput_scaled,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
+use crate::psd::Psd;
 use crate::real::Real;
 use crate::stokes::Stokes;
 use sampler::Setup;
 
 /// A material at one shading point, for one wavelength, at the kernel's model level: what a
 /// renderer calls (module docs).
+///
+/// `Bsdf<'m, T, S, K>`: the scalar `T`, the surface `S` (a [`crate::interaction::RoughSurface`], borrowed for
+/// `'m`: [`BsdfSurface`] names its PSD and pBSDFs) and the kernel `K` (a [`crate::interaction::Kernel`]:
+/// [`BsdfKernel`] names its levels). Code generic over it needs two bounds,
+/// `S: BsdfSurface<T>, K: BsdfKernel<T, S::Psd>` ([`model`](BsdfSurface) docs); a renderer
+/// that holds materials of several kinds and levels uses the type-erased [`Material`].
 ///
 /// `surface` is the shading frame (t̂₁, t̂₂, n̂) ([`Frame::from_normal`] builds one from a normal);
 /// for a dielectric n̂ points into the medium "above" (out of the glass for glass in air,
@@ -182,9 +192,9 @@ use sampler::Setup;
 /// # Ok::<(), gmueller::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy)]
-pub struct Bsdf<'m, T: Real, P, Sp, Sc, Pol, Coh, Rough = FirstOrder> {
-    material: &'m RoughSurface<P, Sp, Sc>,
-    kernel: Kernel<Pol, Coh, Rough>,
+pub struct Bsdf<'m, T: Real, S, K> {
+    material: &'m S,
+    kernel: K,
     surface: Frame<T>,
     k_above: T,
     eta: Option<T>,
@@ -283,6 +293,11 @@ const WIDE_FACTOR: f64 = 2.0;
 pub type SampleResult<T, Pol> =
     Result<Option<BsdfSample<T, <Pol as PolarizationModel>::Throughput<T>>>, Error>;
 
+/// What [`Bsdf::exit_weight`] and [`Bsdf::incident_weight`] return: the weight (a throughput
+/// of the polarization level) and the geometry of the pair of directions.
+pub type WeightResult<T, Pol> =
+    Result<(<Pol as PolarizationModel>::Throughput<T>, Geometry<T>), Error>;
+
 /// `true` when two wavenumbers agree within 16 ulps.
 fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
     (a - b).abs() <= T::lit(16.0) * T::EPSILON * a.abs().max(b.abs())
@@ -296,15 +311,11 @@ fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error>
     })
 }
 
-impl<'m, T, P, Sp, Sc, Pol, Coh, Rough> Bsdf<'m, T, P, Sp, Sc, Pol, Coh, Rough>
+impl<'m, T, S, K> Bsdf<'m, T, S, K>
 where
     T: Real,
-    P: SamplingPsd<T>,
-    Sp: Interface<T>,
-    Sc: Pbsdf<T>,
-    Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, P>,
-    Rough: RoughnessWeights<T, P, Coh>,
+    S: BsdfSurface<T>,
+    K: BsdfKernel<T, S::Psd>,
 {
     /// The material `material` at the shading frame `surface`, at `wavelength` (in the medium
     /// above; see the type docs), evaluated by `kernel`.
@@ -313,13 +324,13 @@ where
     /// [`Error::OutOfRange`] unless the wavelength is finite and positive with the wavenumbers
     /// of both media normal numbers.
     pub fn new(
-        material: &'m RoughSurface<P, Sp, Sc>,
-        kernel: Kernel<Pol, Coh, Rough>,
+        material: &'m S,
+        kernel: K,
         surface: Frame<T>,
         wavelength: T,
     ) -> Result<Self, Error> {
         let k = T::two_pi() / wavelength;
-        let eta = material.specular.transmission_index();
+        let eta = material.parts().specular.transmission_index();
         let normal = |x: T| x.is_finite() && x >= T::MIN_POSITIVE;
         if !(wavelength > T::zero() && normal(k) && eta.is_none_or(|e| normal(e * k))) {
             return Err(Error::OutOfRange {
@@ -349,7 +360,7 @@ where
     /// with Dirac lobes: [`Bsdf::incident_flags`] gives the flags of a prepared packet.
     #[must_use]
     pub fn flags(&self) -> LobeFlags {
-        self.flags_at(Coh::LEVEL == CoherenceLevel::PlaneWave)
+        self.flags_at(<K::Coh as CoherenceModel>::LEVEL == CoherenceLevel::PlaneWave)
     }
 
     /// The lobes for the prepared packet `incident`, as [`Bsdf::eval`] and
@@ -360,9 +371,9 @@ where
     /// grating's orders) are then [`LobeFlags::DELTA`], left out of `eval` and drawn as deltas
     /// — a renderer that skips multiple importance sampling on deltas must ask here.
     #[must_use]
-    pub fn incident_flags(&self, incident: &Incident<T, Pol, Coh>) -> LobeFlags {
-        let plane = Coh::LEVEL == CoherenceLevel::PlaneWave
-            || (Coh::USES_SHAPE && incident.prepared.section().is_none());
+    pub fn incident_flags(&self, incident: &Incident<T, K::Pol, K::Coh>) -> LobeFlags {
+        let plane = <K::Coh as CoherenceModel>::LEVEL == CoherenceLevel::PlaneWave
+            || (<K::Coh as CoherenceModel>::USES_SHAPE && incident.prepared.section().is_none());
         self.flags_at(plane)
     }
 
@@ -377,8 +388,8 @@ where
         } else {
             LobeFlags::COHERENT_SPECULAR
         };
-        if self.material.psd.variance() > T::zero() {
-            f = f | match (self.material.psd.lobes(), delta) {
+        if self.material.parts().psd.variance() > T::zero() {
+            f = f | match (self.material.parts().psd.lobes(), delta) {
                 (PsdLobes::None, _) => LobeFlags::NONE,
                 (PsdLobes::Orders(_) | PsdLobes::Origin, true) => LobeFlags::DELTA,
                 _ => LobeFlags::SCATTERED,
@@ -504,8 +515,8 @@ where
     /// # Errors
     /// [`Error::OutOfRange`] when the packet's wavelength is not the one of the medium it
     /// arrives from ([`Bsdf::wavelength`] of `−k̂`, within 16 ulps): a packet built for another
-    /// wavelength, or for the vacuum wavelength inside glass; as [`Kernel::prepare`].
-    pub fn prepare(&self, packet: &WavePacket<T>) -> Result<Incident<T, Pol, Coh>, Error> {
+    /// wavelength, or for the vacuum wavelength inside glass; as [`crate::interaction::Kernel::prepare`].
+    pub fn prepare(&self, packet: &WavePacket<T>) -> Result<Incident<T, K::Pol, K::Coh>, Error> {
         let s = -packet.direction();
         let k = self.wavenumber(&s)?;
         if !same_wavenumber(k, packet.wavenumber()) {
@@ -516,7 +527,7 @@ where
             });
         }
         let facing = self.surface.facing(&s);
-        let prepared = self.kernel.prepare(packet, &facing)?;
+        let prepared = self.kernel.kernel().prepare(packet, &facing)?;
         let from_below = s.dot(&self.surface.k()) < T::zero();
         let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, [true; 2]);
         Ok(Incident {
@@ -531,7 +542,7 @@ where
     /// What [`Bsdf::prepare`] gives for the packet [`Bsdf::surface_packet`] builds for
     /// unpolarized light of unit irradiance arriving from `to_source` with the surface coherence
     /// `coherence` — the light the backward weights ([`Bsdf::incident_weight`]) and
-    /// [`super::Material::eval_incident`] evaluate — without building the packet: its section
+    /// [`Material::eval_incident`] evaluate — without building the packet: its section
     /// on the surface is `I/w²` with `w` the [`Bsdf::surface_width`] of `to_source`, its Stokes
     /// vector `(1, 0, 0, 0)` in the incident s/p frame. The same numbers as the packet's path
     /// up to rounding (`tests/bsdf_eval.rs`, `prepare_surface_is_the_surface_packet_prepared`).
@@ -542,7 +553,7 @@ where
         &self,
         to_source: Vector3<T>,
         coherence: &SurfaceCoherence<T>,
-    ) -> Result<Incident<T, Pol, Coh>, Error> {
+    ) -> Result<Incident<T, K::Pol, K::Coh>, Error> {
         self.surface_incident(to_source, coherence, [true; 2])
     }
 
@@ -553,12 +564,15 @@ where
         to_source: Vector3<T>,
         coherence: &SurfaceCoherence<T>,
         sides: [bool; 2],
-    ) -> Result<Incident<T, Pol, Coh>, Error> {
+    ) -> Result<Incident<T, K::Pol, K::Coh>, Error> {
         let s = unit(to_source, "direction to the source")?;
         let k = self.wavenumber(&s)?;
         let width = self.width_of(&s, k, coherence);
         let facing = self.surface.facing(&s);
-        let prepared = self.kernel.prepare_unpolarized_isotropic(k, width.recip());
+        let prepared = self
+            .kernel
+            .kernel()
+            .prepare_unpolarized_isotropic(k, width.recip());
         let from_below = s.dot(&self.surface.k()) < T::zero();
         let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, sides);
         Ok(Incident {
@@ -574,7 +588,7 @@ where
     /// channel's section, averaged with the channels' intensities; 1 for a side not `wanted`.
     fn specular_mass(
         &self,
-        prepared: &PreparedPacket<T, Pol, Coh>,
+        prepared: &PreparedPacket<T, K::Pol, K::Coh>,
         s: &Vector3<T>,
         facing: &Frame<T>,
         from_below: bool,
@@ -582,7 +596,7 @@ where
     ) -> [T; 2] {
         let mut channels = [(0.0, Matrix2::<f64>::zeros()); 2];
         let count = match (prepared.channel_sections(), prepared.section()) {
-            _ if Coh::LEVEL == CoherenceLevel::PlaneWave => 0,
+            _ if <K::Coh as CoherenceModel>::LEVEL == CoherenceLevel::PlaneWave => 0,
             (Some([(x, wx), (y, wy)]), _) => {
                 channels = [
                     (wx.to_f64(), x.covariance().map(T::to_f64)),
@@ -633,13 +647,13 @@ where
     /// As [`Bsdf::geometry`].
     pub fn eval(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &Incident<T, K::Pol, K::Coh>,
         exit: Vector3<T>,
-    ) -> Result<BsdfValue<T, Pol::Throughput<T>>, Error> {
+    ) -> Result<BsdfValue<T, <K::Pol as PolarizationModel>::Throughput<T>>, Error> {
         let g = self.geometry(incident.to_source, exit)?;
         Ok(BsdfValue {
-            response: incident.normalise(self.kernel.evaluate_mueller_prepared(
-                self.material,
+            response: incident.normalise(self.kernel.kernel().evaluate_mueller_prepared(
+                self.material.parts(),
                 &incident.prepared,
                 &g,
             )),
@@ -654,13 +668,14 @@ where
     /// As [`Bsdf::geometry`].
     pub fn eval_stokes(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &Incident<T, K::Pol, K::Coh>,
         exit: Vector3<T>,
-    ) -> Result<Pol::Output<T>, Error> {
+    ) -> Result<<K::Pol as PolarizationModel>::Output<T>, Error> {
         let g = self.geometry(incident.to_source, exit)?;
-        let out = self
-            .kernel
-            .evaluate_prepared(self.material, &incident.prepared, &g);
+        let out =
+            self.kernel
+                .kernel()
+                .evaluate_prepared(self.material.parts(), &incident.prepared, &g);
         let mass = incident.specular_mass(g.side());
         Ok(if mass == T::one() {
             out
@@ -678,7 +693,7 @@ where
     /// float grid of directions there (`f32`: coherence wider than ~10⁵ λ; `f64`: ~10¹⁴ λ).
     pub fn exit_sampler(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &Incident<T, K::Pol, K::Coh>,
     ) -> Result<LobeSampler<'m, T>, Error> {
         let prepared = &incident.prepared;
         let k = prepared.wavenumber();
@@ -688,12 +703,13 @@ where
         let cos_i = incident.to_source.dot(&incident.facing.k());
         let reflectance = self
             .material
+            .parts()
             .specular
             .reflectance(cos_i, incident.from_below);
         let section = prepared.section().map(|g| *g.covariance());
-        let (level, specular) = match (Coh::USES_SHAPE, section) {
+        let (level, specular) = match (<K::Coh as CoherenceModel>::USES_SHAPE, section) {
             (true, None) => (CoherenceLevel::PlaneWave, false),
-            _ => (Coh::LEVEL, true),
+            _ => (<K::Coh as CoherenceModel>::LEVEL, true),
         };
         let (channels, channel_count) = match (prepared.channel_sections(), section) {
             (Some([(x, wx), (y, wy)]), _) => {
@@ -713,8 +729,8 @@ where
             k_across,
             forward: true,
             reflectance,
-            variance: self.material.psd.variance(),
-            lobes: self.material.psd.lobes(),
+            variance: self.material.parts().psd.variance(),
+            lobes: self.material.parts().psd.lobes(),
             level,
             specular,
             channels,
@@ -733,7 +749,7 @@ where
                 })
             },
             mirror: [incident.from_below; 2],
-            rough: Rough::LEVEL != RoughnessLevel::FirstOrder,
+            rough: <K::Rough as RoughnessModel>::LEVEL != RoughnessLevel::FirstOrder,
         })
     }
 
@@ -764,7 +780,7 @@ where
         // partner as r̂): the reflected specular ŝ, and close to every ŝ the lobes reach.
         let width = self.width_of(&r, k, coherence);
         let xi = Matrix2::identity() * (width * width).recip();
-        let plane = Coh::LEVEL == CoherenceLevel::PlaneWave;
+        let plane = <K::Coh as CoherenceModel>::LEVEL == CoherenceLevel::PlaneWave;
         // Where the horizon rule sets the width (its term above σ) away from the normal, the
         // light's width varies across the lobe (narrower toward the horizon, wider toward the
         // normal): a quarter of the specular draws come from a lobe twice as wide, so that the
@@ -790,17 +806,17 @@ where
             k_known: k,
             k_across,
             forward: false,
-            reflectance: self.material.specular.reflectance(cos_o, below),
-            variance: self.material.psd.variance(),
-            lobes: self.material.psd.lobes(),
-            level: Coh::LEVEL,
+            reflectance: self.material.parts().specular.reflectance(cos_o, below),
+            variance: self.material.parts().psd.variance(),
+            lobes: self.material.parts().psd.lobes(),
+            level: <K::Coh as CoherenceModel>::LEVEL,
             specular: true,
             channels,
             channel_count,
             blur: (!plane).then_some(xi),
             // Reflection uses the frame facing r̂ (reversed below), transmission its reverse.
             mirror: [below, !below],
-            rough: Rough::LEVEL != RoughnessLevel::FirstOrder,
+            rough: <K::Rough as RoughnessModel>::LEVEL != RoughnessLevel::FirstOrder,
         })
     }
 
@@ -821,11 +837,11 @@ where
         factor: T,
     ) -> Mueller<T> {
         let m = match lobe.part {
-            Part::Specular => self.material.specular.mueller(g),
-            Part::Scattered => self.material.scatter.mueller(g),
+            Part::Specular => self.material.parts().specular.mueller(g),
+            Part::Scattered => self.material.parts().scatter.mueller(g),
         };
         let v = g.phase_factor();
-        let ln_alpha = -(v * v) * self.material.psd.variance();
+        let ln_alpha = -(v * v) * self.material.parts().psd.variance();
         let mt = (m * *t).0;
         let aw = ln_alpha.exp() * w;
         if aw >= T::MIN_POSITIVE && aw <= T::MAX {
@@ -844,18 +860,18 @@ where
     /// As [`Bsdf::geometry`].
     pub fn exit_weight(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &Incident<T, K::Pol, K::Coh>,
         s: &DirectionSample<T>,
-    ) -> Result<(Pol::Throughput<T>, Geometry<T>), Error> {
+    ) -> WeightResult<T, K::Pol> {
         let g = self.geometry(incident.to_source, s.direction)?;
         let flux = g.cos_o() / g.cos_i();
         let weight = if s.lobe.delta {
             let t = Mueller(incident.prepared.t);
             let m = self.delta_integral(&g, &s.lobe, s.delta_weight, &t, flux / s.pdf);
-            Pol::Throughput::<T>::from_mueller(&m)
+            <K::Pol as PolarizationModel>::Throughput::<T>::from_mueller(&m)
         } else {
-            let v = incident.normalise(self.kernel.evaluate_mueller_prepared(
-                self.material,
+            let v = incident.normalise(self.kernel.kernel().evaluate_mueller_prepared(
+                self.material.parts(),
                 &incident.prepared,
                 &g,
             ));
@@ -878,7 +894,7 @@ where
         exit: Vector3<T>,
         coherence: &SurfaceCoherence<T>,
         s: &DirectionSample<T>,
-    ) -> Result<(Pol::Throughput<T>, Geometry<T>), Error> {
+    ) -> WeightResult<T, K::Pol> {
         if s.lobe.delta {
             let g = self.geometry(s.direction, exit)?;
             // The delta's integral over ŝ: (k_o² cos θ_o)/(k_i² cos θ_i) times its integral over r̂.
@@ -891,10 +907,14 @@ where
                 &Mueller::identity(),
                 jac / s.pdf,
             );
-            return Ok((Pol::Throughput::<T>::from_mueller(&m), g));
+            return Ok((
+                <K::Pol as PolarizationModel>::Throughput::<T>::from_mueller(&m),
+                g,
+            ));
         }
         // Only the exit's side of the coherent lobe is evaluated: its mass alone.
-        let reflected = s.direction.dot(&self.surface.k()) * exit.dot(&self.surface.k()) > T::zero();
+        let reflected =
+            s.direction.dot(&self.surface.k()) * exit.dot(&self.surface.k()) > T::zero();
         let light = self.surface_incident(s.direction, coherence, [reflected, !reflected])?;
         let v = self.eval(&light, exit)?;
         Ok((
@@ -911,10 +931,10 @@ where
     /// As [`Bsdf::exit_sampler`] and [`Bsdf::geometry`].
     pub fn sample_exit(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &Incident<T, K::Pol, K::Coh>,
         u_lobe: T,
         u: [T; 2],
-    ) -> SampleResult<T, Pol> {
+    ) -> SampleResult<T, K::Pol> {
         let Some(s) = self.exit_sampler(incident)?.sample(u_lobe, u) else {
             return Ok(None);
         };
@@ -938,7 +958,7 @@ where
         coherence: &SurfaceCoherence<T>,
         u_lobe: T,
         u: [T; 2],
-    ) -> SampleResult<T, Pol> {
+    ) -> SampleResult<T, K::Pol> {
         let Some(s) = self.incident_sampler(exit, coherence)?.sample(u_lobe, u) else {
             return Ok(None);
         };

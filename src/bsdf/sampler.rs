@@ -694,7 +694,10 @@ impl<'a, T: Real> LobeSampler<'a, T> {
         };
         let (pdf, delta_weight) = match delta {
             Some((weight, share)) => (self.probs[part] * share, weight),
-            None => (self.density(&direction, Some((side_index, chart))), T::zero()),
+            None => (
+                self.density(&direction, Some((side_index, chart))),
+                T::zero(),
+            ),
         };
         // Every direction returned has a finite, positive density (a draw the density does not
         // see is rejected, as an evanescent one).

@@ -25,7 +25,7 @@ use std::fmt::Write as _;
 use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, Partial, Pbsdf, SmoothConductor, SmoothDielectric,
+    CoherenceWeights, Full, Kernel, Partial, Pbsdf, RoughSurface, SmoothConductor, SmoothDielectric,
 };
 use gmueller::stokes::Stokes;
 use gmueller::verify::rng::SplitMix64;
@@ -89,7 +89,7 @@ fn cell(n: usize, seed: u64, draw: &mut dyn FnMut(&mut SplitMix64) -> f64) -> (f
 
 /// One row: the forward albedo or the backward furnace at every angle.
 fn row<P, Sp, Sc>(
-    b: &Bsdf<'_, f32, P, Sp, Sc, Full, Partial>,
+    b: &Bsdf<'_, f32, RoughSurface<P, Sp, Sc>, Kernel<Full, Partial>>,
     light: Light,
     forward: bool,
     eta: f64,
