@@ -23,7 +23,8 @@
 //! one uniform (pbrt-v4's `SampleVisibleWavelengths`, hero at index 0), or a fixed set of
 //! bins with the hero chosen by [`Bundle::choose_hero`] from a fresh uniform. With a hero
 //! that is always the same wavelength the weights are biased wherever the `p_j` differ. With
-//! `N = 1` every weight is that of the single-wavelength call.
+//! `N = 1` the weight is that of the single-wavelength call (backward bit for bit, forward to
+//! rounding).
 //!
 //! # Delta lobes
 //! A Dirac lobe (the plane-wave level's specular lobe; a grating's orders) is drawn with a
@@ -75,7 +76,12 @@
 //! and weighs once; each other live wavelength builds its own sampler (its `p_j`, or its `P_j`
 //! at a shared delta) and weighs the direction once; a dispersive delta skips the
 //! secondaries. The loop over the wavelengths is scalar: the per-wavelength cost is about that
-//! of a single-wavelength call (`benches/bundle.rs`).
+//! of a single-wavelength call. Measured (`benches/bundle.rs`, medians of three runs on a
+//! loaded two-core machine, ±10 %): a backward draw of 8 wavelengths took 0.92–0.96× the
+//! time of 8 single-wavelength `Material::sample_incident` calls (rough glass and gold,
+//! Full·Partial and Intensity·Partial, f32 and f64; 7.2–11.5 µs per bundle), 4 wavelengths
+//! 0.88–0.99×: the secondaries' `pdf` costs a little less than a draw. SIMD across the
+//! wavelengths (issue 37 asks for ≤ 0.35× per wavelength at 8) is not attempted here.
 //!
 //! # Examples
 //! ```
@@ -141,7 +147,7 @@ use crate::real::Real;
 ///
 /// # Examples
 /// ```
-/// use gmueller::bsdf::{Bundle, Material, ShadingPoint, SurfaceCoherence};
+/// use gmueller::bsdf::{Bundle, Material, SurfaceCoherence};
 /// use gmueller::frame::Frame;
 /// use gmueller::interaction::{Level, RoughConductor};
 /// use gmueller::psd::GaussianPsd;
