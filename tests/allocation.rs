@@ -77,7 +77,7 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 /// Allocations made by `f` on the calling thread.
-fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
+pub(crate) fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
     let before = THREAD_ALLOCATIONS.with(Cell::get);
     let r = f();
     let after = THREAD_ALLOCATIONS.with(Cell::get);

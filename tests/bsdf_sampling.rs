@@ -40,7 +40,7 @@ fn disk(f: &Frame<f64>) -> Disk {
 
 /// Quantile edges of a pilot draw (seed distinct from the test's) merged with a coarse grid,
 /// per hemisphere that the pilot reaches.
-fn grids(disk: &Disk, draw: &mut dyn FnMut(usize) -> Option<Vector3<f64>>) -> Vec<Grid> {
+pub(crate) fn grids(disk: &Disk, draw: &mut dyn FnMut(usize) -> Option<Vector3<f64>>) -> Vec<Grid> {
     let mut per_side: [(Vec<f64>, Vec<f64>); 2] = Default::default();
     for i in 0..4000 {
         if let Some(d) = draw(i) {

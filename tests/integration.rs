@@ -13,6 +13,7 @@ mod common;
 mod allocation;
 mod architecture;
 mod bad_input;
+mod bsdf_bundle;
 mod bsdf_eval;
 mod bsdf_extremes;
 mod bsdf_f32;

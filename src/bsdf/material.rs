@@ -62,13 +62,16 @@ use core::fmt::Debug;
 
 use nalgebra::Vector3;
 
-use super::{Bsdf, BsdfSample, BsdfValue, Interface, LobeFlags, SamplingPsd, SurfaceCoherence};
+use super::{
+    Bsdf, BsdfSample, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler, SamplingPsd,
+    SurfaceCoherence,
+};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, FirstOrder, Full, Geometric, Incoherent, Intensity, Kernel,
-    Level, OneShape, Partial, Pbsdf, PlaneWave, PolarizationLevel, PolarizationModel, RoughSurface,
-    Roughness, RoughnessWeights, Throughput,
+    CoherenceLevel, CoherenceWeights, FirstOrder, Full, Geometric, Geometry, Incoherent, Intensity,
+    Kernel, Level, OneShape, Partial, Pbsdf, PlaneWave, PolarizationLevel, PolarizationModel,
+    RoughSurface, Roughness, RoughnessWeights, Throughput,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -384,7 +387,43 @@ impl<T: Real> Material<T> {
         let from = -light.frame().k();
         self.model.pdf_exit(&self.side(at, &from), light, exit)
     }
+
+    /// Runs `visit` with the backward sampler of this shading point and the weight of a
+    /// direction it draws ([`super::Bsdf::incident_sampler`], [`super::Bsdf::incident_weight`]
+    /// of one `Bsdf`): what a wavelength bundle ([`super::Bundle`]) needs of each wavelength.
+    pub(crate) fn with_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        visit: &mut Visit<'_, T>,
+    ) -> Result<(), Error> {
+        self.model
+            .with_incident(&self.side(at, &exit), exit, coherence, visit)
+    }
+
+    /// Runs `visit` with the forward sampler of `light` and the weight of a direction it draws
+    /// ([`super::Bsdf::exit_sampler`], [`super::Bsdf::exit_weight`] of one prepared packet).
+    pub(crate) fn with_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        visit: &mut Visit<'_, T>,
+    ) -> Result<(), Error> {
+        let from = -light.frame().k();
+        self.model.with_exit(&self.side(at, &from), light, visit)
+    }
 }
+
+/// The weight of a drawn direction at one shading point, as a Mueller matrix, with its
+/// geometry ([`Material::with_incident`], [`Material::with_exit`]).
+pub(crate) type WeightFn<'w, T> =
+    dyn Fn(&DirectionSample<T>) -> Result<(Mueller<T>, Geometry<T>), Error> + 'w;
+
+/// What [`Material::with_incident`] and [`Material::with_exit`] run with the sampler and the
+/// weight function.
+pub(crate) type Visit<'v, T> =
+    dyn FnMut(&LobeSampler<'_, T>, &WeightFn<'_, T>) -> Result<(), Error> + 'v;
 
 /// The object-safe face of one monomorphised [`Model`].
 trait Shade<T: Real>: Send + Sync + Debug {
@@ -444,6 +483,19 @@ trait Shade<T: Real>: Send + Sync + Debug {
         light: &WavePacket<T>,
         exit: Vector3<T>,
     ) -> Result<T, Error>;
+    fn with_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        visit: &mut Visit<'_, T>,
+    ) -> Result<(), Error>;
+    fn with_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        visit: &mut Visit<'_, T>,
+    ) -> Result<(), Error>;
 }
 
 /// A surface with its kernel.
@@ -584,6 +636,36 @@ where
     ) -> Result<T, Error> {
         let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
         Ok(b.exit_sampler(&b.prepare(light)?)?.pdf(&exit))
+    }
+
+    fn with_incident(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        visit: &mut Visit<'_, T>,
+    ) -> Result<(), Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        let sampler = b.incident_sampler(exit, coherence)?;
+        visit(&sampler, &|s| {
+            let (w, g) = b.incident_weight(exit, coherence, s)?;
+            Ok((w.to_mueller(), g))
+        })
+    }
+
+    fn with_exit(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        visit: &mut Visit<'_, T>,
+    ) -> Result<(), Error> {
+        let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
+        let incident = b.prepare(light)?;
+        let sampler = b.exit_sampler(&incident)?;
+        visit(&sampler, &|s| {
+            let (w, g) = b.exit_weight(&incident, s)?;
+            Ok((w.to_mueller(), g))
+        })
     }
 }
 

@@ -113,6 +113,7 @@
 //! per exit direction; a sampler is built per shading point (a 2×2 Cholesky factor per lobe,
 //! one Fresnel evaluation) and draws in closed form. Measured in `benches/bsdf.rs`.
 
+mod bundle;
 mod flags;
 mod horizon;
 mod interface;
@@ -124,6 +125,7 @@ mod path;
 mod sampler;
 pub mod sources;
 
+pub use bundle::{Bundle, BundlePdf, BundleSample, BundleValues};
 pub use flags::LobeFlags;
 pub use interface::Interface;
 pub use lobes::{PsdLobes, SamplingPsd};
