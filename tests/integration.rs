@@ -20,6 +20,7 @@ mod bsdf_f32;
 mod bsdf_furnace;
 mod bsdf_horizon;
 mod bsdf_material;
+mod bsdf_path;
 mod bsdf_reciprocity;
 mod bsdf_rough;
 mod bsdf_sampling;
