@@ -9,6 +9,8 @@
 //!   (forward: what a light tracer pays per bounce before evaluating);
 //! - `incident_build+sample+pdf`: `Bsdf::incident_sampler` + `sample` + `pdf` (backward);
 //! - `pdf`: `LobeSampler::pdf` of a built sampler (what MIS pays per light sample);
+//! - `prepare_surface`: `Bsdf::prepare_surface` (the light of a direction, as the backward
+//!   weight prepares it);
 //! - `exit_sample+weight`: `Bsdf::sample_exit` (build, draw, weight: a forward bounce);
 //! - `incident_sample+weight`: `Bsdf::sample_incident` (build, draw, weight: a backward
 //!   bounce; the sample carries its pdf for MIS).
@@ -205,6 +207,13 @@ impl<T: Real> LevelVisitor<T, GaussianPsd<T, 2>> for Bench<'_, T> {
                     u[0],
                     [u[1], u[2]],
                 ))
+            });
+        });
+        g.bench_function(BenchmarkId::new("prepare_surface", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                black_box(b.prepare_surface(black_box(self.cases[i].to_source), &coherence[i]))
             });
         });
         g.bench_function(BenchmarkId::new("pdf", &name), |bench| {
