@@ -125,7 +125,7 @@ mod path;
 mod sampler;
 pub mod sources;
 
-pub use bundle::{Bundle, BundlePdf, BundleSample, BundleValues};
+pub use bundle::{Bundle, BundleCoherence, BundlePdf, BundleSample, BundleValues};
 pub use flags::LobeFlags;
 pub use interface::Interface;
 pub use lobes::{PsdLobes, SamplingPsd};
