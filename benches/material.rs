@@ -28,11 +28,17 @@ use num_complex::Complex;
 
 const N: usize = 64;
 
-/// Exit directions, directions to the source and uniforms.
-fn cases<T: Real>(f: &Frame<T>) -> Vec<(Vector3<T>, Vector3<T>, [T; 3])> {
+/// Per call, as a renderer makes them: a shading point of its own (a tilted frame, a
+/// wavelength in 0.4–0.7 µm), an exit direction, a direction to the source and uniforms.
+/// (With one shading point for all calls the compiler could hoist the static form's per-point
+/// work out of the loop, which a renderer never sees.)
+fn cases<T: Real>() -> Vec<(ShadingPoint<T>, Vector3<T>, Vector3<T>, [T; 3])> {
     let mut rng = SplitMix64(0x3a7e);
     (0..N)
         .map(|_| {
+            let n = Vector3::new(rng.unit() - 0.5, rng.unit() - 0.5, 2.0).map(T::lit);
+            let f = Frame::from_normal(n).unwrap();
+            let at = ShadingPoint::new(f, T::lit(0.4 + 0.3 * rng.unit())).unwrap();
             let mut d = |side: f64| {
                 let t = rng.unit() * 70f64.to_radians();
                 let p = rng.unit() * std::f64::consts::TAU;
@@ -43,7 +49,7 @@ fn cases<T: Real>(f: &Frame<T>) -> Vec<(Vector3<T>, Vector3<T>, [T; 3])> {
             };
             let (exit, source) = (d(1.0), d(1.0));
             let u = [rng.unit(), rng.unit(), rng.unit()].map(T::lit);
-            (exit, source, u)
+            (at, exit, source, u)
         })
         .collect()
 }
@@ -58,20 +64,17 @@ fn run<T: Real, Sp, Pol>(
     Pol: PolarizationModel,
     gmueller::psd::ClosedForm: gmueller::psd::BlurMethod<T, 2, GaussianPsd<T, 2>>,
 {
-    let f = Frame::from_normal(Vector3::new(0.2, -0.1, 1.0).map(T::lit)).unwrap();
-    let lambda = T::lit(0.55);
     let sky = SurfaceCoherence::new(T::lit(20.0)).unwrap();
-    let cases = cases(&f);
+    let cases = cases::<T>();
     let kernel = Kernel::<Pol, Partial>::default();
     let material = Material::new(surface.clone(), level);
-    let at = ShadingPoint::new(f, lambda).unwrap();
     let precision = core::any::type_name::<T>();
     let mut g = c.benchmark_group(format!("material/{name}/{}/{precision}", level.name()));
     g.bench_function(BenchmarkId::new("sample_incident", "static"), |b| {
         b.iter(|| {
             let mut acc = T::zero();
-            for (exit, _, u) in &cases {
-                let bsdf = Bsdf::new(surface, kernel, f, lambda).unwrap();
+            for (at, exit, _, u) in &cases {
+                let bsdf = Bsdf::new(surface, kernel, *at.frame(), at.wavelength()).unwrap();
                 if let Ok(Some(s)) = bsdf.sample_incident(*exit, &sky, u[0], [u[1], u[2]]) {
                     // The whole sample is used (a pdf alone would let the compiler drop the
                     // inlined weight of the static form).
@@ -84,9 +87,8 @@ fn run<T: Real, Sp, Pol>(
     g.bench_function(BenchmarkId::new("sample_incident", "erased"), |b| {
         b.iter(|| {
             let mut acc = T::zero();
-            for (exit, _, u) in &cases {
-                if let Ok(Some(s)) = material.sample_incident(&at, *exit, &sky, u[0], [u[1], u[2]])
-                {
+            for (at, exit, _, u) in &cases {
+                if let Ok(Some(s)) = material.sample_incident(at, *exit, &sky, u[0], [u[1], u[2]]) {
                     acc += s.sample.pdf + black_box(&s).weight.m00();
                 }
             }
@@ -96,8 +98,8 @@ fn run<T: Real, Sp, Pol>(
     g.bench_function(BenchmarkId::new("eval_incident", "static"), |b| {
         b.iter(|| {
             let mut acc = T::zero();
-            for (exit, source, _) in &cases {
-                let bsdf = Bsdf::new(surface, kernel, f, lambda).unwrap();
+            for (at, exit, source, _) in &cases {
+                let bsdf = Bsdf::new(surface, kernel, *at.frame(), at.wavelength()).unwrap();
                 let v = bsdf
                     .eval(&bsdf.prepare_surface(*source, &sky).unwrap(), *exit)
                     .unwrap();
@@ -109,8 +111,8 @@ fn run<T: Real, Sp, Pol>(
     g.bench_function(BenchmarkId::new("eval_incident", "erased"), |b| {
         b.iter(|| {
             let mut acc = T::zero();
-            for (exit, source, _) in &cases {
-                let v = material.eval_incident(&at, *exit, &sky, *source).unwrap();
+            for (at, exit, source, _) in &cases {
+                let v = material.eval_incident(at, *exit, &sky, *source).unwrap();
                 acc += v.response.total().m00();
             }
             black_box(acc)
