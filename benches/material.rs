@@ -28,11 +28,14 @@ use num_complex::Complex;
 
 const N: usize = 64;
 
+/// One call's inputs: shading point, exit, direction to the source, uniforms.
+type Call<T> = (ShadingPoint<T>, Vector3<T>, Vector3<T>, [T; 3]);
+
 /// Per call, as a renderer makes them: a shading point of its own (a tilted frame, a
 /// wavelength in 0.4–0.7 µm), an exit direction, a direction to the source and uniforms.
 /// (With one shading point for all calls the compiler could hoist the static form's per-point
 /// work out of the loop, which a renderer never sees.)
-fn cases<T: Real>() -> Vec<(ShadingPoint<T>, Vector3<T>, Vector3<T>, [T; 3])> {
+fn cases<T: Real>() -> Vec<Call<T>> {
     let mut rng = SplitMix64(0x3a7e);
     (0..N)
         .map(|_| {
