@@ -7,7 +7,10 @@
 //! Gaussian-mixture and grating PSDs, the smooth limit, the plane-wave level's Dirac lobes
 //! (drawn with their probability) and the two-shape Full level. The same test rejects a
 //! density with the `cos θ` Jacobian applied twice. Also: `sample.pdf == pdf(sample.direction)`
-//! bit for bit, and the fraction of delta draws against the part probabilities.
+//! bit for bit, and the fraction of delta draws against the part probabilities — including a
+//! Dirac order of the scattered part beyond first order, where the projected disk takes a
+//! share of that part's draws (a downstream PSD with an origin order and an autocorrelation:
+//! the reported probability was the part's whole, 0.0288 against 0.0211 drawn).
 
 use crate::common;
 
@@ -571,5 +574,87 @@ fn f32_sampler_draws_from_its_pdf() {
         if let Some(s) = sampler.sample(u, [u, u]) {
             assert!(s.pdf.is_finite() && s.pdf > 0.0 && s.direction.iter().all(|x| x.is_finite()));
         }
+    }
+}
+
+/// A downstream PSD (a Gaussian) whose sampler lobe is the origin order (`PsdLobes::Origin`,
+/// as `Smooth` names it) and which has an autocorrelation, so the roughness levels beyond
+/// first order accept it — the one way to reach a Dirac order in the scattered part together
+/// with the projected-disk share of those levels.
+#[derive(Debug, Clone, Copy)]
+struct OriginPsd(GaussianPsd<f64, 2>);
+
+impl gmueller::psd::Psd<f64, 2> for OriginPsd {
+    fn value(&self, zeta: &Vector2<f64>) -> f64 {
+        self.0.value(zeta)
+    }
+    fn variance(&self) -> f64 {
+        gmueller::psd::Psd::<f64, 2>::variance(&self.0)
+    }
+}
+
+impl gmueller::psd::Autocorrelation<f64> for OriginPsd {
+    fn normalized_autocorrelation(&self, xi: &Vector2<f64>) -> f64 {
+        self.0.normalized_autocorrelation(xi)
+    }
+    fn decay_radius(&self, level: f64) -> f64 {
+        self.0.decay_radius(level)
+    }
+}
+
+impl gmueller::bsdf::SamplingPsd<f64> for OriginPsd {
+    fn lobes(&self) -> gmueller::bsdf::PsdLobes<'_, f64> {
+        gmueller::bsdf::PsdLobes::Origin
+    }
+}
+
+/// Beyond first order the scattered part gives a share of its draws to the projected disk: a
+/// Dirac order drawn from that part (here the origin order of a plane wave) is reached with
+/// its probability times the rest, and its reported probability must say so (it said the
+/// part's whole probability: weights 25 % low). The frequency of those draws against the
+/// probability each reports.
+#[test]
+fn a_scattered_delta_beyond_first_order_reports_its_probability() {
+    use gmueller::bsdf::Part;
+    use gmueller::interaction::KirchhoffQuadrature;
+    let f = frame();
+    let psd = OriginPsd(GaussianPsd::isotropic(0.05, 2.0).unwrap());
+    let m = RoughDielectric::new(psd, 1.5).unwrap();
+    let kernel = Kernel::<Full, PlaneWave>::default()
+        .with_roughness(KirchhoffQuadrature::new(1e-3).unwrap());
+    let b = Bsdf::new(&m, kernel, f, LAMBDA).unwrap();
+    let c = SurfaceCoherence::new(3.0).unwrap();
+    for (name, sampler) in [
+        (
+            "forward",
+            b.exit_sampler(
+                &b.prepare(
+                    &b.surface_packet(unpolarized(), dir(&f, 30.0, 0.0, 1.0), &c)
+                        .unwrap(),
+                )
+                .unwrap(),
+            )
+            .unwrap(),
+        ),
+        (
+            "backward",
+            b.incident_sampler(dir(&f, 40.0, 0.0, 1.0), &c).unwrap(),
+        ),
+    ] {
+        let mut rng = SplitMix64(0x0d1);
+        let (mut count, mut reported) = (0usize, None);
+        for _ in 0..N {
+            if let Some(s) = sampler.sample(rng.unit(), [rng.unit(), rng.unit()])
+                && s.lobe.delta
+                && s.lobe.part == Part::Scattered
+                && s.lobe.side == gmueller::interaction::Side::Reflection
+            {
+                count += 1;
+                reported = Some(s.pdf);
+            }
+        }
+        let p = reported.expect("scattered delta draws");
+        println!("{name}: scattered delta drawn {count} of {N}, reported probability {p}");
+        check_delta_fraction(name, count as f64 / N as f64, p);
     }
 }

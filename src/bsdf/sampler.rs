@@ -693,6 +693,10 @@ impl<'a, T: Real> LobeSampler<'a, T> {
             delta: delta.is_some(),
         };
         let (pdf, delta_weight) = match delta {
+            // A scattered-part delta is reached past the projected disk's share.
+            Some((weight, share)) if part % 2 == 1 => {
+                (self.probs[part] * (T::one() - self.disk) * share, weight)
+            }
             Some((weight, share)) => (self.probs[part] * share, weight),
             None => (
                 self.density(&direction, Some((side_index, chart))),
