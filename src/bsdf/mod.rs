@@ -530,15 +530,27 @@ where
         }
         let facing = self.surface.facing(&s);
         let prepared = self.kernel.kernel().prepare(packet, &facing)?;
+        Ok(self.incident(prepared, s, facing, [true; 2]))
+    }
+
+    /// The [`Incident`] of `prepared` arriving from the unit direction `s` (`facing`: the
+    /// shading frame facing it), with the specular mass of the sides in `sides`.
+    fn incident(
+        &self,
+        prepared: PreparedPacket<T, K::Pol, K::Coh>,
+        s: Vector3<T>,
+        facing: Frame<T>,
+        sides: [bool; 2],
+    ) -> Incident<T, K::Pol, K::Coh> {
         let from_below = s.dot(&self.surface.k()) < T::zero();
-        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, [true; 2]);
-        Ok(Incident {
+        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, sides);
+        Incident {
             prepared,
             to_source: s,
             facing,
             from_below,
             specular_mass,
-        })
+        }
     }
 
     /// What [`Bsdf::prepare`] gives for the packet [`Bsdf::surface_packet`] builds for
@@ -575,15 +587,7 @@ where
             .kernel
             .kernel()
             .prepare_unpolarized_isotropic(k, width.recip());
-        let from_below = s.dot(&self.surface.k()) < T::zero();
-        let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, sides);
-        Ok(Incident {
-            prepared,
-            to_source: s,
-            facing,
-            from_below,
-            specular_mass,
-        })
+        Ok(self.incident(prepared, s, facing, sides))
     }
 
     /// `E` per side for a prepared packet (module docs, "Near the horizon"): `E` of each
