@@ -151,13 +151,13 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
         };
         let k = packet.wavenumber();
         let ln_s0 = s0.ln();
-        let k_over_2pi = k / T::two_pi();
+        let (inv_lambda_sq, two_ln_k_over_2pi) = wavenumber_terms(k);
         Self {
             s0,
             ln_s0,
-            inv_lambda_sq: k_over_2pi * k_over_2pi,
+            inv_lambda_sq,
             dark_below: T::lit(ln_smallest_subnormal::<T>()) - ln_s0,
-            two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
+            two_ln_k_over_2pi,
             ln_sx,
             ln_sy,
             ln_c,
@@ -193,13 +193,13 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
         } else {
             None
         };
-        let k_over_2pi = k / T::two_pi();
+        let (inv_lambda_sq, two_ln_k_over_2pi) = wavenumber_terms(k);
         Self {
             s0: T::one(),
             ln_s0: T::zero(),
-            inv_lambda_sq: k_over_2pi * k_over_2pi,
+            inv_lambda_sq,
             dark_below: T::lit(ln_smallest_subnormal::<T>()),
-            two_ln_k_over_2pi: T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
+            two_ln_k_over_2pi,
             ln_sx: T::zero(),
             ln_sy: T::zero(),
             ln_c: T::zero(),
@@ -350,6 +350,16 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
             }
         })
     }
+}
+
+/// `1/λ² = (k/2π)²` and `2 ln(k/2π)` of the wavenumber `k`.
+#[inline]
+fn wavenumber_terms<T: Real>(k: T) -> (T, T) {
+    let k_over_2pi = k / T::two_pi();
+    (
+        k_over_2pi * k_over_2pi,
+        T::lit(2.0) * (k.ln() - ln_two_pi::<T>()),
+    )
 }
 
 /// `ln |μ|_max`, the logarithm of the largest degree of correlation the packet's shapes admit:
