@@ -1,40 +1,9 @@
-//! Spectral to sRGB, and the three images: S0 in sRGB, degree of polarization (grey), angle of
+//! The three images: S0 in sRGB, degree of polarization (grey), angle of
 //! polarization (hue = angle, brightness = degree).
 
 use std::path::Path;
 
-use gmueller::spectral;
-
-/// `(x̄, ȳ, z̄)` at `lambda` (µm): the CIE 1931 2° table (`gmueller::spectral`).
-pub(crate) fn cmf(lambda: f32) -> [f32; 3] {
-    spectral::cie1931(lambda)
-}
-
-/// `∫ (x̄, ȳ, z̄) dλ` over `[lo, hi]` (µm), by the midpoint rule: the white of an equal-energy
-/// spectrum, for white balance.
-pub(crate) fn cmf_integral(lo: f32, hi: f32) -> [f32; 3] {
-    let n = 3000;
-    let h = (hi - lo) / n as f32;
-    let mut s = [0.0; 3];
-    for i in 0..n {
-        let c = cmf(lo + (i as f32 + 0.5) * h);
-        for j in 0..3 {
-            s[j] += c[j] * h;
-        }
-    }
-    s
-}
-
-/// Linear sRGB (D65) from XYZ already balanced so that the equal-energy white is `(1, 1, 1)`:
-/// the white is mapped to D65's first.
-pub(crate) fn xyz_to_linear_srgb(xyz: [f32; 3]) -> [f32; 3] {
-    let w = spectral::D65_WHITE_XYZ;
-    spectral::xyz_to_linear_srgb([xyz[0] * w[0] as f32, xyz[1], xyz[2] * w[2] as f32])
-}
-
-fn gamma(c: f32) -> u8 {
-    (spectral::srgb_encode(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8
-}
+use crate::adapter::srgb8;
 
 /// Per pixel: balanced XYZ, and the ȳ-weighted Stokes vector in the camera frame.
 #[derive(Clone, Copy, Default)]
@@ -60,9 +29,7 @@ pub(crate) fn write_images(
     let mut dop = Vec::with_capacity(pixels.len() * 3);
     let mut aop = Vec::with_capacity(pixels.len() * 3);
     for p in pixels {
-        for c in xyz_to_linear_srgb(p.xyz) {
-            s0.push(gamma(c * exposure));
-        }
+        s0.extend(srgb8(p.xyz.map(|c| c * exposure)));
         let [i, q, u, v] = p.stokes;
         let d = if i > 0.0 {
             ((q * q + u * u + v * v).sqrt() / i).min(1.0)

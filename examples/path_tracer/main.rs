@@ -10,50 +10,54 @@
 //!
 //! **Integrator.** Backward (camera) paths, one wavelength each. Each pixel traces `spp`
 //! camera samples of `wavelengths/spp` wavelengths each, stratified over 32 bins of
-//! 0.40–0.70 µm (every pixel sees every bin, jittered inside it). At each vertex:
-//! 1. `Bsdf::new(&material, Kernel::<Full, Partial>, frame, λ)`;
-//! 2. next-event estimation of the sun: `bsdf.distant_packet` (one packet along the disk's
-//!    centre with the whole disk's coherence: the coherent specular lobe is the sun's blurred
-//!    mirror image), `prepare`, `eval` toward the previous vertex, and a shadow ray;
-//! 3. the direction the light comes from: `bsdf.incident_sampler(r̂, &sky_coherence)`,
-//!    `sample`, `bsdf.incident_weight` (`M/p`, evaluated in the physical direction). A ray that
-//!    leaves the scene picks up the sky. The sun is reached only by step 2 (it is not in the
-//!    sky's radiance), so no MIS is needed.
+//! 0.36–0.83 µm, the CIE 1931 table's range (every pixel sees every bin, jittered inside it;
+//! the materials are built once per bin, at its centre). At each vertex (`adapter.rs`):
+//! 1. the hit's `ShadingPoint` and its `Material` (one type for every surface);
+//! 2. next-event estimation of the sun: `Material::distant_packet` (one packet along the
+//!    disk's centre with the whole disk's coherence: the coherent specular lobe is the sun's
+//!    blurred mirror image), `eval` toward the previous vertex, `PathThroughput::gather_light`,
+//!    and a shadow ray;
+//! 3. the direction the light comes from: `Material::sample_incident(r̂, &sky_coherence, …)`,
+//!    whose weight `M/p` `PathThroughput::advance` chains. A ray that leaves the scene picks
+//!    up the sky. The sun is reached only by step 2 (it is not in the sky's radiance), so no
+//!    MIS is needed.
 //!
-//! The path's throughput is a Mueller matrix `t` from the frame the light arrives in at the
-//! last vertex to the camera frame (`x̂` = the image's right, `k̂` toward the camera), chained
-//! with `frame_change_mueller(exit_sp, previous incident_sp)` — the same ray in two frames.
-//! Pixels hold S0 as CIE XYZ (Wyman–Sloan–Shirley fit) and the ȳ-weighted Stokes vector.
+//! `adapter.rs` is all the code between the scene and image code and the crate (frames,
+//! material dispatch, the vertex, the path state, spectral and colour conversions);
+//! `materials.rs` declares the materials. Pixels hold S0 as CIE XYZ
+//! (`spectral::cie1931_normalized`) and the ȳ-weighted Stokes vector in the camera frame
+//! (`x̂` = the image's right, `k̂` toward the camera).
 //!
 //! `--sun-solid-angle 0.1` replaces the sun by an equally bright disk of low coherence (its
 //! lobes widen, the grating's rainbow washes out); `--sky-coherence`, `--sun-split` change
 //! the coherence one sample carries (`--tradeoff` measures both). The black-glass ground draws
-//! reflection only (`with_part_probabilities`): what it transmits is absorbed. Russian
-//! roulette on the throughput's `M₀₀` ends paths; contributions below 1e-30 are dropped.
+//! reflection only (an opaque interface of real index): what it transmits is absorbed.
+//! Russian roulette on the throughput's `M₀₀` (`PathThroughput::roulette`) ends paths.
 //!
 //! `--rough-gold σ` renders the gold sphere with rms height `σ` (µm) beyond first order: the
 //! tangent-plane scatterer (`KirchhoffConductor`) and `Kernel::with_roughness(KirchhoffSeries)`,
 //! whose samplers propose the series' orders.
 //!
-//! `--uniform` replaces step 3 by uniform sampling of the sphere (dielectrics) or hemisphere
-//! (metals) with the same coherence: the brute-force reference of the example's test.
+//! `--uniform` replaces step 3 by `Material::sample_incident_uniform` (the sphere for
+//! dielectrics, the hemisphere for metals, the same coherence): the brute-force reference of
+//! the example's test.
 
+mod adapter;
 mod color;
+mod materials;
 mod scene;
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use gmueller::prelude::*;
-use gmueller::verify::rng::SplitMix64;
-use nalgebra::Vector4;
-
+use adapter::{Materials, Path};
 use color::Pixel;
-use scene::{Materials, SUN_SOLID_ANGLE, Scene, V3};
+use scene::{SUN_SOLID_ANGLE, Scene};
 
-const LAMBDA_MIN: f32 = 0.40;
-const LAMBDA_MAX: f32 = 0.70;
+/// The wavelengths traced (µm): the CIE 1931 table's range.
+const LAMBDA_MIN: f32 = 0.36;
+const LAMBDA_MAX: f32 = 0.83;
 
 /// How step 3 draws the direction the light comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -158,137 +162,33 @@ pub(crate) struct Render {
     pub(crate) seconds: f64,
 }
 
-/// A small seeded generator for reproducible pixels: the verification kit's `SplitMix64`, one
-/// stream per pixel (a renderer brings its own; the example borrows the kit's to stay short).
-struct Rng(SplitMix64);
+/// A small seeded generator for reproducible pixels: `SplitMix64` (Steele, Lea & Flood 2014),
+/// one stream per pixel.
+pub(crate) struct Rng(u64);
 
 impl Rng {
     fn new(seed: u64, a: u64, b: u64) -> Self {
-        let mut r = Rng(SplitMix64(
-            seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
-        ));
-        r.0.next_u64();
+        let mut r = Rng(seed
+            ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ b.wrapping_mul(0xC2B2_AE3D_27D4_EB4F));
+        r.next_u64();
         r
     }
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
     /// Uniform in [0, 1).
-    fn f(&mut self) -> f32 {
-        (self.0.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    pub(crate) fn f(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 }
 
-/// The per-path state: radiance so far (camera frame) and the path's throughput and frame.
-struct Path {
-    radiance: Vector4<f32>,
-    t: PathThroughput<f32>,
-    invalid: usize,
-}
-
-impl Path {
-    /// Adds light `s` through the vertex throughput `m` of geometry `g`; contributions below
-    /// 1e-30 (30 orders under the image) are dropped, non-finite ones counted.
-    fn add(&mut self, m: &Mueller<f32>, g: &Geometry<f32>, s: &Stokes<f32>) {
-        let c = self.t.contribution(m, g, s).vector();
-        if c[0].abs() < 1e-30 {
-        } else if c.iter().all(|x| x.is_finite()) {
-            self.radiance += c;
-        } else {
-            self.invalid += 1;
-        }
-    }
-}
-
-/// What one vertex needs besides its material: the hit, the wavelength, the exit direction r̂
-/// (toward the previous vertex) and the render's settings.
-struct At<'a> {
-    scene: &'a Scene,
-    hit: &'a scene::Hit,
-    lambda: f32,
-    r: V3,
-    opts: &'a Options,
-    coherence: &'a SurfaceCoherence<f32>,
-}
-
-/// One vertex on `material`: sun NEE into `path`, then the next direction (or `None`).
-fn vertex(
-    material: &Material<f32>,
-    at: &At<'_>,
-    path: &mut Path,
-    rng: &mut Rng,
-) -> Result<Option<V3>, Error> {
-    let At {
-        scene,
-        hit,
-        lambda,
-        r,
-        opts,
-        coherence,
-    } = *at;
-    let sp = ShadingPoint::new(scene.shading_frame(hit), lambda)?;
-    let n = hit.normal;
-
-    // 2. The sun.
-    let lit = !(material.is_opaque() && scene.sun.dot(&n) * r.dot(&n) <= 0.0)
-        && scene.sees_sun(&hit.point, &n);
-    if lit {
-        let k = opts.sun_split.max(1);
-        let irradiance = Stokes::unpolarized(1.0 / k as f32)?;
-        for _ in 0..k {
-            let (dir, omega) = if k == 1 {
-                (scene.sun, opts.sun_solid_angle)
-            } else {
-                (
-                    sun_point(scene.sun, opts.sun_solid_angle, rng),
-                    opts.sun_solid_angle / k as f32,
-                )
-            };
-            let packet = material.distant_packet(&sp, irradiance, omega, dir)?;
-            let v = material.eval(&sp, &packet, r)?;
-            path.add(&v.response.total(), &v.geometry, &packet.stokes());
-        }
-    }
-
-    // 3. The direction the light comes from.
-    let (weight, g, s) = match opts.sampling {
-        Sampling::Lobes => {
-            let u = [rng.f(), rng.f(), rng.f()];
-            let Some(s) = material.sample_incident(&sp, r, coherence, u[0], [u[1], u[2]])? else {
-                return Ok(None);
-            };
-            (s.weight, s.geometry, s.sample.direction)
-        }
-        Sampling::Uniform => {
-            let (u1, u2) = (rng.f(), rng.f());
-            let (z, pdf) = if material.is_opaque() {
-                (u1 * r.dot(&n).signum(), 1.0 / std::f32::consts::TAU)
-            } else {
-                (1.0 - 2.0 * u1, 0.25 / std::f32::consts::PI)
-            };
-            let rho = (1.0 - z * z).max(0.0).sqrt();
-            let phi = std::f32::consts::TAU * u2;
-            let f = sp.frame();
-            let s = f.x() * (rho * phi.cos()) + f.y() * (rho * phi.sin()) + n * z;
-            if z.abs() < 1e-6 {
-                return Ok(None);
-            }
-            let v = material.eval_incident(&sp, r, coherence, s)?;
-            (v.response.total().scaled(1.0 / pdf), v.geometry, s)
-        }
-    };
-    path.t.advance(&weight.scaled(opts.weight_scale), &g);
-    Ok(Some(s))
-}
-
-/// A direction uniformly inside the sun's disk (a cone of solid angle Ω about `sun`).
-fn sun_point(sun: V3, solid_angle: f32, rng: &mut Rng) -> V3 {
-    let cos_max = 1.0 - solid_angle / std::f32::consts::TAU;
-    let z = 1.0 - rng.f() * (1.0 - cos_max);
-    let rho = (1.0 - z * z).max(0.0).sqrt();
-    let phi = std::f32::consts::TAU * rng.f();
-    let f = Frame::from_normal(sun).expect("sun frame");
-    f.x() * (rho * phi.cos()) + f.y() * (rho * phi.sin()) + sun * z
-}
-
-/// The Stokes radiance (camera frame) of one path at `lambda` through image point `(x, y)`.
+/// One path at `lambda` through image point `(x, y)`: `(X, Y, Z, ȳS0, ȳS1, ȳS2, ȳS3)`,
+/// invalid contributions and errors.
 fn trace(
     scene: &Scene,
     mats: &Materials,
@@ -296,39 +196,18 @@ fn trace(
     (x, y): (f32, f32),
     opts: &Options,
     rng: &mut Rng,
-) -> (Vector4<f32>, usize, usize) {
+) -> ([f32; 7], usize, usize) {
     let cam = &scene.camera;
     let mut d = cam.direction(x, y, opts.width as f32 / opts.height as f32);
     let mut o = cam.origin;
-    let coherence = if opts.horizon_rule {
-        SurfaceCoherence::new(opts.sky_coherence)
-    } else {
-        SurfaceCoherence::fixed(opts.sky_coherence)
-    }
-    .expect("coherence width");
-    let mut path = Path {
-        radiance: Vector4::zeros(),
-        t: PathThroughput::new(cam.frame(&d)),
-        invalid: 0,
-    };
+    let mut path = Path::new(scene, &d, lambda, opts);
     let mut errors = 0;
     for _ in 0..opts.max_depth {
         let Some(hit) = scene.intersect(&o, &d) else {
-            let (s, f) = scene.sky(&d, lambda);
-            path.radiance += path.t.arriving(&f, &s).vector();
+            path.sky(scene, &d);
             break;
         };
-        let r = -d;
-        let at = At {
-            scene,
-            hit: &hit,
-            lambda,
-            r,
-            opts,
-            coherence: &coherence,
-        };
-        let step = vertex(mats.of(hit.material), &at, &mut path, rng);
-        match step {
+        match path.vertex(scene, mats, &hit, -d, rng) {
             Ok(Some(s)) => {
                 d = s;
                 o = hit.point + hit.normal * (1e-4 * s.dot(&hit.normal).signum());
@@ -339,15 +218,9 @@ fn trace(
                 break;
             }
         }
-        // Russian roulette on the throughput's M00 (unbiased; it also keeps f32 throughputs
-        // out of the subnormal range).
-        let survive = (path.t.matrix().m00() / 0.05).min(1.0);
-        if survive.is_nan() || survive <= 0.0 || rng.f() >= survive {
-            break;
-        }
-        path.t.scale(1.0 / survive);
     }
-    (path.radiance, path.invalid, errors)
+    let (v, invalid) = path.xyz_stokes(LAMBDA_MAX - LAMBDA_MIN);
+    (v, invalid, errors)
 }
 
 /// Renders the scene.
@@ -362,10 +235,9 @@ pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
     let mats: Vec<Materials> = (0..bins)
         .map(|b| {
             let centre = LAMBDA_MIN + (b as f32 + 0.5) * width_bin;
-            Materials::at(opts.lambda.unwrap_or(centre), opts.rough_gold)
+            materials::at(opts.lambda.unwrap_or(centre), opts.rough_gold)
         })
         .collect();
-    let white = color::cmf_integral(LAMBDA_MIN, LAMBDA_MAX);
     let per_sample = (bins / opts.spp.max(1)).max(1);
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new(opts.height as u64);
@@ -405,21 +277,10 @@ pub(crate) fn render(scene: &Scene, opts: &Options) -> Render {
                                         let jitter =
                                             LAMBDA_MIN + (bin as f32 + rng.f()) * width_bin;
                                         let lambda = opts.lambda.unwrap_or(jitter);
-                                        let (l, bad, err) =
+                                        let (v, bad, err) =
                                             trace(scene, &mats[bin], lambda, xy, opts, &mut rng);
                                         invalid += bad;
                                         errors += err;
-                                        let c = color::cmf(lambda);
-                                        let span = LAMBDA_MAX - LAMBDA_MIN;
-                                        let v = [
-                                            l[0] * c[0] * span / white[0],
-                                            l[0] * c[1] * span / white[1],
-                                            l[0] * c[2] * span / white[2],
-                                            l[0] * c[1] * span / white[1],
-                                            l[1] * c[1] * span / white[1],
-                                            l[2] * c[1] * span / white[1],
-                                            l[3] * c[1] * span / white[1],
-                                        ];
                                         px.n += 1;
                                         for (k, x) in v.iter().enumerate() {
                                             let x = f64::from(*x);

@@ -16,13 +16,9 @@
 //!   the scattering plane with degree 0.75 sin²γ/(1 + cos²γ), γ the angle to the sun): both
 //!   illustrative, not measured.
 
-use gmueller::bsdf as gm;
-use gmueller::prelude::{
-    Frame, GaussianPsd, Glass, Grating, KirchhoffConductor, KirchhoffSeries, Level, Metal,
-    RoughConductor, RoughDielectric, Roughness, Stokes,
-};
-use nalgebra::{Vector2, Vector3};
-use num_complex::Complex;
+use nalgebra::Vector3;
+
+use crate::Rng;
 
 pub(crate) type V3 = Vector3<f32>;
 
@@ -62,48 +58,6 @@ struct Plate {
     half: [f32; 2],
 }
 
-/// The materials at one wavelength, indexed by [`Material`].
-pub(crate) struct Materials([gm::Material<f32>; 4]);
-
-impl Materials {
-    /// The materials at `lambda`; `rough_gold` the rms height (µm) of a gold sphere rendered
-    /// beyond first order, or `None` for the first-order one.
-    pub(crate) fn at(lambda: f32, rough_gold: Option<f32>) -> Self {
-        let psd = |s: f32, l: f32| GaussianPsd::isotropic(s, l).expect("valid PSD");
-        let grating = Grating::sinusoidal_height(0.025, 2.0, &Vector2::x()).expect("grating");
-        let level = Level::ALL[7]; // Full · Partial
-        let (au, al) = (Metal::Au.index(lambda), Metal::Al.index(lambda));
-        let gold = match rough_gold {
-            Some(sigma) => gm::Material::with_roughness(
-                KirchhoffConductor::new(psd(sigma, 1.5), au).expect("rough gold"),
-                level,
-                Roughness::Series(KirchhoffSeries::new(1e-3).expect("tolerance")),
-            ),
-            None => gm::Material::new(
-                RoughConductor::new(psd(0.012, 1.5), au).expect("gold"),
-                level,
-            ),
-        };
-        // Black glass: an interface of index 1.5 whose transmitted light is absorbed, i.e. a
-        // "conductor" of real index (Fresnel and Rayleigh–Rice reflection of the dielectric).
-        let black = RoughConductor::new(psd(0.008, 3.0), Complex::new(1.5, 0.0)).expect("ground");
-        let glass =
-            RoughDielectric::new(psd(0.010, 2.0), Glass::NBk7.index(lambda)).expect("glass");
-        let plate = RoughConductor::new(grating, al).expect("aluminium");
-        Self([
-            gm::Material::new(black, level),
-            gm::Material::new(glass, level),
-            gold,
-            gm::Material::new(plate, level).two_sided(true),
-        ])
-    }
-
-    /// The material of a hit.
-    pub(crate) fn of(&self, m: Material) -> &gm::Material<f32> {
-        &self.0[m as usize]
-    }
-}
-
 pub(crate) struct Scene {
     spheres: [Sphere; 2],
     plate: Plate,
@@ -126,12 +80,6 @@ impl Camera {
         let sx = (2.0 * x - 1.0) * self.tan_half_fov * aspect;
         let sy = (1.0 - 2.0 * y) * self.tan_half_fov;
         (self.forward + self.right * sx + self.up * sy).normalize()
-    }
-
-    /// The frame the images' Stokes vectors are in for a ray seen along `view`:
-    /// `x̂` = the image's right, `k̂ = −view` (the light travels toward the camera).
-    pub(crate) fn frame(&self, view: &V3) -> Frame<f32> {
-        Frame::from_direction_and_x(-view, self.right).expect("camera frame")
     }
 }
 
@@ -248,22 +196,33 @@ impl Scene {
         self.intersect(&o, &self.sun).is_none()
     }
 
-    /// The shading frame of a hit: the outward normal, and for the grating plate its grating
-    /// direction as `t̂₁` (the PSD's x axis).
-    pub(crate) fn shading_frame(&self, hit: &Hit) -> Frame<f32> {
-        if hit.material == Material::Grating {
-            let n = hit.normal;
-            let u = self.plate.u;
-            Frame::new(u, n.cross(&u), n).expect("plate frame")
-        } else {
-            Frame::from_normal(hit.normal).expect("normal frame")
-        }
+    /// The grating direction of the plate (the shading frame's `t̂₁`, the PSD's x axis);
+    /// `None` for the isotropic materials.
+    pub(crate) fn grating_axis(&self, hit: &Hit) -> Option<V3> {
+        (hit.material == Material::Grating).then_some(self.plate.u)
     }
 
-    /// The sky's Stokes radiance arriving from direction `d` (toward the sky) at wavelength
-    /// `lambda` (µm), in the frame it returns (`k̂ = −d`, `x̂` perpendicular to the plane of
-    /// `d` and the sun).
-    pub(crate) fn sky(&self, d: &V3, lambda: f32) -> (Stokes<f32>, Frame<f32>) {
+    /// The `k`-th part of the sun for a vertex that splits it into `k` packets: the disk's
+    /// centre and whole solid angle `Ω` for `k = 1`, else a direction uniform in the disk and
+    /// `Ω/k`.
+    pub(crate) fn sun_sample(&self, k: usize, solid_angle: f32, rng: &mut Rng) -> (V3, f32) {
+        if k == 1 {
+            return (self.sun, solid_angle);
+        }
+        let cos_max = 1.0 - solid_angle / std::f32::consts::TAU;
+        let z = 1.0 - rng.f() * (1.0 - cos_max);
+        let rho = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * rng.f();
+        let x = self.sun.cross(&V3::x()).normalize();
+        let y = self.sun.cross(&x);
+        let dir = x * (rho * phi.cos()) + y * (rho * phi.sin()) + self.sun * z;
+        (dir, solid_angle / k as f32)
+    }
+
+    /// The sky's radiance arriving from direction `d` (toward the sky) at wavelength `lambda`
+    /// (µm) and its degree of linear polarization, along the axis it returns (`x̂`,
+    /// perpendicular to the plane of `d` and the sun; the light travels along `−d`).
+    pub(crate) fn sky(&self, d: &V3, lambda: f32) -> ([f32; 2], V3) {
         let cos_g = d.dot(&self.sun).clamp(-1.0, 1.0);
         let sin2 = 1.0 - cos_g * cos_g;
         let elevation = d.y.max(0.0);
@@ -279,9 +238,7 @@ impl Scene {
         } else {
             d.cross(&V3::x())
         };
-        let frame = Frame::from_direction_and_x(-d, x).expect("sky frame");
-        let s = Stokes::new(l, l * dop, 0.0, 0.0).expect("valid sky Stokes");
-        (s, frame)
+        ([l, dop], x)
     }
 }
 

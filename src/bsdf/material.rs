@@ -63,15 +63,15 @@ use core::fmt::Debug;
 use nalgebra::Vector3;
 
 use super::{
-    Bsdf, BsdfSample, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler, SamplingPsd,
-    SurfaceCoherence,
+    Bsdf, BsdfSample, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler, Part,
+    SampledLobe, SamplingPsd, SurfaceCoherence,
 };
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::{
     CoherenceLevel, CoherenceWeights, FirstOrder, Full, Geometric, Geometry, Incoherent, Intensity,
     Kernel, Level, OneShape, Partial, Pbsdf, PlaneWave, PolarizationLevel, PolarizationModel,
-    RoughSurface, Roughness, RoughnessWeights, Throughput,
+    RoughSurface, Roughness, RoughnessWeights, Side, Throughput,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -356,6 +356,62 @@ impl<T: Real> Material<T> {
     ) -> Result<T, Error> {
         self.model
             .pdf_incident(&self.side(at, &exit), exit, coherence, to_source)
+    }
+
+    /// The brute-force twin of [`Material::sample_incident`]: the direction the light comes
+    /// from drawn uniformly over the exit's hemisphere (opaque materials, density `1/2π`) or
+    /// the sphere (interfaces, `1/4π`), weighted by [`Material::eval_incident`]`/p`.
+    ///
+    /// Its mean weight estimates the same integral as `sample_incident`'s, without importance
+    /// sampling (a reference for a renderer's or a sampler's tests; it never draws a Dirac
+    /// lobe, so it sees only what the BSDF has in `eval`). `u` is uniform in `[0, 1)²`; `None`
+    /// for a draw within `√ε` of the surface's plane (its density is kept, so the estimator
+    /// stays unbiased up to that band).
+    ///
+    /// # Errors
+    /// As [`Material::eval_incident`].
+    pub fn sample_incident_uniform(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        u: [T; 2],
+    ) -> Result<Option<BsdfSample<T, Mueller<T>>>, Error> {
+        let (one, two) = (T::one(), T::lit(2.0));
+        let n = at.frame.k();
+        let (z, pdf) = if self.opaque {
+            let up = if exit.dot(&n) < T::zero() { -one } else { one };
+            (u[0] * up, one / T::two_pi())
+        } else {
+            (one - two * u[0], one / (two * T::two_pi()))
+        };
+        if z.abs() <= T::EPSILON.sqrt() {
+            return Ok(None);
+        }
+        let rho = (one - z * z).max(T::zero()).sqrt();
+        let (sin, cos) = (T::two_pi() * u[1]).sin_cos();
+        let f = &at.frame;
+        let direction = f.x() * (rho * cos) + f.y() * (rho * sin) + n * z;
+        let v = self.eval_incident(at, exit, coherence, direction)?;
+        let side = if z * exit.dot(&n) > T::zero() {
+            Side::Reflection
+        } else {
+            Side::Transmission
+        };
+        Ok(Some(BsdfSample {
+            sample: DirectionSample {
+                direction,
+                pdf,
+                lobe: SampledLobe {
+                    side,
+                    part: Part::Scattered,
+                    delta: false,
+                },
+                delta_weight: T::zero(),
+            },
+            weight: v.response.total().scaled(T::one() / pdf),
+            geometry: v.geometry,
+        }))
     }
 
     /// Draws an exit direction for `light` with its weight ([`super::Bsdf::sample_exit`]).

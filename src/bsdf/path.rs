@@ -1,5 +1,5 @@
-//! The state of a backward path: the product of the vertex throughputs and the frame its
-//! input side is expressed in (`docs/renderer.md` §3).
+//! The state of a backward path: the product of the vertex throughputs, the frame its input
+//! side is expressed in (`docs/renderer.md` §3), and the light gathered so far.
 //!
 //! # Formula
 //! A camera path `x₀ (camera) ← x₁ ← x₂ …` carries `Tₙ`, the Mueller matrix from the light
@@ -14,10 +14,17 @@
 //! `C(a → b)` is [`frame_change_mueller`], `Wₙ` the vertex's sample weight and `M` an `eval`
 //! (light sampling). The contribution is projected onto the Stokes cone (`|S_pol| ≤ S0`),
 //! whose rounding a chain of products in `f32` may leave by a few ε.
+//!
+//! The `gather_*` methods add contributions to the path's radiance (a sum of vectors in the
+//! cone stays in it) and count, instead of adding, any that is not finite: a renderer's pixel
+//! is never poisoned by one bad sample, and [`PathThroughput::rejected`] tells how many there
+//! were (0 is the crate's promise for finite input; the tests hold it).
 
+use super::BsdfValue;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::interaction::{Geometry, onto_cone};
 use crate::mueller::Mueller;
+use crate::packet::WavePacket;
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -47,6 +54,8 @@ use crate::stokes::Stokes;
 /// let v = gold.eval(&at, &light, to_camera)?;
 /// let seen = path.contribution(&v.response.total(), &v.geometry, &light.stokes());
 /// assert!(seen.s0() >= 0.0);
+/// path.gather_light(&v, &light); // the same, added to the path's radiance
+/// assert_eq!(path.radiance(), seen);
 /// // BSDF sampling: continue the path.
 /// let sky = SurfaceCoherence::new(20.0)?;
 /// if let Some(s) = gold.sample_incident(&at, to_camera, &sky, 0.5, [0.3, 0.8])? {
@@ -59,6 +68,8 @@ use crate::stokes::Stokes;
 pub struct PathThroughput<T: Real> {
     t: Mueller<T>,
     frame: Frame<T>,
+    radiance: Stokes<T>,
+    rejected: usize,
 }
 
 impl<T: Real> PathThroughput<T> {
@@ -68,6 +79,8 @@ impl<T: Real> PathThroughput<T> {
         Self {
             t: Mueller::identity(),
             frame: camera,
+            radiance: Stokes::from_vector_unchecked(nalgebra::Vector4::zeros()),
+            rejected: 0,
         }
     }
 
@@ -109,9 +122,64 @@ impl<T: Real> PathThroughput<T> {
         self.frame = *g.incident_sp();
     }
 
+    /// Adds to the path's radiance what the camera reads of a light sample `light` through the
+    /// vertex evaluation `v` ([`super::Material::eval`] of that packet):
+    /// [`PathThroughput::contribution`] of `v`'s total with the packet's Stokes vector.
+    pub fn gather_light(&mut self, v: &BsdfValue<T, Mueller<T>>, light: &WavePacket<T>) {
+        self.gather(self.contribution(&v.response.total(), &v.geometry, &light.stokes()));
+    }
+
+    /// Adds [`PathThroughput::arriving`] of `light` (Stokes, in frame `from`) to the path's
+    /// radiance: an emitter or the sky hit by the path's last ray.
+    pub fn gather_arriving(&mut self, from: &Frame<T>, light: &Stokes<T>) {
+        self.gather(self.arriving(from, light));
+    }
+
+    /// Adds `c` (camera frame) to the radiance if it is finite, else counts it as rejected.
+    pub fn gather(&mut self, c: Stokes<T>) {
+        if c.vector().iter().all(|x| x.is_finite()) {
+            self.radiance = Stokes::from_vector_unchecked(self.radiance.vector() + c.vector());
+        } else {
+            self.rejected += 1;
+        }
+    }
+
+    /// The radiance gathered so far, in the camera's frame.
+    #[must_use]
+    pub fn radiance(&self) -> Stokes<T> {
+        self.radiance
+    }
+
+    /// How many contributions [`PathThroughput::gather`] refused as not finite.
+    #[must_use]
+    pub fn rejected(&self) -> usize {
+        self.rejected
+    }
+
     /// Scales the throughput by `factor` (Russian roulette's `1/p_survive`).
     pub fn scale(&mut self, factor: T) {
         self.t = Mueller(self.t.0 * factor);
+    }
+
+    /// Russian roulette on `M₀₀` (what the path passes of unpolarized light): a path with
+    /// `M₀₀ ≥ threshold` survives; below, it survives with probability `M₀₀/threshold` and is
+    /// rescaled by its inverse, so the estimate stays unbiased. `u` is uniform in `[0, 1)`.
+    /// Returns `false` when the path ends (also for `M₀₀ ≤ 0` or not finite: see
+    /// [`PathThroughput::is_alive`]).
+    ///
+    /// Rescaling also keeps `f32` throughputs out of the subnormal range.
+    pub fn roulette(&mut self, u: T, threshold: T) -> bool {
+        if !self.is_alive() {
+            return false;
+        }
+        let survive = (self.t.0[(0, 0)] / threshold).min(T::one());
+        if u >= survive {
+            return false;
+        }
+        if survive < T::one() {
+            self.scale(T::one() / survive);
+        }
+        true
     }
 
     /// `true` while some light can still pass (`M₀₀ > 0`, finite): a renderer may stop the
