@@ -30,6 +30,7 @@ const LAYERS: &[&str] = &[
     "medium",
     "verify",
     "prelude",
+    "guide",
 ];
 
 /// The submodules of `interaction`, bottom first.

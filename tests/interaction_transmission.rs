@@ -746,7 +746,7 @@ fn the_four_lobes_are_reported_by_side() {
 /// lobes' fractions as σ grows from 0 past the edge of the first-order range (the largest phase,
 /// the reflected `v σ = 2 k_i σ cos θ_i`, at most 0.3; rows beyond it are marked). Within the
 /// range, power moves monotonically from the coherent lobes to the scattered ones, and the sum
-/// stays within the energy bound of `energy_of_reflection_plus_transmission`. The README's table
+/// stays within the energy bound of `energy_of_reflection_plus_transmission`. The kernel guide's table (`docs/kernel.md`)
 /// is this test's output (`cargo test --release --test integration -- --nocapture
 /// smooth_to_rough`).
 #[test]

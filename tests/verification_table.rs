@@ -1,4 +1,5 @@
-//! The README's table "Every numbered result, its test and its oracle" against the tests: every
+//! The table "Every numbered result, its test and its oracle" (`docs/results.md`, the guide
+//! `gmueller::guide::results`) against the tests: every
 //! `file::function` it names is a function of `tests/<file>.rs`, and every numbered result of
 //! the supplemental — S1.1–S1.7, S2.1–S2.20, Lemma S2.1, Corollary S2.2 — has a row.
 
@@ -8,10 +9,10 @@ use std::path::Path;
 /// The table's rows (lines starting with `|` after the section heading).
 fn rows() -> Vec<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let readme = fs::read_to_string(root.join("README.md")).expect("README.md");
+    let readme = fs::read_to_string(root.join("docs/results.md")).expect("docs/results.md");
     let start = readme
-        .find("## Every numbered result, its test and its oracle")
-        .expect("the README has the table's section");
+        .find("# Every numbered result, its test and its oracle")
+        .expect("docs/results.md has the table's section");
     readme[start..]
         .lines()
         .skip(1)
@@ -60,7 +61,7 @@ fn every_test_in_the_table_exists() {
     assert!(count > 50, "only {count} tests named");
     assert!(
         missing.is_empty(),
-        "named in the README's table but not found: {missing:?}"
+        "named in docs/results.md's table but not found: {missing:?}"
     );
 }
 

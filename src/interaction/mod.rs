@@ -102,7 +102,7 @@
 //! [`Kernel::evaluate`] does both; for one packet and many exit directions (a lobe, a grid, a
 //! light sample and a BSDF sample) [`Kernel::prepare`] the packet once and call
 //! [`Kernel::evaluate_prepared`] per direction: the results are bit for bit the same. Measured
-//! costs per level are in the README ("Accuracy and speed") and `benches/kernel.rs`.
+//! costs per level are in the repository's `VALIDATION.md` ("Accuracy and speed") and `benches/kernel.rs`.
 
 mod attenuation;
 pub mod batch;

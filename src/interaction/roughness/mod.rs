@@ -37,7 +37,7 @@
 //! until the geometric bound on the rest, `t_n r/(1 − r)` with `r` the last ratio, is at most
 //! `tolerance/2` of the partial sum on each side. The result is then within `tolerance` of the
 //! whole series (relative), and the number of terms grows like `√g` around `n ≈ g` (`g ≫ 1`)
-//! plus the bisection's `2 log₂ g` — see the README's table for measured counts and costs.
+//! plus the bisection's `2 log₂ g` — see the guide `gmueller::guide::roughness` for measured counts and costs.
 //! For the incoherent level every `K[p_n]` is the same (each `p_n` has the variance σ²), and
 //! the sum is `K[p] (1 − e^{−g})/g` in closed form. For a Gaussian PSD with the plane-wave
 //! weight or [`crate::psd::ClosedForm`]'s, every order's weight comes from one closed form,

@@ -278,7 +278,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (mi, m) in materials.iter().enumerate() {
         for &theta_i in &incidences {
             // The K-correlation reference (adaptive 1e-10) costs 15–700 ms per evaluation, and at
-            // 80° with w = 1000 λ it was found wrong (see the README): 45° only.
+            // 80° with w = 1000 λ it was found wrong (see VALIDATION.md): 45° only.
             if matches!(m, MaterialSpec::KCorr { .. }) && theta_i != 45.0 {
                 continue;
             }

@@ -1,6 +1,6 @@
 //! Rough scenes: speed versus accuracy of the roughness levels (first order, the Kirchhoff
 //! series at three tolerances, the geometric limit) from smooth to very rough surfaces, so
-//! that the README can say which level to use for which roughness.
+//! that the roughness guide (`docs/roughness.md`) can say which level to use for which roughness.
 //!
 //! **Suite.** Rough glass (η = 1.5, Fresnel specular interface) with an isotropic Gaussian PSD,
 //! ℓ = 5λ and 20λ, rms height set by `vσ` at the specular direction: 0.1, 0.3, 1, 3, 10 (rms
