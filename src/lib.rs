@@ -4,42 +4,44 @@
 //! Practical Physical-Optics Rendering*, ACM TOG 41(4) (SIGGRAPH 2022), supplemental §S1–S2.
 //! Equation numbers `S1.x`, `S2.x` refer to that supplemental.
 //!
-//! ## Module map (one module per concept, in the order of the derivation)
-//! - [`real`]: the scalar trait [`Real`] (`f32`, `f64`).
+//! ## Module map
+//! One module per concept, bottom first: a module imports only from those listed before it
+//! ([`guide::architecture`] draws the graph; `tests/architecture.rs` checks it).
 //! - [`simd`]: the lane vocabulary, vector exponential, structure-of-arrays view and chunk loop
 //!   under the batch paths (imports no physics module).
+//! - [`real`]: the scalar trait [`Real`] (`f32`, `f64`).
 //! - [`error`]: the [`Error`] returned by validated constructors.
-//! - [`jones`]: Jones vectors and matrices, standard polarization elements.
-//! - [`fresnel`]: Fresnel coefficients of dielectric and conducting interfaces as Jones matrices.
-//! - [`spectral`]: spectral data for renderers — the CIE 1931 colour-matching functions,
-//!   XYZ ↔ sRGB, measured complex indices of metals, glass dispersion (Sellmeier, Cauchy).
 //! - [`stack`]: the stack operator and Kronecker product, Lemma S1.1.
+//! - [`jones`]: Jones vectors and matrices, standard polarization elements.
 //! - [`stokes`]: `A_mül` (S1.3), CSD matrices, Stokes and generalized Stokes vectors (S1.2).
 //! - [`mueller`]: classical and generalized Mueller matrices (S1.7) and their analysis;
 //!   [`mueller::batch`], Jones → Mueller over structure-of-arrays batches with run-time SIMD.
 //! - [`frame`]: transverse frames, τ (S2.3) and the rotation Mueller matrix T(φ) (S2.4).
+//! - [`fresnel`]: Fresnel coefficients of dielectric and conducting interfaces as Jones matrices.
+//! - [`spectral`]: spectral data for renderers — the CIE 1931 colour-matching functions,
+//!   XYZ ↔ sRGB, measured complex indices of metals, glass dispersion (Sellmeier, Cauchy).
 //! - [`gaussian`]: anisotropic Gaussians and their Fourier transforms (Lemma S2.1, Corollary S2.2).
-//! - [`psd`]: power spectral densities of random matter and their Gaussian blur (S2.14–S2.17).
 //! - [`packet`]: the canonical wave packet (Definition 3.1): Stokes vector, coherence shapes, sources.
 //! - [`propagation`]: far-field propagation (S2.1–S2.6): the vector Smythe formula and the
 //!   propagation of CSD matrices, generalized Stokes parameters and radiance from a region.
+//! - [`psd`]: power spectral densities of random matter and their Gaussian blur (S2.14–S2.17).
 //! - [`matter`]: locally-stationary matter (S2.7–S2.9), its angular spectrum (S2.14) and pBSDF
 //!   (S2.19), and a generator of its random realizations.
 //! - [`interaction`]: the S2.20 kernel, pBSDFs (S2.19), model levels, the exitant packet, in
 //!   reflection and in transmission through rough interfaces from either side; complete
 //!   materials ([`interaction::RoughDielectric`], [`interaction::RoughConductor`] and their smooth
-//!   limits); [`interaction::batch`], the plane-wave Rayleigh–Rice kernel over batches of
-//!   directions (reflection).
+//!   limits); [`interaction::batch`], the kernel over batches of directions and wavelengths, in SIMD
+//!   lanes for Gaussian and mixture PSDs on conductors and dielectrics (both sides).
 //! - [`bsdf`]: the layer a renderer calls — the kernel as a BSDF (Mueller matrices per lobe in
 //!   documented frames, lobe flags), sampling and pdf in both tracing directions, and the
 //!   coherence one Monte Carlo sample of light carries ([`guide::renderer`]); [`bsdf::Material`],
 //!   one type for every surface with its model level chosen at run time, and
 //!   [`bsdf::PathThroughput`], a backward path's state.
-//! - [`prelude`]: the names a renderer uses, in one import.
-//! - [`guide`]: the guides (no code: pages of `docs/`, their examples doctests).
 //! - [`medium`]: random media — S2.20 with n = 3 in first-Born form, as a volume path tracer
 //!   needs it: a scattering coefficient and a Mueller phase matrix for the incident packet's
 //!   coherence, with sampling and its exact pdf.
+//! - [`prelude`]: the names a renderer uses, in one import.
+//! - [`guide`]: the guides (no code: pages of `docs/`, their examples doctests).
 //!
 //! ## Quick start
 //! ```

@@ -88,7 +88,7 @@ pub struct PreparedPacket<T: Real, Pol, Coh> {
 
 impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     /// The per-packet work of `plan` (chosen by the polarization level, see
-    /// `polarization.rs`): the sections it asks for, the rotation `T` unless intensity only,
+    /// `polarization/`): the sections it asks for, the rotation `T` unless intensity only,
     /// the channel logarithms for the Full level's channel mix.
     ///
     /// `inline(always)`: at each level's call site most of `plan` is a constant, and its

@@ -14,9 +14,10 @@
 //! [`Kernel::evaluate_batch`] is the batch form of the partially coherent kernel at every level
 //! (both lobes and the exit frames, into [`LobesSoa`] and [`ExitFramesSoa`]), and
 //! [`Kernel::evaluate_batch_spectral`] its form for several wavelengths of one path; at every
-//! polarization level with `Partial` or `Incoherent` coherence, on a [`super::RoughConductor`]
-//! with a Gaussian or Gaussian-mixture (≤ 8 components) PSD in reflection, they run the same
-//! stages in lanes (`partial.rs`), elsewhere the per-direction kernel per exit.
+//! polarization level with `Partial` or `Incoherent` coherence, with a Gaussian or
+//! Gaussian-mixture (≤ 8 components) PSD, on a [`super::RoughConductor`] (reflection) or a
+//! [`super::RoughDielectric`] (reflection and transmission, lit from either side), they run the
+//! same stages in lanes (`partial.rs`), elsewhere the per-direction kernel per exit.
 
 use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
