@@ -7,8 +7,8 @@
 //! ## Module map
 //! One module per concept, bottom first: a module imports only from those listed before it
 //! ([`guide::architecture`] draws the graph; `tests/architecture.rs` checks it).
-//! - [`simd`]: the lane vocabulary, vector exponential, structure-of-arrays view and chunk loop
-//!   under the batch paths (imports no physics module).
+//! - `simd` (crate-private): the lane vocabulary, vector exponential, structure-of-arrays
+//!   view and chunk loop under the batch paths (imports no physics module).
 //! - [`real`]: the scalar trait [`Real`] (`f32`, `f64`).
 //! - [`error`]: the [`Error`] returned by validated constructors.
 //! - [`stack`]: the stack operator and Kronecker product, Lemma S1.1.
@@ -103,7 +103,7 @@ pub mod prelude;
 pub mod propagation;
 pub mod psd;
 pub mod real;
-pub mod simd;
+mod simd;
 pub mod spectral;
 pub mod stack;
 pub mod stokes;

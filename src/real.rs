@@ -12,7 +12,7 @@ use crate::simd::Lanes;
 ///
 /// This is [`nalgebra::RealField`] (which brings `sqrt`, `sin_cos`, `exp_m1`, `hypot`, …) plus
 /// `Copy`, and two lossless-enough conversions to and from `f64` for literals and error reports,
-/// and the sealed lane vocabulary [`Lanes`] of the batch paths (so `Real` is implemented for
+/// and the sealed lane vocabulary `Lanes` of the batch paths (crate-private) (so `Real` is implemented for
 /// `f32` and `f64` only).
 ///
 /// # Examples

@@ -234,3 +234,217 @@ fn the_parser_sees_groups_and_ignores_comments() {
     assert_eq!(code("    /// see [`crate::interaction`]"), None);
     assert_eq!(code("let a = 1; // crate::x"), Some("let a = 1; "));
 }
+
+/// A source file's module path under `src/` (`interaction/batch/lobes.rs` →
+/// `["interaction", "batch", "lobes"]`; a `mod.rs` is its folder's module).
+fn module_path(src: &Path, file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src).expect("file under src");
+    let mut parts: Vec<String> = rel
+        .iter()
+        .map(|p| p.to_string_lossy().trim_end_matches(".rs").to_owned())
+        .collect();
+    if parts.last().is_some_and(|p| p == "mod" || p == "lib") {
+        parts.pop();
+    }
+    parts
+}
+
+/// The crate paths a line of code names through `crate::` and chains of `super::`, resolved
+/// against the module `at` (`super::super::prep::X` in `a/b/c` → `a/prep/X`); a brace group
+/// right after the prefix gives one path per name.
+fn paths_named(code: &str, at: &[String]) -> Vec<Vec<String>> {
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut out = Vec::new();
+    let bytes = code.as_bytes();
+    let mut i = 0;
+    while i < code.len() {
+        let rest = &code[i..];
+        let starts = |p: &str| rest.starts_with(p);
+        let boundary = i == 0 || !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_');
+        if !(boundary && (starts("crate::") || starts("super::"))) {
+            i += rest.chars().next().map_or(1, char::len_utf8);
+            continue;
+        }
+        let (mut base, mut tail) = if let Some(t) = rest.strip_prefix("crate::") {
+            (Vec::new(), t)
+        } else {
+            (at.to_vec(), rest)
+        };
+        while let Some(t) = tail.strip_prefix("super::") {
+            base.pop();
+            tail = t;
+        }
+        // Segments up to a group, a glob or the end of the path.
+        let mut path = base;
+        loop {
+            let name = ident(tail);
+            if name.is_empty() {
+                break;
+            }
+            tail = &tail[name.len()..];
+            path.push(name);
+            match tail.strip_prefix("::") {
+                Some(t) => tail = t,
+                None => break,
+            }
+        }
+        if let Some(group) = tail.strip_prefix('{') {
+            let end = group.find('}').unwrap_or(group.len());
+            for item in group[..end].split(',') {
+                let name = ident(item.trim());
+                if !name.is_empty() {
+                    let mut p = path.clone();
+                    p.push(name);
+                    out.push(p);
+                }
+            }
+        } else if !path.is_empty() {
+            out.push(path);
+        }
+        i = code.len() - tail.len().min(code.len() - i - 1);
+    }
+    out
+}
+
+/// The cycles of a small directed graph, one per strongly connected component of two or more
+/// nodes (or a self-loop), each listed from its smallest node.
+fn cycles(edges: &BTreeMap<String, std::collections::BTreeSet<String>>) -> Vec<Vec<String>> {
+    let nodes: Vec<&String> = edges.keys().collect();
+    let reaches = |from: &String, to: &String| -> bool {
+        let mut seen = std::collections::BTreeSet::new();
+        let mut stack = vec![from.clone()];
+        while let Some(n) = stack.pop() {
+            for m in edges.get(&n).into_iter().flatten() {
+                if m == to {
+                    return true;
+                }
+                if seen.insert(m.clone()) {
+                    stack.push(m.clone());
+                }
+            }
+        }
+        false
+    };
+    let mut done = std::collections::BTreeSet::new();
+    let mut out = Vec::new();
+    for a in &nodes {
+        if done.contains(*a) || !reaches(a, a) {
+            continue;
+        }
+        let component: Vec<String> = nodes
+            .iter()
+            .filter(|b| reaches(a, b) && reaches(b, a))
+            .map(|b| (*b).clone())
+            .collect();
+        done.extend(component.iter().cloned());
+        out.push(component);
+    }
+    out
+}
+
+/// No cycle between sibling modules in any folder of `src/` (the layer test above orders the
+/// top level and `interaction`; this covers every folder, `interaction/batch/` and its
+/// `stages/` included): an import from module `a/x…` of `a/y…` is an edge `x → y` of folder
+/// `a`, taken at the first segment where the two paths part.
+#[test]
+fn no_folder_has_an_import_cycle() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let modules: std::collections::BTreeSet<Vec<String>> =
+        files.iter().map(|f| module_path(&src, f)).collect();
+    let mut graphs: BTreeMap<Vec<String>, BTreeMap<String, std::collections::BTreeSet<String>>> =
+        BTreeMap::new();
+    let mut edge_count = 0;
+    for file in &files {
+        let at = module_path(&src, file);
+        let text = fs::read_to_string(file).expect("readable source");
+        for line in text.lines() {
+            let Some(code) = code(line) else { continue };
+            for target in paths_named(code, &at) {
+                let common = at.iter().zip(&target).take_while(|(a, b)| a == b).count();
+                if common >= at.len() || common >= target.len() {
+                    continue; // the module itself, or one of its ancestors
+                }
+                let folder = at[..common].to_vec();
+                let mut child = folder.clone();
+                child.push(target[common].clone());
+                if !modules.iter().any(|m| m.starts_with(&child)) {
+                    continue; // an item, not a sibling module
+                }
+                let (from, to) = (at[common].clone(), target[common].clone());
+                if graphs
+                    .entry(folder)
+                    .or_default()
+                    .entry(from)
+                    .or_default()
+                    .insert(to)
+                {
+                    edge_count += 1;
+                }
+            }
+        }
+    }
+    let mut found = Vec::new();
+    for (folder, edges) in &graphs {
+        for c in cycles(edges) {
+            found.push(format!("src/{}: {}", folder.join("/"), c.join(" ↔ ")));
+        }
+    }
+    println!(
+        "{} folders, {edge_count} sibling edges, {} cycles",
+        graphs.len(),
+        found.len()
+    );
+    assert!(found.is_empty(), "import cycles:\n{}", found.join("\n"));
+    // The walk saw the real structure, sub-folders included.
+    let batch = vec!["interaction".to_owned(), "batch".to_owned()];
+    let sees = |folder: &[String], from: &str, to: &str| {
+        graphs
+            .get(folder)
+            .and_then(|g| g.get(from))
+            .is_some_and(|t| t.contains(to))
+    };
+    assert!(sees(&batch, "partial", "prep"), "{graphs:?}");
+    assert!(sees(&batch, "lobes", "partial"), "{graphs:?}");
+    assert!(sees(&[], "interaction", "psd"), "{graphs:?}");
+    assert!(edge_count > 100, "{edge_count}");
+}
+
+#[test]
+fn the_cycle_finder_and_path_resolver_work() {
+    let g = |pairs: &[(&str, &str)]| {
+        let mut m: BTreeMap<String, std::collections::BTreeSet<String>> = BTreeMap::new();
+        for (a, b) in pairs {
+            m.entry((*a).to_owned())
+                .or_default()
+                .insert((*b).to_owned());
+            m.entry((*b).to_owned()).or_default();
+        }
+        m
+    };
+    assert!(cycles(&g(&[("a", "b"), ("b", "c")])).is_empty());
+    assert_eq!(
+        cycles(&g(&[("a", "b"), ("b", "c"), ("c", "a"), ("c", "d")])),
+        [["a", "b", "c"]]
+    );
+    let at: Vec<String> = ["interaction", "batch", "stages", "rayleigh_rice"]
+        .map(str::to_owned)
+        .to_vec();
+    assert_eq!(
+        paths_named("use super::super::prep::{Incidence, Other};", &at),
+        [
+            ["interaction", "batch", "prep", "Incidence"],
+            ["interaction", "batch", "prep", "Other"]
+        ]
+    );
+    assert_eq!(
+        paths_named("let x = crate::psd::two_pi(); my_crate::a::b", &at),
+        [["psd", "two_pi"]]
+    );
+}

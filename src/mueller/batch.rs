@@ -98,7 +98,7 @@ impl<'a, T> MuellerSoa<'a, T> {
     }
 }
 
-/// The layout errors of [`crate::simd::Soa`] as the crate's [`Error::OutOfRange`].
+/// The layout errors of the structure-of-arrays views (`simd::Soa`) as the crate's [`Error::OutOfRange`].
 impl From<LayoutError> for Error {
     fn from(e: LayoutError) -> Self {
         Error::OutOfRange {

@@ -62,24 +62,6 @@ impl<'a, T, const K: usize> Soa<'a, T, K> {
             c: strided(buf, n, stride)?,
         })
     }
-
-    /// The number of elements (the length of the first slice; 0 for `K = 0`).
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.c.first().map_or(0, |c| c.len())
-    }
-
-    /// `true` when the batch holds no element.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Whether every slice has length `n`.
-    #[must_use]
-    pub fn all_len(&self, n: usize) -> bool {
-        self.c.iter().all(|c| c.len() == n)
-    }
 }
 
 impl<'a, T, const K: usize> SoaMut<'a, T, K> {
@@ -91,24 +73,6 @@ impl<'a, T, const K: usize> SoaMut<'a, T, K> {
         Ok(Self {
             c: strided_mut(buf, n, stride)?,
         })
-    }
-
-    /// The number of elements (the length of the first slice; 0 for `K = 0`).
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.c.first().map_or(0, |c| c.len())
-    }
-
-    /// `true` when the batch holds no element.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Whether every slice has length `n`.
-    #[must_use]
-    pub fn all_len(&self, n: usize) -> bool {
-        self.c.iter().all(|c| c.len() == n)
     }
 }
 

@@ -11,7 +11,8 @@
 //! wavelengths of one path, `Kernel::evaluate_batch_spectral` (`super::spectral`) shares the
 //! exit geometry between them.
 
-use super::{DirectionsSoa, StokesSoa};
+use super::DirectionsSoa;
+use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::RoughSurface;
@@ -22,50 +23,6 @@ use crate::packet::WavePacket;
 use crate::psd::Psd;
 use crate::real::Real;
 use nalgebra::Vector3;
-
-/// The two lobes of a batch: Stokes radiances in each direction's exit s/p frame
-/// ([`Geometry::exit_sp`]), in the exit medium.
-#[derive(Debug)]
-pub struct LobesSoa<'a, T> {
-    /// The coherent specular (direct) lobe, attenuation included.
-    pub specular: StokesSoa<'a, T>,
-    /// The scattered part, attenuation included.
-    pub scattered: StokesSoa<'a, T>,
-}
-
-/// The exit s/p frames of a batch, as the unit `ŝ` axis of each ([`Frame::x`] of
-/// [`Geometry::exit_sp`]); the `p̂` axis is `ô × ŝ` with `ô` the unit exit direction.
-#[derive(Debug)]
-pub struct ExitFramesSoa<'a, T> {
-    /// `x, y, z` components of `ŝ` (world coordinates).
-    pub s: [&'a mut [T]; 3],
-}
-
-/// [`Error::OutOfRange`] unless every direction, lobe and frame slice is at least as long as
-/// `exits.x`.
-pub(crate) fn check_lengths<T>(
-    exits: &DirectionsSoa<'_, T>,
-    outs: &[LobesSoa<'_, T>],
-    frames: Option<&ExitFramesSoa<'_, T>>,
-) -> Result<(), Error> {
-    let n = exits.len();
-    let short = |len: usize| len < n;
-    if short(exits.y.len())
-        || short(exits.z.len())
-        || outs.iter().any(|out| {
-            out.specular.s.iter().any(|s| short(s.len()))
-                || out.scattered.s.iter().any(|s| short(s.len()))
-        })
-        || frames.is_some_and(|f| f.s.iter().any(|s| short(s.len())))
-    {
-        return Err(Error::OutOfRange {
-            what: "batch slice length",
-            value: n as f64,
-            expected: "every direction, lobe and frame slice at least as long as exits.x",
-        });
-    }
-    Ok(())
-}
 
 impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// Evaluates S2.20 for `packet` leaving along every direction of `exits`, writing both lobes
@@ -236,6 +193,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::StokesSoa;
     use super::*;
     use crate::interaction::{
         Full, Incoherent, Intensity, OneShape, Partial, PlaneWave, RoughConductor, RoughDielectric,
@@ -575,6 +533,7 @@ mod tests {
 mod lane_tests {
     //! The lane path (`super::super::partial`) on batches of every length and at extreme
     //! scales of the packet.
+    use super::super::StokesSoa;
     use super::*;
     use crate::interaction::{
         FresnelInterface, FresnelReflection, Full, Incoherent, Intensity, OneShape, Partial,

@@ -34,12 +34,13 @@ use crate::simd::driver::{self, LaneMap};
 use crate::simd::{Soa, SoaMut};
 
 mod lobes;
+mod outputs;
 mod partial;
 mod prep;
 mod spectral;
 mod stages;
 
-pub use lobes::{ExitFramesSoa, LobesSoa};
+pub use outputs::{ExitFramesSoa, LobesSoa};
 pub(crate) use prep::PlaneWavePrep;
 pub use spectral::{MAX_WAVELENGTHS, Wavelength};
 use stages::validity::{clearly_valid, clearly_valid_lanes};

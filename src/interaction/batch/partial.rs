@@ -42,7 +42,7 @@ use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
-use super::lobes::{ExitFramesSoa, LobesSoa};
+use super::outputs::{ExitFramesSoa, LobesSoa};
 use super::prep::{Incidence, LobePrep, TransmissionPrep};
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};

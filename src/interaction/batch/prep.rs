@@ -5,7 +5,6 @@
 use nalgebra::{Matrix4, Vector2, Vector3, Vector4};
 use num_complex::Complex;
 
-use super::stages::rayleigh_rice::TransmissionConsts;
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::interaction::geometry::{self, Geometry};
@@ -494,5 +493,31 @@ impl<T: Real> LobePrep<T> {
         }
         self.components = 1;
         shift.is_finite().then_some(self)
+    }
+}
+
+/// The per-packet constants of the transmission factors (`stages::rayleigh_rice::
+/// transmission_factors`) besides the [`Incidence`]: `η = √ε`
+/// (principal branch) scaled by `1/t` ([`Incidence::scale`]) and `sin θ_i`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TransmissionConsts<F: Real> {
+    pub(crate) index: Complex<F>,
+    pub(crate) index_s: Complex<F>,
+    pub(crate) sin_i: F,
+}
+
+impl<F: Real> TransmissionConsts<F> {
+    /// The constants of the incidence `p` (built with the permittivity seen from the source),
+    /// or `None` unless `ε` is real (a dielectric interface): the lanes take `a_o`'s square
+    /// root on the real axis only.
+    pub(crate) fn new(p: &Incidence<F>) -> Option<Self> {
+        (p.e.im == F::zero()).then(|| {
+            let index = principal_sqrt(p.e);
+            Self {
+                index,
+                index_s: index * p.scale.inv,
+                sin_i: p.si2.sqrt(),
+            }
+        })
     }
 }

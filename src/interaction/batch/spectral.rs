@@ -11,7 +11,7 @@
 use nalgebra::Vector3;
 
 use super::DirectionsSoa;
-use super::lobes::{ExitFramesSoa, LobesSoa, check_lengths};
+use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
 use super::partial::{PartialLobes, lane_prep, scalar_exit};
 use super::prep::LobePrep;
 use crate::error::Error;

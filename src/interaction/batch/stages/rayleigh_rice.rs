@@ -5,10 +5,7 @@
 
 use pulp::Simd;
 
-use num_complex::Complex;
-
-use super::super::prep::Incidence;
-use crate::numerics::principal_sqrt;
+use super::super::prep::{Incidence, TransmissionConsts};
 use crate::real::Real;
 use crate::simd::complex::{C, Cx};
 
@@ -65,31 +62,6 @@ pub(crate) fn factors<S: Simd, F: Real>(
         sin_phi,
     );
     [ss, ps, sp, pp]
-}
-
-/// The per-packet constants of [`transmission_factors`] besides the [`Incidence`]: `η = √ε`
-/// (principal branch) scaled by `1/t` ([`Incidence::scale`]) and `sin θ_i`.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct TransmissionConsts<F: Real> {
-    pub(crate) index: Complex<F>,
-    pub(crate) index_s: Complex<F>,
-    pub(crate) sin_i: F,
-}
-
-impl<F: Real> TransmissionConsts<F> {
-    /// The constants of the incidence `p` (built with the permittivity seen from the source),
-    /// or `None` unless `ε` is real (a dielectric interface): the lanes take `a_o`'s square
-    /// root on the real axis only.
-    pub(crate) fn new(p: &Incidence<F>) -> Option<Self> {
-        (p.e.im == F::zero()).then(|| {
-            let index = principal_sqrt(p.e);
-            Self {
-                index,
-                index_s: index * p.scale.inv,
-                sin_i: p.si2.sqrt(),
-            }
-        })
-    }
 }
 
 /// `[ss, ps, sp, pp]` of Elson's transmission factors (`RayleighRice::factors` on the
@@ -168,6 +140,8 @@ pub(crate) fn transmission_factors<S: Simd, F: Real>(
 #[cfg(test)]
 mod tests {
     use num_complex::Complex;
+
+    use crate::numerics::principal_sqrt;
     use pulp::Simd;
 
     use nalgebra::Vector3;
