@@ -19,7 +19,7 @@ use gmueller::frame::Frame;
 use gmueller::interaction::{
     Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
 };
-use gmueller::medium::{Dipole, Incident, PhaseFunction, RandomMedium, VolumeCoherence};
+use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence, VolumeIncident};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
@@ -104,7 +104,7 @@ fn level<T, Pol, Coh>(
     Coh: VolumeCoherence<T, GaussianPsd<T, 3>>,
 {
     let phase = PhaseFunction::new(m, kernel);
-    let incidents: Vec<Incident<T, Pol, Coh>> = cases
+    let incidents: Vec<VolumeIncident<T, Pol, Coh>> = cases
         .axial
         .iter()
         .map(|p| phase.prepare(p).unwrap())

@@ -7,7 +7,7 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::sampling::LobeSampler;
+use gmueller::interaction::sampling::ScatterSampler;
 use gmueller::psd::{GaussianPsd, KCorrelation};
 use nalgebra::Vector3;
 
@@ -30,7 +30,7 @@ fn setup<T: Real>(deg: f64) -> (Frame<T>, Vector3<T>, T) {
     (surface, to_source, T::lit(core::f64::consts::TAU / 0.5))
 }
 
-fn samplers<T: Real>() -> Vec<(&'static str, LobeSampler<T>)> {
+fn samplers<T: Real>() -> Vec<(&'static str, ScatterSampler<T>)> {
     let (surface, src, k) = setup::<T>(30.0);
     let (_, graze, _) = setup::<T>(80.0);
     let g = GaussianPsd::<T, 2>::isotropic(T::lit(0.01), T::lit(2.0)).unwrap();
@@ -38,15 +38,15 @@ fn samplers<T: Real>() -> Vec<(&'static str, LobeSampler<T>)> {
     vec![
         (
             "gaussian",
-            LobeSampler::gaussian(&g, &surface, &src, k, T::lit(1.0)).unwrap(),
+            ScatterSampler::gaussian(&g, &surface, &src, k, T::lit(1.0)).unwrap(),
         ),
         (
             "k_correlation",
-            LobeSampler::k_correlation(&kc, &surface, &src, k, T::lit(1.0)).unwrap(),
+            ScatterSampler::k_correlation(&kc, &surface, &src, k, T::lit(1.0)).unwrap(),
         ),
         (
             "gaussian_grazing",
-            LobeSampler::gaussian(&g, &surface, &graze, k, T::lit(0.15)).unwrap(),
+            ScatterSampler::gaussian(&g, &surface, &graze, k, T::lit(0.15)).unwrap(),
         ),
     ]
 }
@@ -88,7 +88,7 @@ fn bench_for<T: Real>(c: &mut Criterion, name: &str) {
     let (surface, src, k) = setup::<T>(30.0);
     let g = GaussianPsd::<T, 2>::isotropic(T::lit(0.01), T::lit(2.0)).unwrap();
     group.bench_function(BenchmarkId::new("construct", "gaussian"), |b| {
-        b.iter(|| LobeSampler::gaussian(black_box(&g), &surface, &src, k, T::lit(1.0)).unwrap());
+        b.iter(|| ScatterSampler::gaussian(black_box(&g), &surface, &src, k, T::lit(1.0)).unwrap());
     });
     group.finish();
 }

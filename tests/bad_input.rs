@@ -18,7 +18,7 @@ use gmueller::Error;
 use gmueller::frame::{self, Frame};
 use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::sampling::LobeSampler;
+use gmueller::interaction::sampling::ScatterSampler;
 use gmueller::interaction::{
     FresnelInterface, FresnelReflection, Full, Geometry, IdealDiffuse, Incoherent, Intensity,
     Kernel, OneShape, Partial, PhaseScreen, PlaneWave, RayleighRice, RoughDielectric, RoughSurface,
@@ -769,7 +769,7 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
         let u = [t(3), t(4)];
         let (k, w) = (t(7).abs(), t(8).abs());
         if let Ok(p) = GaussianPsd::<T, 2>::isotropic(t(5).abs(), t(6).abs())
-            && let Ok(s) = LobeSampler::gaussian(&p, &surface, &src, k, w)
+            && let Ok(s) = ScatterSampler::gaussian(&p, &surface, &src, k, w)
         {
             SAMPLER_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             let d = s.sample(u);
@@ -780,7 +780,7 @@ fn exercise<T: gmueller::Real>(v: &[f64]) -> Result<(), TestCaseError> {
             let _ = s.pdf(&v3(9));
         }
         if let Ok(kc) = KCorrelation::<T, 2>::new(t(5).abs(), t(6).abs(), t(10).abs())
-            && let Ok(s) = LobeSampler::k_correlation(&kc, &surface, &src, k, w)
+            && let Ok(s) = ScatterSampler::k_correlation(&kc, &surface, &src, k, w)
         {
             let d = s.sample(u);
             assert!(

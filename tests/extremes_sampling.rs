@@ -14,7 +14,7 @@ use crate::common;
 
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::sampling::LobeSampler;
+use gmueller::interaction::sampling::ScatterSampler;
 use gmueller::psd::{GaussianPsd, KCorrelation};
 use nalgebra::Vector3;
 use proptest::prelude::*;
@@ -31,7 +31,7 @@ fn incidence() -> impl Strategy<Value = f64> {
     })
 }
 
-fn check(sampler: &LobeSampler<f64>, us: &[(f64, f64)]) -> Result<(), TestCaseError> {
+fn check(sampler: &ScatterSampler<f64>, us: &[(f64, f64)]) -> Result<(), TestCaseError> {
     for &(a, b) in us {
         let s = sampler.sample([a, b]);
         let d = s.direction;
@@ -70,7 +70,7 @@ proptest! {
         let to_source = Vector3::new(theta.sin() * azimuth.cos(), theta.sin() * azimuth.sin(), theta.cos());
         let k = std::f64::consts::TAU / lambda;
         let gauss = GaussianPsd::isotropic(rms * lambda, ell * lambda).unwrap();
-        match LobeSampler::gaussian(&gauss, &surface, &to_source, k, width * lambda) {
+        match ScatterSampler::gaussian(&gauss, &surface, &to_source, k, width * lambda) {
             Ok(s) => check(&s, &us)?,
             Err(e) => prop_assert!(
                 theta > 80f64.to_radians(),
@@ -78,7 +78,7 @@ proptest! {
             ),
         }
         let kc = KCorrelation::new((rms * lambda).powi(2), (ell * lambda).powi(2), gamma).unwrap();
-        match LobeSampler::k_correlation(&kc, &surface, &to_source, k, width * lambda) {
+        match ScatterSampler::k_correlation(&kc, &surface, &to_source, k, width * lambda) {
             Ok(s) => check(&s, &us)?,
             Err(e) => prop_assert!(
                 theta > 80f64.to_radians(),
@@ -115,7 +115,7 @@ fn boundary_uniforms<T: Real>(v: f64) -> Vec<[T; 2]> {
 /// Every boundary draw: a finite unit direction strictly above the surface, `pdf` finite and
 /// positive and equal to `pdf(direction)` (exactly: both are the same function of the same
 /// direction).
-fn check_boundary<T: Real>(sampler: &LobeSampler<T>, v: f64) -> Result<(), TestCaseError> {
+fn check_boundary<T: Real>(sampler: &ScatterSampler<T>, v: f64) -> Result<(), TestCaseError> {
     let tol_unit = 64.0 * T::EPSILON.to_f64();
     for u in boundary_uniforms::<T>(v) {
         let s = sampler.sample(u);
@@ -163,7 +163,7 @@ fn boundary_case<T: Real>(
     let k = T::lit(std::f64::consts::TAU / lambda);
     let w = T::lit(width * lambda);
     let gauss = GaussianPsd::<T, 2>::isotropic(T::lit(rms * lambda), T::lit(ell * lambda)).unwrap();
-    if let Ok(s) = LobeSampler::gaussian(&gauss, &surface, &src, k, w) {
+    if let Ok(s) = ScatterSampler::gaussian(&gauss, &surface, &src, k, w) {
         check_boundary(&s, v)?;
     }
     let kc = KCorrelation::<T, 2>::new(
@@ -172,7 +172,7 @@ fn boundary_case<T: Real>(
         T::lit(gamma),
     )
     .unwrap();
-    if let Ok(s) = LobeSampler::k_correlation(&kc, &surface, &src, k, w) {
+    if let Ok(s) = ScatterSampler::k_correlation(&kc, &surface, &src, k, w) {
         check_boundary(&s, v)?;
     }
     Ok(())
@@ -222,8 +222,8 @@ fn narrow_lobes<T: Real>(ells: &[f64]) {
         .unwrap();
         let inf = T::lit(f64::INFINITY);
         for s in [
-            LobeSampler::gaussian(&p, &surface, &src, k, inf),
-            LobeSampler::k_correlation(&kc, &surface, &src, k, inf),
+            ScatterSampler::gaussian(&p, &surface, &src, k, inf),
+            ScatterSampler::k_correlation(&kc, &surface, &src, k, inf),
         ] {
             let s = match s {
                 Ok(s) => s,
@@ -288,7 +288,7 @@ fn grazing_sub_resolution_lobe_is_refused() {
     let kc =
         KCorrelation::<f64, 2>::new(0.0, 1.7376618155853006e-168, 3.322599045891505e203).unwrap();
     let r =
-        LobeSampler::k_correlation(&kc, &surface, &src, 0.6077570085065888, 5.89157231586223e62);
+        ScatterSampler::k_correlation(&kc, &surface, &src, 0.6077570085065888, 5.89157231586223e62);
     assert!(
         matches!(r, Err(gmueller::Error::Unrealizable { .. })),
         "{:?}",
@@ -305,7 +305,7 @@ fn lobe_wider_than_the_scalar_type_is_refused() {
     let (k, w) = (8.652166140935165, 2.5685616729281098e-42);
     let s32 = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
     let p32 = GaussianPsd::<f32, 2>::isotropic(0.0, 0.30059147474528997).unwrap();
-    let r = LobeSampler::gaussian(&p32, &s32, &src.map(|x| x as f32), k as f32, w as f32);
+    let r = ScatterSampler::gaussian(&p32, &s32, &src.map(|x| x as f32), k as f32, w as f32);
     assert!(
         matches!(r, Err(gmueller::Error::Unrealizable { .. })),
         "{:?}",
@@ -313,7 +313,7 @@ fn lobe_wider_than_the_scalar_type_is_refused() {
     );
     let s64 = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
     let p64 = GaussianPsd::<f64, 2>::isotropic(0.0, 0.30059147474528997).unwrap();
-    let s = LobeSampler::gaussian(&p64, &s64, &src, k, w).unwrap();
+    let s = ScatterSampler::gaussian(&p64, &s64, &src, k, w).unwrap();
     let d = s.sample([0.3, 0.6]);
     assert!(
         d.pdf > 0.0 && d.pdf.is_finite() && d.direction.z > 0.0,

@@ -16,7 +16,9 @@ use common::{SplitMix64, Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave};
 use gmueller::interaction::{PolarizationModel, Throughput};
-use gmueller::medium::{Dipole, Incident, PhaseFunction, RandomMedium, VolumeCoherence, VolumePsd};
+use gmueller::medium::{
+    Dipole, PhaseFunction, RandomMedium, VolumeCoherence, VolumeIncident, VolumePsd,
+};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{GaussianPsd, KCorrelation};
 use gmueller::stokes::Stokes;
@@ -128,7 +130,7 @@ where
     Coh: VolumeCoherence<f64, P>,
 {
     let phase = PhaseFunction::new(medium, kernel);
-    let inc: Incident<f64, Pol, Coh> = phase.prepare(light).unwrap();
+    let inc: VolumeIncident<f64, Pol, Coh> = phase.prepare(light).unwrap();
     let (f, k) = (*light.frame(), light.wavenumber());
     let edges = radial_edges(k, scale);
     let pdf = |r: &Vector3<f64>| phase.pdf(&inc, r);

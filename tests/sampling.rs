@@ -14,7 +14,7 @@ use common::quadrature::{gauss_legendre, integrate};
 use common::{SplitMix64, Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::sampling::{LobeSampler, RadialProfile, weight};
+use gmueller::interaction::sampling::{RadialProfile, ScatterSampler, weight};
 use gmueller::interaction::{
     FresnelReflection, Geometry, Intensity, Kernel, Partial, RayleighRice, RoughSurface,
 };
@@ -88,13 +88,13 @@ fn hemisphere_integral(pdf: &dyn Fn(&Vector3<f64>) -> f64) -> f64 {
 }
 
 /// The test's cases: (label, sampler, scale of the lobe in u for binning).
-fn gaussian_case(deg: f64, ell: f64, w_min: f64, lambda: f64) -> LobeSampler<f64> {
+fn gaussian_case(deg: f64, ell: f64, w_min: f64, lambda: f64) -> ScatterSampler<f64> {
     let psd = GaussianPsd::<f64, 2>::isotropic(0.01, ell).unwrap();
-    LobeSampler::gaussian(&psd, &surface(), &to_source(deg), k_of(lambda), w_min).unwrap()
+    ScatterSampler::gaussian(&psd, &surface(), &to_source(deg), k_of(lambda), w_min).unwrap()
 }
-fn k_case(deg: f64, t: f64, gamma: f64, w_min: f64, lambda: f64) -> LobeSampler<f64> {
+fn k_case(deg: f64, t: f64, gamma: f64, w_min: f64, lambda: f64) -> ScatterSampler<f64> {
     let psd = KCorrelation::<f64, 2>::new(1e-4, t, gamma).unwrap();
-    LobeSampler::k_correlation(&psd, &surface(), &to_source(deg), k_of(lambda), w_min).unwrap()
+    ScatterSampler::k_correlation(&psd, &surface(), &to_source(deg), k_of(lambda), w_min).unwrap()
 }
 
 // ------------------------------------------------------------------ the quadrature oracle
@@ -259,7 +259,8 @@ fn gaussian_truncated_mass_matches_cartesian_erf_quadrature_and_monte_carlo() {
         (80.0, Matrix2::new(1.0, -0.4, -0.4, 0.5), 2.0),
     ] {
         let psd = GaussianPsd::from_spectral_shape(1e-4, Gaussian::new(spectral).unwrap()).unwrap();
-        let sampler = LobeSampler::gaussian(&psd, &surface(), &to_source(deg), k, w_min).unwrap();
+        let sampler =
+            ScatterSampler::gaussian(&psd, &surface(), &to_source(deg), k, w_min).unwrap();
         let (_, lobe) = sampler.components().next().unwrap();
         // The lobe, rebuilt here from the module formula: covariance (C_p + I/w²)/k², c = −ŝ_t.
         let cov_u = (spectral + Matrix2::identity() / (w_min * w_min)) / (k * k);
@@ -341,7 +342,7 @@ fn k_correlation_truncated_mass_matches_2d_quadrature() {
 
 #[test]
 fn pdf_integrates_to_one_over_the_hemisphere() {
-    let mut cases: Vec<(String, LobeSampler<f64>)> = Vec::new();
+    let mut cases: Vec<(String, ScatterSampler<f64>)> = Vec::new();
     for deg in [0.0, 45.0, 80.0] {
         for w_min in [1.0, 0.2] {
             cases.push((
@@ -432,7 +433,7 @@ fn bin_probabilities(
 }
 
 fn draw_counts(
-    sampler: &LobeSampler<f64>,
+    sampler: &ScatterSampler<f64>,
     c: Vector2<f64>,
     scale: f64,
     n: usize,
@@ -450,7 +451,7 @@ fn draw_counts(
 
 struct ChiCase {
     label: &'static str,
-    sampler: LobeSampler<f64>,
+    sampler: ScatterSampler<f64>,
     deg: f64,
     scale: f64,
 }
@@ -572,9 +573,9 @@ fn f32_sampler_agrees_with_f64() {
     let psd32 = GaussianPsd::<f32, 2>::isotropic(0.01, 2.0).unwrap();
     let s32 = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
     let src = to_source(40.0);
-    let a = LobeSampler::gaussian(&psd64, &surface(), &src, k_of(0.5), 0.7).unwrap();
-    let b =
-        LobeSampler::gaussian(&psd32, &s32, &src.map(|x| x as f32), k_of(0.5) as f32, 0.7).unwrap();
+    let a = ScatterSampler::gaussian(&psd64, &surface(), &src, k_of(0.5), 0.7).unwrap();
+    let b = ScatterSampler::gaussian(&psd32, &s32, &src.map(|x| x as f32), k_of(0.5) as f32, 0.7)
+        .unwrap();
     let mut rng = SplitMix64(5);
     for _ in 0..500 {
         let u = [rng.unit(), rng.unit()];
@@ -632,7 +633,7 @@ fn weights_equal_value_over_pdf() {
     let material = glass_material(psd);
     let kernel = Kernel::<Intensity, Partial>::default();
     let sampler =
-        LobeSampler::gaussian(&psd, &surface(), &to_source(35.0), k_of(0.5), 0.5).unwrap();
+        ScatterSampler::gaussian(&psd, &surface(), &to_source(35.0), k_of(0.5), 0.5).unwrap();
     let pk = packet(35.0, 1.5, 0.5);
     let mut rng = SplitMix64(11);
     for _ in 0..200 {
@@ -667,7 +668,7 @@ fn importance_sampled_estimate_matches_quadrature() {
     let kernel = Kernel::<Intensity, Partial>::default();
     let (deg, lambda) = (40.0, 0.5);
     let sampler =
-        LobeSampler::gaussian(&psd, &surface(), &to_source(deg), k_of(lambda), 0.6).unwrap();
+        ScatterSampler::gaussian(&psd, &surface(), &to_source(deg), k_of(lambda), 0.6).unwrap();
     for width in [2.0, 0.4] {
         let pk = packet(deg, width, lambda);
         let value = |d: &Vector3<f64>| {
@@ -705,12 +706,12 @@ fn importance_sampled_estimate_matches_quadrature() {
 fn constructors_validate_their_inputs() {
     let psd = GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap();
     let s = surface();
-    assert!(LobeSampler::gaussian(&psd, &s, &Vector3::new(0.0, 0.3, -1.0), 10.0, 1.0).is_err());
-    assert!(LobeSampler::gaussian(&psd, &s, &to_source(10.0), 0.0, 1.0).is_err());
-    assert!(LobeSampler::gaussian(&psd, &s, &to_source(10.0), 10.0, 0.0).is_err());
-    assert!(LobeSampler::gaussian(&psd, &s, &Vector3::zeros(), 10.0, 1.0).is_err());
+    assert!(ScatterSampler::gaussian(&psd, &s, &Vector3::new(0.0, 0.3, -1.0), 10.0, 1.0).is_err());
+    assert!(ScatterSampler::gaussian(&psd, &s, &to_source(10.0), 0.0, 1.0).is_err());
+    assert!(ScatterSampler::gaussian(&psd, &s, &to_source(10.0), 10.0, 0.0).is_err());
+    assert!(ScatterSampler::gaussian(&psd, &s, &Vector3::zeros(), 10.0, 1.0).is_err());
     // w_min = ∞: the plane-wave lobe C_p/k² only.
-    let pw = LobeSampler::gaussian(&psd, &s, &to_source(10.0), 10.0, f64::INFINITY).unwrap();
+    let pw = ScatterSampler::gaussian(&psd, &s, &to_source(10.0), 10.0, f64::INFINITY).unwrap();
     let (_, lobe) = pw.components().next().unwrap();
     let l = lobe.whitening();
     assert_close(

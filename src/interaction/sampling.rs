@@ -82,7 +82,7 @@ const TABLE_TOL: f64 = 1e-13;
 /// The most panels a table may use.
 const MAX_PANELS: usize = 1 << 14;
 /// The narrowest lobe a sampler accepts, in machine epsilons of the scalar type (see
-/// [`LobeSampler::gaussian`]).
+/// [`ScatterSampler::gaussian`]).
 const MIN_WIDTH_ULPS: f64 = 8.0;
 /// The weight of the K-correlation lobe in its mixture with the Gaussian (incoherent) lobe.
 pub const K_CORRELATION_LOBE_WEIGHT: f64 = 0.5;
@@ -99,12 +99,12 @@ pub enum RadialProfile<T: Real> {
     },
 }
 
-/// One direction drawn by [`LobeSampler::sample`].
+/// One direction drawn by [`ScatterSampler::sample`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample<T: Real> {
     /// The exit direction r̂ (unit, world coordinates, strictly above the surface).
     pub direction: Vector3<T>,
-    /// Its density per unit solid angle, `== LobeSampler::pdf(direction)`.
+    /// Its density per unit solid angle, `== ScatterSampler::pdf(direction)`.
     pub pdf: T,
 }
 
@@ -364,12 +364,12 @@ fn rho_max<T: Real>(c: &Vector2<T>, l: &[T; 3], inside: T, psi: T) -> T {
 /// An importance sampler for the wave BSDF at one incident direction (see the module docs).
 ///
 /// Built once per (PSD, incident direction, surface frame, wavenumber, minimum coherence
-/// width); [`LobeSampler::sample`] and [`LobeSampler::pdf`] allocate nothing.
+/// width); [`ScatterSampler::sample`] and [`ScatterSampler::pdf`] allocate nothing.
 ///
 /// # Examples
 /// ```
 /// use gmueller::frame::Frame;
-/// use gmueller::interaction::sampling::LobeSampler;
+/// use gmueller::interaction::sampling::ScatterSampler;
 /// use gmueller::psd::GaussianPsd;
 /// use nalgebra::Vector3;
 ///
@@ -377,13 +377,13 @@ fn rho_max<T: Real>(c: &Vector2<T>, l: &[T; 3], inside: T, psi: T) -> T {
 /// let to_source = Vector3::new(-0.5_f64, 0.0, 0.75_f64.sqrt()); // 30° incidence
 /// let psd = GaussianPsd::<f64, 2>::isotropic(0.01, 2.0).unwrap();
 /// let k = std::f64::consts::TAU / 0.5;
-/// let sampler = LobeSampler::gaussian(&psd, &surface, &to_source, k, 1.0).unwrap();
+/// let sampler = ScatterSampler::gaussian(&psd, &surface, &to_source, k, 1.0).unwrap();
 /// let s = sampler.sample([0.3, 0.7]);
 /// assert!(s.direction.z > 0.0 && (s.direction.norm() - 1.0).abs() < 1e-12);
 /// assert!((sampler.pdf(&s.direction) - s.pdf).abs() <= 1e-12 * s.pdf);
 /// ```
 #[derive(Debug, Clone, PartialEq)]
-pub struct LobeSampler<T: Real> {
+pub struct ScatterSampler<T: Real> {
     surface: Frame<T>,
     /// Components and their mixture weights (cumulative weights for selection).
     components: Vec<(T, TruncatedLobe<T>)>,
@@ -466,7 +466,7 @@ fn gaussian_lobe<T: Real>(
     TruncatedLobe::new(RadialProfile::Gaussian, c, [l00, l10, l11], inside)
 }
 
-impl<T: Real> LobeSampler<T> {
+impl<T: Real> ScatterSampler<T> {
     /// The sampler for a Gaussian PSD: the truncated Gaussian of covariance
     /// `(C_p + I/w_min²)/k²` about `c = −ŝ_t` in the projected disk.
     ///
@@ -516,10 +516,10 @@ impl<T: Real> LobeSampler<T> {
     /// p_ω = cos θ_o [ ½ q_K(u)/m_K + ½ 𝒩(u; c, (I/((γ+1)T) + I/w_min²)/k²)/m_G ]
     /// q_K(u) = k²T (γ−1)/(2π) (1 + k²T |u − c|²)^{−(γ+1)/2}      (= p(h_t)/∫p · k², J2)
     /// ```
-    /// Arguments as in [`LobeSampler::gaussian`].
+    /// Arguments as in [`ScatterSampler::gaussian`].
     ///
     /// # Errors
-    /// As [`LobeSampler::gaussian`].
+    /// As [`ScatterSampler::gaussian`].
     pub fn k_correlation(
         psd: &KCorrelation<T, 2>,
         surface: &Frame<T>,
@@ -588,13 +588,13 @@ impl<T: Real> LobeSampler<T> {
     }
 
     /// Draws an exit direction from two uniforms `u ∈ [0, 1)²`, exactly from
-    /// [`LobeSampler::pdf`] (see the module docs). For a mixture the first uniform also
+    /// [`ScatterSampler::pdf`] (see the module docs). For a mixture the first uniform also
     /// selects the component (and is rescaled).
     ///
     /// Every input is accepted without panic: each uniform is clamped into `[0, 1 − ε/2]`
     /// (values above, including 1 and `+∞`, act as the largest `T` below 1; values below 0,
     /// `−∞` and NaN as 0). The result is always a finite unit direction strictly above the
-    /// surface with `pdf` finite and `> 0`, equal to [`LobeSampler::pdf`] of it.
+    /// surface with `pdf` finite and `> 0`, equal to [`ScatterSampler::pdf`] of it.
     #[must_use]
     pub fn sample(&self, u: [T; 2]) -> Sample<T> {
         let mut v0 = clamp01(u[0]);

@@ -102,8 +102,8 @@
 //!
 //! # When `σ_s` is 0 or not representable
 //! - `F`, the pdf and the sample weight are computed from `ln σ_s`
-//!   ([`Incident::ln_scattering_coefficient`]): a `σ_s` that underflows the type
-//!   ([`Incident::scattering_coefficient`] 0) or overflows it (∞) leaves them finite and exact
+//!   ([`VolumeIncident::ln_scattering_coefficient`]): a `σ_s` that underflows the type
+//!   ([`VolumeIncident::scattering_coefficient`] 0) or overflows it (∞) leaves them finite and exact
 //!   (`tests/medium_f32.rs`: `σ_s` 5e-49 and 1e40 in `f32`, `F` within 1e-5 of `f64`).
 //! - A medium that does not scatter (`δε = 0`, `ln σ_s = −∞`): `σ_s = 0`, `F = 0`, `dI/dV = 0`,
 //!   sample weights 0, and the sampler still draws with a finite positive pdf.
@@ -158,7 +158,9 @@ mod spectrum;
 
 pub use coherence::VolumeCoherence;
 pub use geometry::ScatteringGeometry;
-pub use phase::{Incident, LevelLight, PhaseFunction, PhaseSample, PhaseValue, ScatteredLight};
+pub use phase::{
+    LevelLight, PhaseFunction, PhaseSample, PhaseValue, ScatteredLight, VolumeIncident,
+};
 pub use scatterer::{Dipole, Scalar, Scatterer};
 pub use spectrum::{VolumeLobes, VolumePsd};
 

@@ -81,7 +81,7 @@ pub struct PhaseFunction<'m, P, M, Pol, Coh> {
 /// A packet prepared for one medium ([`PhaseFunction::prepare`]): its channel weights'
 /// ingredients, its scattering coefficient and its direction sampler.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Incident<T: Real, Pol, Coh> {
+pub struct VolumeIncident<T: Real, Pol, Coh> {
     pub(crate) channels: Channels<T, Pol, Coh>,
     /// For the phase matrix and `σ_s` (the packet's own, or unpolarized for a dark packet).
     pub(crate) phase_channels: Channels<T, Pol, Coh>,
@@ -89,7 +89,7 @@ pub struct Incident<T: Real, Pol, Coh> {
     sampler: DirectionMixture<T>,
 }
 
-impl<T: Real, Pol, Coh> Incident<T, Pol, Coh> {
+impl<T: Real, Pol, Coh> VolumeIncident<T, Pol, Coh> {
     /// `σ_s` (1/length): the power scattered per unit length of travel per unit irradiance, for
     /// this packet (module docs).
     #[must_use]
@@ -240,7 +240,7 @@ where
     /// function's lobe (`F` forward beyond what a resolved lobe of the named shape allows: a
     /// [`VolumePsd`] naming a lobe far wider than its PSD's), where `F` would be ~∞
     /// ([module docs](super), "When `σ_s` is 0 or not representable").
-    pub fn prepare<T>(&self, packet: &WavePacket<T>) -> Result<Incident<T, Pol, Coh>, Error>
+    pub fn prepare<T>(&self, packet: &WavePacket<T>) -> Result<VolumeIncident<T, Pol, Coh>, Error>
     where
         T: Real,
         P: VolumePsd<T>,
@@ -294,7 +294,7 @@ where
             }
         }
         let sampler = DirectionMixture::new(&model, packet.wavenumber(), coefficient.far);
-        Ok(Incident {
+        Ok(VolumeIncident {
             channels,
             phase_channels,
             ln_sigma: coefficient.ln_sigma,
@@ -309,7 +309,7 @@ where
     /// [`Error::NonFinite`] or [`Error::InvalidBasis`] for a non-finite or zero `exit`.
     pub fn eval<T>(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &VolumeIncident<T, Pol, Coh>,
         exit: Vector3<T>,
     ) -> Result<PhaseValue<T, Pol::Throughput<T>>, Error>
     where
@@ -324,7 +324,7 @@ where
 
     fn eval_geometry<T>(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &VolumeIncident<T, Pol, Coh>,
         g: &ScatteringGeometry<T>,
     ) -> PhaseValue<T, Pol::Throughput<T>>
     where
@@ -365,7 +365,11 @@ where
     /// of the K-correlation's own exponent. `w_u = min(1, max(0.05, (s_max/2k)², 1.5 f_far))`,
     /// `f_far` the share of `σ_s` beyond three lobe widths.
     #[must_use]
-    pub fn pdf<T: Real>(&self, incident: &Incident<T, Pol, Coh>, direction: &Vector3<T>) -> T {
+    pub fn pdf<T: Real>(
+        &self,
+        incident: &VolumeIncident<T, Pol, Coh>,
+        direction: &Vector3<T>,
+    ) -> T {
         incident
             .sampler
             .pdf(&incident.channels.frame, incident.channels.k, direction)
@@ -378,7 +382,7 @@ where
     #[must_use]
     pub fn sample<T>(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &VolumeIncident<T, Pol, Coh>,
         u_part: T,
         u: [T; 2],
     ) -> PhaseSample<T, Pol::Throughput<T>>
@@ -410,7 +414,7 @@ where
     /// As [`Self::eval`].
     pub fn differential_scattering<T>(
         &self,
-        incident: &Incident<T, Pol, Coh>,
+        incident: &VolumeIncident<T, Pol, Coh>,
         exit: Vector3<T>,
     ) -> Result<ScatteredLight<T, LevelLight<T, Pol>>, Error>
     where
