@@ -37,42 +37,23 @@
 //! ```
 
 use super::{Interface, SamplingPsd};
-use crate::interaction::{
-    CoherenceWeights, Kernel, Pbsdf, PolarizationModel, RoughSurface, RoughnessWeights,
-};
+#[cfg(doc)]
+use crate::interaction::RoughSurface;
+use crate::interaction::{CoherenceWeights, Kernel, PolarizationModel, RoughnessWeights, Surface};
 use crate::psd::Psd;
 use crate::real::Real;
 
-/// A surface a [`super::Bsdf`] shades: its PSD, specular interface and scattering pBSDF as
-/// associated types. Implemented by every [`RoughSurface`] whose parts the layer can sample
-/// ([`SamplingPsd`], [`Interface`], [`Pbsdf`]).
-pub trait BsdfSurface<T: Real> {
-    /// The height PSD.
-    type Psd: SamplingPsd<T>;
-    /// The mean interface (Fresnel reflection or a dielectric interface).
-    type Specular: Interface<T>;
-    /// The scattering pBSDF.
-    type Scatter: Pbsdf<T>;
+/// A surface a [`super::Bsdf`] shades: a [`Surface`] (its PSD, specular interface and
+/// scattering pBSDF as associated types, [`Surface::parts`]) whose parts the layer can sample:
+/// a [`SamplingPsd`] and an [`Interface`]. Implemented by every such surface (every
+/// [`RoughSurface`] of those parts).
+pub trait BsdfSurface<T: Real>: Surface<T, Psd: SamplingPsd<T>, Specular: Interface<T>> {}
 
-    /// The surface as the kernel takes it.
-    fn parts(&self) -> &RoughSurface<Self::Psd, Self::Specular, Self::Scatter>;
-}
-
-impl<T, P, Sp, Sc> BsdfSurface<T> for RoughSurface<P, Sp, Sc>
+impl<T, S> BsdfSurface<T> for S
 where
     T: Real,
-    P: SamplingPsd<T>,
-    Sp: Interface<T>,
-    Sc: Pbsdf<T>,
+    S: Surface<T, Psd: SamplingPsd<T>, Specular: Interface<T>>,
 {
-    type Psd = P;
-    type Specular = Sp;
-    type Scatter = Sc;
-
-    #[inline]
-    fn parts(&self) -> &Self {
-        self
-    }
 }
 
 /// A kernel a [`super::Bsdf`] evaluates with, for the PSD `P`: its polarization, coherence

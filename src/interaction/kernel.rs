@@ -4,15 +4,13 @@ use core::marker::PhantomData;
 
 use super::coherence::{CoherenceModel, CoherenceWeights};
 use super::geometry::{self, Geometry};
-use super::material::RoughSurface;
-use super::pbsdf::Pbsdf;
+use super::material::Surface;
 use super::polarization::{MuellerResponse, PolarizationModel};
 use super::prepared::PreparedPacket;
 use super::roughness::{FirstOrder, RoughnessModel, RoughnessWeights};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::packet::WavePacket;
-use crate::psd::Psd;
 use crate::real::Real;
 
 /// The S2.20 kernel at a chosen model level: polarization `Pol` ([`super::Intensity`],
@@ -107,19 +105,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// directions of one packet, [`Kernel::prepare`] once and [`Kernel::evaluate_prepared`]
     /// per direction give the same result without repeating the per-packet work.
     #[must_use]
-    pub fn evaluate<T, P, Sp, Sc>(
+    pub fn evaluate<T, S>(
         &self,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         packet: &WavePacket<T>,
         g: &Geometry<T>,
     ) -> Pol::Output<T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Rough: RoughnessWeights<T, P, Coh>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         debug_assert!(
             same_wavenumber(packet.wavenumber(), g.k),
@@ -139,19 +135,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// few ulps (a geometry built for another wavelength, or for the packet's wavelength in the
     /// other medium), or when `g.to_source()` is not the packet's reversed direction (within
     /// `64 ε`).
-    pub fn try_evaluate<T, P, Sp, Sc>(
+    pub fn try_evaluate<T, S>(
         &self,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         packet: &WavePacket<T>,
         g: &Geometry<T>,
     ) -> Result<Pol::Output<T>, Error>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Rough: RoughnessWeights<T, P, Coh>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         check_geometry(packet, g)?;
         Ok(self.evaluate(material, packet, g))
@@ -186,19 +180,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// # Ok::<(), gmueller::Error>(())
     /// ```
     #[must_use]
-    pub fn evaluate_mueller<T, P, Sp, Sc>(
+    pub fn evaluate_mueller<T, S>(
         &self,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         packet: &WavePacket<T>,
         g: &Geometry<T>,
     ) -> MuellerResponse<T, Pol::Throughput<T>>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Rough: RoughnessWeights<T, P, Coh>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         let prepared = self.prepare_unchecked(packet, &g.surface, &g.incident_sp);
         self.evaluate_mueller_prepared(material, &prepared, g)
@@ -206,19 +198,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
 
     /// [`Kernel::evaluate_mueller`] with the per-packet work done by [`Kernel::prepare`].
     #[must_use]
-    pub fn evaluate_mueller_prepared<T, P, Sp, Sc>(
+    pub fn evaluate_mueller_prepared<T, S>(
         &self,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Pol, Coh>,
         g: &Geometry<T>,
     ) -> MuellerResponse<T, Pol::Throughput<T>>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Rough: RoughnessWeights<T, P, Coh>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         debug_assert!(
             same_wavenumber(prepared.k, g.k),
@@ -307,19 +297,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// [`Kernel::evaluate`] with the per-packet work done by [`Kernel::prepare`]; `g` must be
     /// a geometry of that packet on that surface (e.g. [`Geometry::for_packet`]).
     #[must_use]
-    pub fn evaluate_prepared<T, P, Sp, Sc>(
+    pub fn evaluate_prepared<T, S>(
         &self,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Pol, Coh>,
         g: &Geometry<T>,
     ) -> Pol::Output<T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Rough: RoughnessWeights<T, P, Coh>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         debug_assert!(
             same_wavenumber(prepared.k, g.k),

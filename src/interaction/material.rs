@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use num_complex::Complex;
 
 use super::geometry::Geometry;
-use super::pbsdf::{FresnelInterface, FresnelReflection, RayleighRice, TangentPlane};
+use super::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf, RayleighRice, TangentPlane};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::packet::WavePacket;
@@ -22,6 +22,39 @@ pub struct RoughSurface<P, Sp, Sc> {
     pub specular: Sp,
     /// The scattering pBSDF (e.g. [`super::RayleighRice`], [`super::PhaseScreen`]).
     pub scatter: Sc,
+}
+
+/// A rough surface as the kernel's functions take it: its PSD and its two pBSDFs as
+/// associated types, so that generic code names one bound, `S: Surface<T>`, where it named
+/// three (`P: Psd<T, 2>, Sp: Pbsdf<T>, Sc: Pbsdf<T>`), and the levels' bounds read
+/// `Coh: CoherenceWeights<T, S::Psd>`. Implemented by every [`RoughSurface`] of such parts.
+pub trait Surface<T: Real> {
+    /// The height PSD.
+    type Psd: Psd<T, 2>;
+    /// The specular pBSDF.
+    type Specular: Pbsdf<T>;
+    /// The scattering pBSDF.
+    type Scatter: Pbsdf<T>;
+
+    /// The surface's parts.
+    fn parts(&self) -> &RoughSurface<Self::Psd, Self::Specular, Self::Scatter>;
+}
+
+impl<T, P, Sp, Sc> Surface<T> for RoughSurface<P, Sp, Sc>
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+{
+    type Psd = P;
+    type Specular = Sp;
+    type Scatter = Sc;
+
+    #[inline]
+    fn parts(&self) -> &Self {
+        self
+    }
 }
 
 /// A rough interface between two lossless dielectrics of relative index

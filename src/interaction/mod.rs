@@ -130,7 +130,7 @@ pub use kernel::Kernel;
 pub use level::{Level, LevelVisitor, RoughLevelVisitor, Roughness};
 pub use material::{
     KirchhoffConductor, KirchhoffDielectric, RoughConductor, RoughDielectric, RoughSurface,
-    SmoothConductor, SmoothDielectric,
+    SmoothConductor, SmoothDielectric, Surface,
 };
 pub use pbsdf::{
     ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen,

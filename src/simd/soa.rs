@@ -28,16 +28,8 @@ impl fmt::Display for LayoutError {
 
 impl core::error::Error for LayoutError {}
 
-/// `K` input slices of one batch: component `k` of element `i` is `c[k][i]`.
-///
-/// # Examples
-/// ```
-/// use gmueller::simd::{Soa, padded_stride};
-/// let (n, s) = (3, padded_stride::<f32>(3));
-/// let buf = vec![1.0_f32; 2 * s];
-/// let soa = Soa::<f32, 2>::from_strided(&buf, n, s).unwrap();
-/// assert_eq!((soa.len(), soa.c[1].len()), (3, 3));
-/// ```
+/// `K` input slices of one batch: component `k` of element `i` is `c[k][i]` (a test below
+/// builds one from a strided buffer).
 #[derive(Debug, Clone, Copy)]
 pub struct Soa<'a, T, const K: usize> {
     /// The component slices.
@@ -137,7 +129,7 @@ pub(crate) fn strided_mut<T, const K: usize>(
 ///
 /// # Examples
 /// ```
-/// use gmueller::simd::padded_stride;
+/// use gmueller::mueller::batch::padded_stride;
 /// assert_eq!(padded_stride::<f64>(1024), 1048); // 1024 · 8 B is a multiple of 4 KiB
 /// assert!(padded_stride::<f32>(1000) >= 1000);
 /// ```
@@ -160,4 +152,19 @@ pub fn padded_stride<T>(n: usize) -> usize {
         .map(|j| first + j * per_line)
         .find(|&s| spread(s))
         .unwrap_or(first)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Soa, padded_stride};
+
+    /// The example the private type's docs had: two components of three elements, `s` apart.
+    #[test]
+    fn from_strided_gives_k_slices_of_n() {
+        let (n, s) = (3, padded_stride::<f32>(3));
+        let buf = vec![1.0_f32; 2 * s];
+        let soa = Soa::<f32, 2>::from_strided(&buf, n, s).unwrap();
+        assert_eq!((soa.c[0].len(), soa.c[1].len()), (3, 3));
+        assert!(Soa::<f32, 2>::from_strided(&buf, n, 2 * s).is_err()); // past the buffer
+    }
 }

@@ -15,7 +15,7 @@ use nalgebra::{Matrix1, Matrix4};
 
 use super::super::coherence::CoherenceWeights;
 use super::super::geometry::Geometry;
-use super::super::material::RoughSurface;
+use super::super::material::Surface;
 use super::super::pbsdf::Pbsdf;
 use super::super::prepared::{PreparedPacket, flush_to_normal, throughput_scaled};
 use super::super::roughness::RoughnessWeights;
@@ -78,21 +78,20 @@ where
 
 /// The [`super::Intensity`] level's BSDF form: scalars `(cos θ_o/λ_t²) α M₀₀ K`.
 #[inline]
-pub(super) fn intensity<T, P, Sp, Sc, Pol, Coh, Rough>(
+pub(super) fn intensity<T, S, Pol, Coh, Rough>(
     coherence: &Coh,
     roughness: &Rough,
-    material: &RoughSurface<P, Sp, Sc>,
+    material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
 ) -> MuellerResponse<T, T>
 where
     T: Real,
-    P: Psd<T, 2>,
-    Sp: Pbsdf<T>,
-    Sc: Pbsdf<T>,
-    Coh: CoherenceWeights<T, P>,
-    Rough: RoughnessWeights<T, P, Coh>,
+    S: Surface<T>,
+    Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessWeights<T, S::Psd, Coh>,
 {
+    let material = material.parts();
     let psd = &material.psd;
     let f = front(psd, prepared, g);
     let (attenuation, ln_front) = (f.attenuation, f.ln_front);
@@ -116,21 +115,20 @@ where
 /// The [`super::OneShape`] level's BSDF form (also [`super::Full`] on single-shape packets):
 /// `(cos θ_o/λ_t²) α M_pbsdf T K`.
 #[inline]
-pub(super) fn one_shape<T, P, Sp, Sc, Pol, Coh, Rough>(
+pub(super) fn one_shape<T, S, Pol, Coh, Rough>(
     coherence: &Coh,
     roughness: &Rough,
-    material: &RoughSurface<P, Sp, Sc>,
+    material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
 ) -> MuellerResponse<T, Mueller<T>>
 where
     T: Real,
-    P: Psd<T, 2>,
-    Sp: Pbsdf<T>,
-    Sc: Pbsdf<T>,
-    Coh: CoherenceWeights<T, P>,
-    Rough: RoughnessWeights<T, P, Coh>,
+    S: Surface<T>,
+    Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessWeights<T, S::Psd, Coh>,
 {
+    let material = material.parts();
     let psd = &material.psd;
     let f = front(psd, prepared, g);
     let (attenuation, ln_front) = (f.attenuation, f.ln_front);
@@ -155,21 +153,20 @@ where
 /// The [`super::Full`] level's BSDF form on a packet with two shapes:
 /// `(cos θ_o/λ_t²) α M_pbsdf T Σ_α K_α P_α` ([`PreparedPacket::channel_matrix`]).
 #[inline]
-pub(super) fn full<T, P, Sp, Sc, Pol, Coh, Rough>(
+pub(super) fn full<T, S, Pol, Coh, Rough>(
     coherence: &Coh,
     roughness: &Rough,
-    material: &RoughSurface<P, Sp, Sc>,
+    material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
 ) -> MuellerResponse<T, Mueller<T>>
 where
     T: Real,
-    P: Psd<T, 2>,
-    Sp: Pbsdf<T>,
-    Sc: Pbsdf<T>,
-    Coh: CoherenceWeights<T, P>,
-    Rough: RoughnessWeights<T, P, Coh>,
+    S: Surface<T>,
+    Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessWeights<T, S::Psd, Coh>,
 {
+    let material = material.parts();
     let psd = &material.psd;
     let f = front(psd, prepared, g);
     let (attenuation, ln_front) = (f.attenuation, f.ln_front);

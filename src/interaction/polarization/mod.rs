@@ -24,7 +24,7 @@ use nalgebra::Vector4;
 
 use super::coherence::CoherenceWeights;
 use super::geometry::Geometry;
-use super::material::RoughSurface;
+use super::material::Surface;
 use super::pbsdf::Pbsdf;
 use super::prepared::{Plan, PreparedPacket};
 use super::roughness::{RoughnessModel, RoughnessWeights};
@@ -69,20 +69,18 @@ pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
     /// The level's S2.20 for one exit direction `g` (see the module formula), with the
     /// scattered weights of the roughness level `roughness`.
     #[must_use]
-    fn evaluate<T, P, Sp, Sc, Coh, R>(
+    fn evaluate<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> Self::Output<T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>;
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>;
 
     /// What the level's BSDF form holds per lobe: a Mueller matrix at the Stokes levels, a
     /// scalar at the intensity level.
@@ -91,20 +89,18 @@ pub trait PolarizationModel: sealed::Sealed + Copy + Default + Debug {
     /// The level's S2.20 for one exit direction `g` in BSDF form: per unit incident
     /// irradiance, acting on Stokes vectors in the packet's frame ([`MuellerResponse`]).
     #[must_use]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
+    fn evaluate_mueller<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> MuellerResponse<T, Self::Throughput<T>>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>;
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>;
 }
 
 /// The per-packet work a polarization level asks for ([`PolarizationModel::plan`]); opaque.
@@ -253,21 +249,20 @@ where
 
 /// The [`OneShape`] path (also [`Full`] on single-shape packets and without shapes): `M T S K`.
 #[inline]
-fn one_shape<T, P, Sp, Sc, Pol, Coh, R>(
+fn one_shape<T, S, Pol, Coh, R>(
     coherence: &Coh,
     roughness: &R,
-    material: &RoughSurface<P, Sp, Sc>,
+    material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
 ) -> Response<T>
 where
     T: Real,
-    P: Psd<T, 2>,
-    Sp: Pbsdf<T>,
-    Sc: Pbsdf<T>,
-    Coh: CoherenceWeights<T, P>,
-    R: RoughnessWeights<T, P, Coh>,
+    S: Surface<T>,
+    Coh: CoherenceWeights<T, S::Psd>,
+    R: RoughnessWeights<T, S::Psd, Coh>,
 {
+    let material = material.parts();
     let psd = &material.psd;
     let f = front(psd, prepared, g);
     let (attenuation, ln_front) = (f.attenuation, f.ln_front);
@@ -301,20 +296,18 @@ impl PolarizationModel for Intensity {
     type Throughput<T: Real> = T;
 
     #[inline]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
+    fn evaluate_mueller<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> MuellerResponse<T, T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>,
     {
         matrix::intensity(coherence, roughness, material, prepared, g)
     }
@@ -327,21 +320,20 @@ impl PolarizationModel for Intensity {
     }
 
     #[inline]
-    fn evaluate<T, P, Sp, Sc, Coh, R>(
+    fn evaluate<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> IntensityResponse<T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>,
     {
+        let material = material.parts();
         let psd = &material.psd;
         let f = front(psd, prepared, g);
         let (attenuation, ln_front) = (f.attenuation, f.ln_front);
@@ -376,20 +368,18 @@ impl PolarizationModel for OneShape {
     type Throughput<T: Real> = Mueller<T>;
 
     #[inline]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
+    fn evaluate_mueller<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> MuellerResponse<T, Mueller<T>>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>,
     {
         matrix::one_shape(coherence, roughness, material, prepared, g)
     }
@@ -402,20 +392,18 @@ impl PolarizationModel for OneShape {
     }
 
     #[inline]
-    fn evaluate<T, P, Sp, Sc, Coh, R>(
+    fn evaluate<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> Response<T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>,
     {
         one_shape(coherence, roughness, material, prepared, g)
     }
@@ -425,20 +413,18 @@ impl PolarizationModel for Full {
     type Throughput<T: Real> = Mueller<T>;
 
     #[inline]
-    fn evaluate_mueller<T, P, Sp, Sc, Coh, R>(
+    fn evaluate_mueller<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> MuellerResponse<T, Mueller<T>>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>,
     {
         if !Coh::USES_SHAPE || prepared.single_shape {
             matrix::one_shape(coherence, roughness, material, prepared, g)
@@ -464,21 +450,20 @@ impl PolarizationModel for Full {
     }
 
     #[inline]
-    fn evaluate<T, P, Sp, Sc, Coh, R>(
+    fn evaluate<T, S, Coh, R>(
         coherence: &Coh,
         roughness: &R,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         prepared: &PreparedPacket<T, Self, Coh>,
         g: &Geometry<T>,
     ) -> Response<T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
-        Coh: CoherenceWeights<T, P>,
-        R: RoughnessWeights<T, P, Coh>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        R: RoughnessWeights<T, S::Psd, Coh>,
     {
+        let material = material.parts();
         if !Coh::USES_SHAPE || prepared.single_shape {
             return one_shape(coherence, roughness, material, prepared, g);
         }
