@@ -300,9 +300,10 @@ pub type SampleResult<T, Pol> =
 pub type WeightResult<T, Pol> =
     Result<(<Pol as PolarizationModel>::Throughput<T>, Geometry<T>), Error>;
 
-/// `true` when two wavenumbers agree within 16 ulps.
+/// `true` when two wavenumbers agree within 16 ulps (a packet's own wavenumber, and the one
+/// the `Bsdf` derives from its wavelength and the source's medium).
 fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
-    (a - b).abs() <= T::lit(16.0) * T::EPSILON * a.abs().max(b.abs())
+    crate::numerics::within_ulps(a, b, 16.0)
 }
 
 /// `v/|v|`, rejecting zero and non-finite directions.

@@ -322,7 +322,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
 /// `true` when two wavenumbers agree within 8 ulps.
 #[inline]
 fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
-    (a - b).abs() <= T::lit(8.0) * T::EPSILON * a.abs().max(b.abs())
+    crate::numerics::within_ulps(a, b, 8.0)
 }
 
 /// `Ok` when `g` was built for `packet`: its wavenumber and its reversed direction.

@@ -23,6 +23,13 @@ pub(crate) use linalg2::{
 
 use crate::real::Real;
 
+/// `true` when `a` and `b` agree within `ulps` units of the larger's last place (a NaN fails):
+/// the check that a wavenumber (or wavelength) given twice is the same one.
+#[inline]
+pub(crate) fn within_ulps<T: Real>(a: T, b: T, ulps: f64) -> bool {
+    (a - b).abs() <= T::lit(ulps) * T::EPSILON * a.abs().max(b.abs())
+}
+
 /// `v/|v|` for a finite `v`, rescaled by its largest component first (`None` for the zero
 /// vector): `|v|` itself over- or underflows for components beyond ~1e±154 (f64) or ~1e±19
 /// (f32), and a subnormal `|v|²` keeps too few digits to normalise by. The one normaliser of
