@@ -124,16 +124,22 @@ fn owner(src: &Path, file: &Path) -> (String, Option<String>) {
     (top, sub)
 }
 
+/// `src/` and its Rust files, sorted.
+fn sources() -> (PathBuf, Vec<PathBuf>) {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    (src, files)
+}
+
 fn rank(order: &[&str], name: &str) -> Option<usize> {
     order.iter().position(|m| *m == name)
 }
 
 #[test]
 fn every_import_points_down_the_documented_layers() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    files.sort();
+    let (src, files) = sources();
     let mut violations = Vec::new();
     let mut edges: BTreeMap<(String, String), usize> = BTreeMap::new();
     for file in &files {
@@ -305,7 +311,8 @@ fn paths_named(code: &str, at: &[String]) -> Vec<Vec<String>> {
         } else if !path.is_empty() {
             out.push(path);
         }
-        i = code.len() - tail.len().min(code.len() - i - 1);
+        // `tail` is a suffix of `code` past at least one `crate::` or `super::`.
+        i = code.len() - tail.len();
     }
     out
 }
@@ -352,10 +359,7 @@ fn cycles(edges: &BTreeMap<String, std::collections::BTreeSet<String>>) -> Vec<V
 /// `a`, taken at the first segment where the two paths part.
 #[test]
 fn no_folder_has_an_import_cycle() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    files.sort();
+    let (src, files) = sources();
     let modules: std::collections::BTreeSet<Vec<String>> =
         files.iter().map(|f| module_path(&src, f)).collect();
     let mut graphs: BTreeMap<Vec<String>, BTreeMap<String, std::collections::BTreeSet<String>>> =

@@ -213,6 +213,12 @@ fn roulette_keeps_the_expected_throughput() {
     for m00 in [0.0_f32, -0.1, f32::NAN, f32::INFINITY] {
         assert!(!path(m00).roulette(0.0, 0.05), "M00 {m00}");
     }
+    // No roulette without a positive threshold: a live path survives, unscaled.
+    for threshold in [0.0_f32, -1.0, f32::NAN] {
+        let mut p = path(0.01);
+        assert!(p.roulette(0.999, threshold), "threshold {threshold}");
+        assert_eq!(p.matrix().m00(), 0.01);
+    }
 }
 
 /// `gather_*` add finite contributions (the same vectors as `contribution` / `arriving`) and
@@ -349,4 +355,65 @@ fn uniform_incident_sampling_is_the_unweighted_twin_of_sample_incident() {
             vi[0].sqrt()
         );
     }
+}
+
+/// `sample_incident_uniform` in `f32`, at grazing exits and φ ≠ 0 and over the whole
+/// square of uniforms (its edges included): every draw is `None` only within `√ε` of the
+/// plane, otherwise a finite weight, the exact density and a direction in the domain; and
+/// the weight is `eval_incident / p` bit for bit.
+#[test]
+fn uniform_incident_sampling_in_f32() {
+    let psd = GaussianPsd::<f32, 2>::isotropic(0.01, 2.0).unwrap();
+    let full_partial = Level::ALL[7];
+    let gold = Material::new(
+        RoughConductor::new(psd, Complex::new(0.2, 3.5)).unwrap(),
+        full_partial,
+    );
+    let glass = Material::new(RoughDielectric::new(psd, 1.5).unwrap(), full_partial);
+    let frame = Frame::from_normal(Vector3::new(0.3_f32, -0.2, 1.0)).unwrap();
+    let at = ShadingPoint::new(frame, 0.55).unwrap();
+    let sky = SurfaceCoherence::new(20.0_f32).unwrap();
+    let (mut drawn, mut refused) = (0, 0);
+    for (m, domain) in [(&gold, 1.0_f32), (&glass, 2.0)] {
+        for (theta, phi) in [
+            (0.0_f32, 0.0_f32),
+            (1.2, 0.7),
+            (1.55, -2.0),
+            (std::f32::consts::FRAC_PI_2 - 1e-4, 2.9),
+        ] {
+            let r = (frame.x() * (theta.sin() * phi.cos())
+                + frame.y() * (theta.sin() * phi.sin())
+                + frame.k() * theta.cos())
+            .normalize();
+            for i in 0..=20 {
+                for j in 0..=8 {
+                    let u = [i as f32 / 20.0, j as f32 / 8.0];
+                    let Some(s) = m.sample_incident_uniform(&at, r, &sky, u).unwrap() else {
+                        refused += 1;
+                        continue;
+                    };
+                    let d = s.sample.direction;
+                    let cos = d.dot(&frame.k());
+                    assert!(cos.abs() > f32::EPSILON.sqrt(), "{d}");
+                    assert!(domain == 2.0 || cos > 0.0, "{d} below an opaque surface");
+                    assert_eq!(s.sample.pdf, 1.0 / (domain * std::f32::consts::TAU));
+                    assert!(
+                        s.weight.matrix().iter().all(|x| x.is_finite()),
+                        "{:?}",
+                        s.weight
+                    );
+                    let v = m.eval_incident(&at, r, &sky, d).unwrap();
+                    assert_eq!(s.weight, v.response.total().scaled(1.0 / s.sample.pdf));
+                    drawn += 1;
+                }
+            }
+        }
+    }
+    // u₀ = 0 on the hemisphere (z = 0) and u₀ = 0.5 on the sphere are refused, nothing else.
+    assert_eq!(
+        refused,
+        4 * 9 * 2,
+        "{refused} refused of {}",
+        drawn + refused
+    );
 }

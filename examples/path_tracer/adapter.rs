@@ -4,7 +4,7 @@
 //! part), it is the only code that names the crate; `tests.rs` holds it to 50 lines of code.
 
 use gmueller::prelude::*;
-use gmueller::spectral::{cie1931_normalized, srgb_encode, xyz_to_linear_srgb};
+use gmueller::spectral::{D65_WHITE_XYZ, cie1931_normalized, srgb_encode, xyz_to_linear_srgb};
 
 use crate::scene::{Hit, Scene, V3};
 use crate::{Options, Rng, Sampling};
@@ -107,6 +107,7 @@ impl<'a> Path<'a> {
 
 /// 8-bit sRGB of `xyz` (the equal-energy white at `(1, 1, 1)`, mapped to D65's).
 pub(crate) fn srgb8(xyz: [f32; 3]) -> [u8; 3] {
-    let rgb = xyz_to_linear_srgb([xyz[0] * 0.9505, xyz[1], xyz[2] * 1.089]);
+    let w = D65_WHITE_XYZ.map(|c| c as f32);
+    let rgb = xyz_to_linear_srgb([xyz[0] * w[0], xyz[1], xyz[2] * w[2]]);
     rgb.map(|c| (srgb_encode(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
 }

@@ -213,7 +213,13 @@ impl Scene {
         let z = 1.0 - rng.f() * (1.0 - cos_max);
         let rho = (1.0 - z * z).max(0.0).sqrt();
         let phi = std::f32::consts::TAU * rng.f();
-        let x = self.sun.cross(&V3::x()).normalize();
+        // Any axis not along the sun spans the disk's plane with it.
+        let axis = if self.sun.x.abs() < 0.9 {
+            V3::x()
+        } else {
+            V3::y()
+        };
+        let x = self.sun.cross(&axis).normalize();
         let y = self.sun.cross(&x);
         let dir = x * (rho * phi.cos()) + y * (rho * phi.sin()) + self.sun * z;
         (dir, solid_angle / k as f32)

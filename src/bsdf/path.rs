@@ -165,12 +165,17 @@ impl<T: Real> PathThroughput<T> {
     /// `M₀₀ ≥ threshold` survives; below, it survives with probability `M₀₀/threshold` and is
     /// rescaled by its inverse, so the estimate stays unbiased. `u` is uniform in `[0, 1)`.
     /// Returns `false` when the path ends (also for `M₀₀ ≤ 0` or not finite: see
-    /// [`PathThroughput::is_alive`]).
+    /// [`PathThroughput::is_alive`]). A `threshold` that is not positive (or NaN) plays no
+    /// roulette: every live path survives unscaled.
     ///
     /// Rescaling also keeps `f32` throughputs out of the subnormal range.
     pub fn roulette(&mut self, u: T, threshold: T) -> bool {
         if !self.is_alive() {
             return false;
+        }
+        // Not `threshold > 0` (NaN included): no roulette.
+        if threshold.partial_cmp(&T::zero()) != Some(core::cmp::Ordering::Greater) {
+            return true;
         }
         let survive = (self.t.0[(0, 0)] / threshold).min(T::one());
         if u >= survive {
