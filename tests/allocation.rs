@@ -282,7 +282,7 @@ fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
     name: &str,
 ) where
     T: Real,
-    P: gmueller::bsdf::SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: gmueller::bsdf::Interface<T>,
     Sc: gmueller::interaction::Pbsdf<T>,
     Pol: PolarizationModel,
@@ -339,16 +339,16 @@ fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
 /// and on tangent-plane glass at `vσ ≈ 3` at every level × every run-time roughness level
 /// (`Level::dispatch_rough`).
 fn renderer_layer<T: Real>() {
-    use gmueller::bsdf::SamplingPsd;
     use gmueller::interaction::{
         KirchhoffDielectric, KirchhoffSeries, RoughLevelVisitor, Roughness, RoughnessLevel,
     };
     use gmueller::psd::Grating;
+    use gmueller::psd::Psd;
 
     struct RunBsdf<'a, T: Real, P> {
         material: &'a RoughSurface<P, gmueller::interaction::FresnelInterface<T>, RayleighRice<T>>,
     }
-    impl<T: Real, P: SamplingPsd<T>> LevelVisitor<T, P> for RunBsdf<'_, T, P> {
+    impl<T: Real, P: Psd<T, 2>> LevelVisitor<T, P> for RunBsdf<'_, T, P> {
         type Output = ();
         fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
         where
@@ -574,7 +574,7 @@ fn batch_evaluation_allocates_nothing() {
 /// Intensity·Incoherent levels, Gaussian (closed form) and K-correlation (Gauss–Hermite) PSDs.
 fn medium_levels<T: Real>() {
     use gmueller::interaction::Throughput;
-    use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence, VolumePsd};
+    use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence};
     use gmueller::psd::{GaussianPsd as G, KCorrelation as K};
     fn run<T, P, Pol, Coh>(
         name: &str,
@@ -583,7 +583,7 @@ fn medium_levels<T: Real>() {
         s: &Scene<T>,
     ) where
         T: Real,
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         Pol: PolarizationModel,
         Coh: VolumeCoherence<T, P>,
     {

@@ -1432,7 +1432,7 @@ fn forward_delta<P, Sp, Sc>(
     part: usize,
     tol: f64,
 ) where
-    P: gmueller::bsdf::SamplingPsd<f64>,
+    P: gmueller::psd::Psd<f64, 2>,
     Sp: gmueller::bsdf::Interface<f64>,
     Sc: Pbsdf<f64>,
     ClosedForm: BlurMethod<f64, 2, P>,

@@ -22,7 +22,7 @@ use crate::common;
 
 use common::proptest_config;
 use gmueller::Real;
-use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
+use gmueller::bsdf::{Bsdf, Interface, SurfaceCoherence};
 use gmueller::error::Error;
 use gmueller::frame::Frame;
 use gmueller::interaction::{
@@ -161,7 +161,7 @@ struct Case<'a, T: Real, P, Sp> {
 impl<T, P, Sp> LevelVisitor<T, P> for Case<'_, T, P, Sp>
 where
     T: Real,
-    P: SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: Interface<T>,
 {
     type Output = Result<(), TestCaseError>;

@@ -242,7 +242,7 @@ impl<T, P, Sp, Sc, Pol, Coh, Rough> Probe<T>
     for Bsdf<'_, T, RoughSurface<P, Sp, Sc>, Kernel<Pol, Coh, Rough>>
 where
     T: Real,
-    P: gmueller::bsdf::SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: gmueller::bsdf::Interface<T>,
     Sc: gmueller::interaction::Pbsdf<T>,
     Pol: gmueller::interaction::PolarizationModel,

@@ -18,7 +18,7 @@
 use crate::common;
 
 use common::rng::SplitMix64;
-use gmueller::bsdf::{Bsdf, Interface, LobeSampler, SamplingPsd, SurfaceCoherence};
+use gmueller::bsdf::{Bsdf, Interface, LobeSampler, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::RoughSurface;
 use gmueller::interaction::{
@@ -67,7 +67,7 @@ fn forward_albedo<P, Sp, Sc, Pol, Coh>(
     seed: u64,
 ) -> (f64, f64)
 where
-    P: SamplingPsd<f64>,
+    P: gmueller::psd::Psd<f64, 2>,
     Sp: Interface<f64>,
     Sc: Pbsdf<f64>,
     Pol: PolarizationModel,
@@ -93,7 +93,7 @@ fn backward_furnace<P, Sp, Sc, Pol, Coh>(
     seed: u64,
 ) -> (f64, f64)
 where
-    P: SamplingPsd<f64>,
+    P: gmueller::psd::Psd<f64, 2>,
     Sp: Interface<f64>,
     Sc: Pbsdf<f64>,
     Pol: PolarizationModel,

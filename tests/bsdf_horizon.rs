@@ -23,7 +23,7 @@ use crate::common;
 use common::rng::SplitMix64;
 
 use gmueller::Real;
-use gmueller::bsdf::{Bsdf, Incident, Interface, SamplingPsd, SurfaceCoherence};
+use gmueller::bsdf::{Bsdf, Incident, Interface, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::RoughSurface;
 use gmueller::interaction::{
@@ -68,7 +68,7 @@ fn coherences<T: Real, P, Sp, Sc>(
     s: Vector3<T>,
 ) -> Vec<(String, WavePacket<T>)>
 where
-    P: SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: Interface<T>,
     Sc: Pbsdf<T>,
     Partial: CoherenceWeights<T, P>,
@@ -146,7 +146,7 @@ fn lobe_albedos<T: Real, P, Sp, Sc>(
     with_raw: bool,
 ) -> (f64, f64)
 where
-    P: SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: Interface<T>,
     Sc: Pbsdf<T>,
     Partial: CoherenceWeights<T, P>,
@@ -402,7 +402,7 @@ fn backward_f32<P, Sp, Sc>(
     seed: u64,
 ) -> (f64, f64)
 where
-    P: SamplingPsd<f32>,
+    P: gmueller::psd::Psd<f32, 2>,
     Sp: Interface<f32>,
     Sc: Pbsdf<f32>,
     Partial: CoherenceWeights<f32, P>,

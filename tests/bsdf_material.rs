@@ -6,7 +6,7 @@
 //! two-sided option: the back of a two-sided opaque surface answers as its front turned over,
 //! bit for bit, and a one-sided one refuses it.
 
-use gmueller::bsdf::{Bsdf, Interface, Material, SamplingPsd, ShadingPoint, SurfaceCoherence};
+use gmueller::bsdf::{Bsdf, Interface, Material, ShadingPoint, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
     CoherenceWeights, Kernel, KirchhoffSeries, Level, LevelVisitor, Pbsdf, PolarizationModel,
@@ -91,7 +91,7 @@ struct Static<'a, T: Real, P, Sp, Sc> {
 
 impl<T: Real, P, Sp, Sc> Static<'_, T, P, Sp, Sc>
 where
-    P: SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: Interface<T>,
     Sc: Pbsdf<T>,
 {
@@ -155,7 +155,7 @@ where
 
 impl<T: Real, P, Sp, Sc> LevelVisitor<T, P> for Static<'_, T, P, Sp, Sc>
 where
-    P: SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: Interface<T>,
     Sc: Pbsdf<T>,
 {
@@ -171,7 +171,7 @@ where
 
 impl<T: Real, P, Sp, Sc> RoughLevelVisitor<T, P> for Static<'_, T, P, Sp, Sc>
 where
-    P: SamplingPsd<T>,
+    P: gmueller::psd::Psd<T, 2>,
     Sp: Interface<T>,
     Sc: Pbsdf<T>,
 {
@@ -238,7 +238,7 @@ fn compare<T, P, Sp, Sc, B>(
 ) -> usize
 where
     T: Real,
-    P: SamplingPsd<T> + Clone + std::fmt::Debug + Send + Sync + 'static,
+    P: gmueller::psd::Psd<T, 2> + Clone + std::fmt::Debug + Send + Sync + 'static,
     Sp: Interface<T> + Clone + std::fmt::Debug + Send + Sync + 'static,
     Sc: Pbsdf<T> + Clone + std::fmt::Debug + Send + Sync + 'static,
     B: BlurMethod<T, 2, P> + Clone + std::fmt::Debug + Send + Sync + 'static,

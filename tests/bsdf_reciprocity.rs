@@ -23,7 +23,7 @@ use gmueller::verify::check::reciprocal;
 
 use common::SplitMix64;
 use common::hemisphere::{Hemisphere, hemisphere_integral};
-use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
+use gmueller::bsdf::{Bsdf, Interface, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
     CoherenceWeights, Full, Kernel, Partial, Pbsdf, PlaneWave, RoughConductor, RoughDielectric,
@@ -72,7 +72,7 @@ fn bsdf<P, Sp, Sc, Coh>(
     r: Vector3<f64>,
 ) -> (Matrix4<f64>, Matrix4<f64>)
 where
-    P: SamplingPsd<f64>,
+    P: gmueller::psd::Psd<f64, 2>,
     Sp: Interface<f64>,
     Sc: Pbsdf<f64>,
     Coh: CoherenceWeights<f64, P>,
@@ -409,7 +409,7 @@ fn backward<P, Sp, Sc, Coh>(
     seed: u64,
 ) -> (f64, f64, Estimate, Estimate)
 where
-    P: SamplingPsd<f64>,
+    P: gmueller::psd::Psd<f64, 2>,
     Sp: Interface<f64>,
     Sc: Pbsdf<f64>,
     Coh: CoherenceWeights<f64, P>,
@@ -583,7 +583,7 @@ fn forward_monte_carlo_matches_the_albedo() {
         c: &SurfaceCoherence<f64>,
         seed: u64,
     ) where
-        P: SamplingPsd<f64>,
+        P: gmueller::psd::Psd<f64, 2>,
         Sp: Interface<f64>,
         Sc: Pbsdf<f64>,
         Partial: CoherenceWeights<f64, P>,

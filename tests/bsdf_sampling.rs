@@ -577,7 +577,7 @@ fn f32_sampler_draws_from_its_pdf() {
     }
 }
 
-/// A downstream PSD (a Gaussian) whose sampler lobe is the origin order (`PsdLobes::Origin`,
+/// A downstream PSD (a Gaussian) whose sampler lobe is the origin order (`Shape::Origin`,
 /// as `Smooth` names it) and which has an autocorrelation, so the roughness levels beyond
 /// first order accept it — the one way to reach a Dirac order in the scattered part together
 /// with the projected-disk share of those levels.
@@ -591,6 +591,9 @@ impl gmueller::psd::Psd<f64, 2> for OriginPsd {
     fn variance(&self) -> f64 {
         gmueller::psd::Psd::<f64, 2>::variance(&self.0)
     }
+    fn form(&self) -> gmueller::psd::Form<'_, f64, 2> {
+        gmueller::psd::Form::closest(gmueller::psd::Shape::Origin)
+    }
 }
 
 impl gmueller::psd::Autocorrelation<f64> for OriginPsd {
@@ -599,12 +602,6 @@ impl gmueller::psd::Autocorrelation<f64> for OriginPsd {
     }
     fn decay_radius(&self, level: f64) -> f64 {
         self.0.decay_radius(level)
-    }
-}
-
-impl gmueller::bsdf::SamplingPsd<f64> for OriginPsd {
-    fn lobes(&self) -> gmueller::bsdf::PsdLobes<'_, f64> {
-        gmueller::bsdf::PsdLobes::Origin
     }
 }
 

@@ -25,9 +25,7 @@ use gmueller::interaction::{
     Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
     Throughput, volume_coherence_term,
 };
-use gmueller::medium::{
-    Dipole, PhaseFunction, RandomMedium, Scalar, Scatterer, VolumeCoherence, VolumePsd,
-};
+use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, Scatterer, VolumeCoherence};
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussianPsd, KCorrelation};
 use gmueller::stokes::Stokes;
@@ -604,7 +602,7 @@ fn check_coefficient<P, Pol, Coh>(
     tol: f64,
 ) -> f64
 where
-    P: VolumePsd<f64>,
+    P: gmueller::psd::Psd<f64, 3>,
     Pol: PolarizationModel,
     Coh: VolumeCoherence<f64, P>,
 {

@@ -16,7 +16,7 @@ use gmueller::interaction::{
     Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
     Throughput,
 };
-use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, VolumeCoherence, VolumePsd};
+use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{GaussianPsd, KCorrelation};
 use gmueller::stokes::Stokes;
@@ -134,7 +134,7 @@ trait Checker<T: Real> {
 
 impl<T: Real, P, M: gmueller::medium::Scatterer<T>> Checker<T> for RandomMedium<P, M>
 where
-    P: VolumePsd<T> + gmueller::psd::ClosedFormBlur<T, 3>,
+    P: gmueller::psd::Psd<T, 3> + gmueller::psd::ClosedFormBlur<T, 3>,
 {
     fn all_levels(&self, packet: &WavePacket<T>, exit: Vector3<T>, tol: f64) {
         let partial = Partial(gmueller::psd::ClosedForm);
@@ -145,7 +145,7 @@ where
 /// A medium whose PSD has no closed-form blur: `Partial` by Gauss–Hermite quadrature.
 struct ByQuadrature<P, M>(RandomMedium<P, M>);
 
-impl<T: Real, P: VolumePsd<T>, M: gmueller::medium::Scatterer<T>> Checker<T>
+impl<T: Real, P: gmueller::psd::Psd<T, 3>, M: gmueller::medium::Scatterer<T>> Checker<T>
     for ByQuadrature<P, M>
 {
     fn all_levels(&self, packet: &WavePacket<T>, exit: Vector3<T>, tol: f64) {
@@ -162,7 +162,7 @@ fn levels<T, P, M, B>(
     tol: f64,
 ) where
     T: Real,
-    P: VolumePsd<T>,
+    P: gmueller::psd::Psd<T, 3>,
     M: gmueller::medium::Scatterer<T>,
     B: gmueller::psd::BlurMethod<T, 3, P> + Clone + core::fmt::Debug,
 {
@@ -222,7 +222,7 @@ fn level<T, P, M, Pol, Coh>(
     name: &str,
 ) where
     T: Real,
-    P: VolumePsd<T>,
+    P: gmueller::psd::Psd<T, 3>,
     M: gmueller::medium::Scatterer<T>,
     Pol: PolarizationModel,
     Coh: VolumeCoherence<T, P>,

@@ -18,11 +18,9 @@ use gmueller::interaction::{
     Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
     Throughput,
 };
-use gmueller::medium::{
-    Dipole, PhaseFunction, RandomMedium, Scalar, Scatterer, VolumeCoherence, VolumeLobes, VolumePsd,
-};
+use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, Scatterer, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
+use gmueller::psd::{ClosedForm, Form, GaussHermite, GaussianPsd, KCorrelation, Psd, Shape};
 use gmueller::stokes::Stokes;
 use gmueller::verify::check::assert_valid_stokes;
 use gmueller::verify::strategy::frame;
@@ -50,7 +48,7 @@ fn checked<T, P, M, Pol, Coh>(
 ) -> f64
 where
     T: Real,
-    P: VolumePsd<T>,
+    P: Psd<T, 3>,
     M: Scatterer<T>,
     Pol: PolarizationModel,
     Coh: VolumeCoherence<T, P>,
@@ -387,8 +385,8 @@ fn all_levels<P32, P64, M, B32, B64>(
     p32: &WavePacket<f32>,
 ) -> [f64; 9]
 where
-    P32: VolumePsd<f32>,
-    P64: VolumePsd<f64>,
+    P32: Psd<f32, 3>,
+    P64: Psd<f64, 3>,
     M: Scatterer<f32> + Scatterer<f64>,
     B32: gmueller::psd::BlurMethod<f32, 3, P32> + Clone + core::fmt::Debug,
     B64: gmueller::psd::BlurMethod<f64, 3, P64> + Clone + core::fmt::Debug,
@@ -649,10 +647,12 @@ fn sigma_s_beyond_f32_leaves_the_phase_matrix_finite() {
     }
 }
 
-/// A `VolumePsd` that names a lobe `scale²` times wider (in variance) than its own Gaussian's.
+/// A PSD whose form names as its closest a lobe `scale²` times wider (in variance) than its own
+/// Gaussian's.
 struct Misnamed {
     psd: GaussianPsd<f64, 3>,
-    scale: f64,
+    /// The named lobe: the same variance, correlation length `ℓ/scale`.
+    named: GaussianPsd<f64, 3>,
 }
 
 impl Psd<f64, 3> for Misnamed {
@@ -665,15 +665,25 @@ impl Psd<f64, 3> for Misnamed {
     fn variance(&self) -> f64 {
         Psd::<f64, 3>::variance(&self.psd)
     }
-}
-
-impl VolumePsd<f64> for Misnamed {
-    fn lobes(&self) -> VolumeLobes<'_, f64> {
-        VolumeLobes::Gaussian(*self.psd.spectral_shape().covariance() * (self.scale * self.scale))
+    fn form(&self) -> Form<'_, f64, 3> {
+        Form::closest(Shape::Gaussian(&self.named))
     }
 }
 
-/// Where the `σ_s` quadrature cannot see the lobe — a `VolumePsd` that names a lobe 10⁴ times
+impl Misnamed {
+    fn new(psd: GaussianPsd<f64, 3>, ell: f64, scale: f64) -> Self {
+        let named = GaussianPsd::isotropic(1e-3, ell / scale).unwrap();
+        // The named lobe's spectral covariance is the PSD's times scale².
+        let (a, b) = (
+            named.spectral_shape().covariance(),
+            psd.spectral_shape().covariance() * (scale * scale),
+        );
+        assert!((a - b).amax() <= 1e-12 * b.amax());
+        Self { psd, named }
+    }
+}
+
+/// Where the `σ_s` quadrature cannot see the lobe — a PSD whose form names a lobe 10⁴ times
 /// wider than its PSD's (kℓ = 500), so that every node lies ≥ 20 lobe widths out — the
 /// integral comes out ~e⁻²⁰⁰ of the truth, and `F = f/σ_s` would be ~10⁸⁶ (∞ in `f32`):
 /// `prepare` refuses with `Error::Unrealizable` rather than hand out such an `F`. Named
@@ -698,7 +708,7 @@ fn a_lobe_the_quadrature_cannot_see_is_refused() {
         .unwrap()
         .scattering_coefficient();
     for (scale, ok) in [(1.0, true), (4.0, true), (1e4, false)] {
-        let m = RandomMedium::new(Misnamed { psd, scale }, Dipole);
+        let m = RandomMedium::new(Misnamed::new(psd, ell, scale), Dipole);
         let got = PhaseFunction::new(&m, Kernel::<Full, PlaneWave>::default()).prepare(&p);
         match (got, ok) {
             (Ok(inc), true) => common::assert_close(

@@ -12,7 +12,7 @@ use gmueller::interaction::{
     Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
     Throughput,
 };
-use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, VolumeCoherence, VolumePsd};
+use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
@@ -300,7 +300,7 @@ fn probe<T, P, Pol, Coh>(
 ) -> bool
 where
     T: Real,
-    P: VolumePsd<T>,
+    P: gmueller::psd::Psd<T, 3>,
     Pol: PolarizationModel,
     Coh: VolumeCoherence<T, P>,
 {

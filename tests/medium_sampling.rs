@@ -16,9 +16,7 @@ use common::{SplitMix64, Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave};
 use gmueller::interaction::{PolarizationModel, Throughput};
-use gmueller::medium::{
-    Dipole, PhaseFunction, RandomMedium, VolumeCoherence, VolumeIncident, VolumePsd,
-};
+use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence, VolumeIncident};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{GaussianPsd, KCorrelation};
 use gmueller::stokes::Stokes;
@@ -125,7 +123,7 @@ fn check<P, Pol, Coh>(
     seed: u64,
 ) -> (f64, f64)
 where
-    P: VolumePsd<f64>,
+    P: gmueller::psd::Psd<f64, 3>,
     Pol: PolarizationModel,
     Coh: VolumeCoherence<f64, P>,
 {

@@ -19,7 +19,6 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::psd::{GaussianMixturePsd, GaussianPsd, Grating, KCorrelation, Psd, Smooth};
 use crate::real::Real;
 
 /// `ln 2π`.
@@ -146,80 +145,5 @@ impl<T: Real> PowerLobe<T> {
     #[inline]
     pub(crate) fn log_density(&self, h: &Vector2<T>) -> T {
         self.ln_norm + self.neg_exp * (self.t * h.norm_squared()).ln_1p()
-    }
-}
-
-/// The scattered lobes of a PSD, as the sampler needs them ([`SamplingPsd::lobes`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PsdLobes<'a, T: Real> {
-    /// No scattered part (a smooth surface).
-    None,
-    /// One Dirac order at `ζ = 0` (a [`Smooth`] PSD of positive weight: scattering into the
-    /// specular direction only).
-    Origin,
-    /// A Gaussian PSD of spectral covariance `C_p` (rad²/length²).
-    Gaussian(Matrix2<T>),
-    /// A Gaussian mixture: each component with weight `σ_j²/σ²`.
-    Mixture(&'a [GaussianPsd<T, 2>]),
-    /// Dirac orders `(ζ_m, η_m)` (a grating): weight `η_m/Σ η`.
-    Orders(&'a [(Vector2<T>, T)]),
-    /// The K-correlation PSD `∝ (1 + T|ζ|²)^{−(γ+1)/2}`.
-    KCorrelation {
-        /// `T` (length²).
-        t: T,
-        /// `γ > 1`.
-        gamma: T,
-    },
-}
-
-/// A PSD the BSDF sampler can draw from: it names its scattered lobes ([`PsdLobes`]).
-///
-/// Implemented for every PSD of the crate; a downstream PSD can implement it by naming the
-/// closest of these shapes (the sampler is unbiased for any PSD whose support the named lobes
-/// cover, only less efficient).
-pub trait SamplingPsd<T: Real>: Psd<T, 2> {
-    /// The scattered lobes.
-    fn lobes(&self) -> PsdLobes<'_, T>;
-}
-
-impl<T: Real> SamplingPsd<T> for GaussianPsd<T, 2> {
-    #[inline]
-    fn lobes(&self) -> PsdLobes<'_, T> {
-        PsdLobes::Gaussian(*self.spectral_shape().covariance())
-    }
-}
-
-impl<T: Real> SamplingPsd<T> for GaussianMixturePsd<T, 2> {
-    #[inline]
-    fn lobes(&self) -> PsdLobes<'_, T> {
-        PsdLobes::Mixture(self.components())
-    }
-}
-
-impl<T: Real> SamplingPsd<T> for Grating<T, 2> {
-    #[inline]
-    fn lobes(&self) -> PsdLobes<'_, T> {
-        PsdLobes::Orders(self.orders())
-    }
-}
-
-impl<T: Real> SamplingPsd<T> for KCorrelation<T, 2> {
-    #[inline]
-    fn lobes(&self) -> PsdLobes<'_, T> {
-        PsdLobes::KCorrelation {
-            t: self.t(),
-            gamma: self.gamma(),
-        }
-    }
-}
-
-impl<T: Real> SamplingPsd<T> for Smooth<T> {
-    #[inline]
-    fn lobes(&self) -> PsdLobes<'_, T> {
-        if Psd::<T, 2>::variance(self) > T::zero() {
-            PsdLobes::Origin
-        } else {
-            PsdLobes::None
-        }
     }
 }

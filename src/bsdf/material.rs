@@ -64,7 +64,7 @@ use nalgebra::Vector3;
 
 use super::{
     Bsdf, BsdfSample, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler, Part,
-    SampledLobe, SamplingPsd, SurfaceCoherence,
+    SampledLobe, SurfaceCoherence,
 };
 use crate::error::Error;
 use crate::frame::Frame;
@@ -75,7 +75,7 @@ use crate::interaction::{
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
-use crate::psd::{BlurMethod, ClosedForm, CorrelationPowers};
+use crate::psd::{BlurMethod, ClosedForm, CorrelationPowers, Psd};
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -144,7 +144,7 @@ impl<T: Real> Material<T> {
     #[must_use]
     pub fn new<P, Sp, Sc>(surface: RoughSurface<P, Sp, Sc>, level: Level) -> Self
     where
-        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        P: Psd<T, 2> + Debug + Send + Sync + 'static,
         Sp: Interface<T> + Debug + Send + Sync + 'static,
         Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
         ClosedForm: BlurMethod<T, 2, P>,
@@ -157,7 +157,7 @@ impl<T: Real> Material<T> {
     #[must_use]
     pub fn with_blur<P, Sp, Sc, B>(surface: RoughSurface<P, Sp, Sc>, level: Level, blur: B) -> Self
     where
-        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        P: Psd<T, 2> + Debug + Send + Sync + 'static,
         Sp: Interface<T> + Debug + Send + Sync + 'static,
         Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
         B: BlurMethod<T, 2, P> + Clone + Debug + Send + Sync + 'static,
@@ -181,7 +181,7 @@ impl<T: Real> Material<T> {
         roughness: Roughness,
     ) -> Self
     where
-        P: SamplingPsd<T> + CorrelationPowers<T> + Debug + Send + Sync + 'static,
+        P: Psd<T, 2> + CorrelationPowers<T> + Debug + Send + Sync + 'static,
         Sp: Interface<T> + Debug + Send + Sync + 'static,
         Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
         ClosedForm: BlurMethod<T, 2, P> + BlurMethod<T, 2, P::Power>,
@@ -207,7 +207,7 @@ impl<T: Real> Material<T> {
         kernel: Kernel<Pol, Coh, Rough>,
     ) -> Self
     where
-        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        P: Psd<T, 2> + Debug + Send + Sync + 'static,
         Sp: Interface<T> + Debug + Send + Sync + 'static,
         Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
         Pol: PolarizationModel + Send + Sync + 'static,
@@ -587,7 +587,7 @@ fn sample_to_mueller<T: Real, M: Throughput<T>>(s: BsdfSample<T, M>) -> BsdfSamp
 impl<T, P, Sp, Sc, Pol, Coh, Rough> Shade<T> for Model<P, Sp, Sc, Pol, Coh, Rough>
 where
     T: Real,
-    P: SamplingPsd<T> + Debug + Send + Sync,
+    P: Psd<T, 2> + Debug + Send + Sync,
     Sp: Interface<T> + Debug + Send + Sync,
     Sc: Pbsdf<T> + Debug + Send + Sync,
     Pol: PolarizationModel + Send + Sync,
@@ -735,7 +735,7 @@ fn build<T, P, Sp, Sc, B, R>(
 ) -> Box<dyn Shade<T>>
 where
     T: Real,
-    P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+    P: Psd<T, 2> + Debug + Send + Sync + 'static,
     Sp: Interface<T> + Debug + Send + Sync + 'static,
     Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
     B: BlurMethod<T, 2, P> + Clone + Debug + Send + Sync + 'static,
@@ -754,7 +754,7 @@ where
     ) -> Box<dyn Shade<T>>
     where
         T: Real,
-        P: SamplingPsd<T> + Debug + Send + Sync + 'static,
+        P: Psd<T, 2> + Debug + Send + Sync + 'static,
         Sp: Interface<T> + Debug + Send + Sync + 'static,
         Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
         Pol: PolarizationModel + Send + Sync + 'static,

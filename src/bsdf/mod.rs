@@ -128,7 +128,6 @@ pub mod sources;
 pub use bundle::{Bundle, BundleCoherence, BundlePdf, BundleSample, BundleValues};
 pub use flags::LobeFlags;
 pub use interface::Interface;
-pub use lobes::{PsdLobes, SamplingPsd};
 pub use material::{Material, ShadingPoint};
 pub use model::{BsdfKernel, BsdfSurface};
 pub use path::PathThroughput;
@@ -147,7 +146,7 @@ use crate::interaction::{
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
-use crate::psd::Psd;
+use crate::psd::{Psd, Shape};
 use crate::real::Real;
 use crate::stokes::Stokes;
 use sampler::Setup;
@@ -392,9 +391,9 @@ where
             LobeFlags::COHERENT_SPECULAR
         };
         if self.material.parts().psd.variance() > T::zero() {
-            f = f | match (self.material.parts().psd.lobes(), delta) {
-                (PsdLobes::None, _) => LobeFlags::NONE,
-                (PsdLobes::Orders(_) | PsdLobes::Origin, true) => LobeFlags::DELTA,
+            f = f | match (self.material.parts().psd.form().shape(), delta) {
+                (Shape::Zero, _) => LobeFlags::NONE,
+                (Shape::Orders(_) | Shape::Origin, true) => LobeFlags::DELTA,
                 _ => LobeFlags::SCATTERED,
             };
         }
@@ -737,7 +736,7 @@ where
             forward: true,
             reflectance,
             variance: self.material.parts().psd.variance(),
-            lobes: self.material.parts().psd.lobes(),
+            lobes: self.material.parts().psd.form().shape(),
             level,
             specular,
             channels,
@@ -815,7 +814,7 @@ where
             forward: false,
             reflectance: self.material.parts().specular.reflectance(cos_o, below),
             variance: self.material.parts().psd.variance(),
-            lobes: self.material.parts().psd.lobes(),
+            lobes: self.material.parts().psd.form().shape(),
             level: <K::Coh as CoherenceModel>::LEVEL,
             specular: true,
             channels,

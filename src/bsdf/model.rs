@@ -36,7 +36,7 @@
 //! # Ok::<(), gmueller::Error>(())
 //! ```
 
-use super::{Interface, SamplingPsd};
+use super::Interface;
 #[cfg(doc)]
 use crate::interaction::RoughSurface;
 use crate::interaction::{CoherenceWeights, Kernel, PolarizationModel, RoughnessWeights, Surface};
@@ -45,14 +45,14 @@ use crate::real::Real;
 
 /// A surface a [`super::Bsdf`] shades: a [`Surface`] (its PSD, specular interface and
 /// scattering pBSDF as associated types, [`Surface::parts`]) whose parts the layer can sample:
-/// a [`SamplingPsd`] and an [`Interface`]. Implemented by every such surface (every
+/// an [`Interface`] (the PSD is read through its [`Psd::form`]). Implemented by every such surface (every
 /// [`RoughSurface`] of those parts).
-pub trait BsdfSurface<T: Real>: Surface<T, Psd: SamplingPsd<T>, Specular: Interface<T>> {}
+pub trait BsdfSurface<T: Real>: Surface<T, Specular: Interface<T>> {}
 
 impl<T, S> BsdfSurface<T> for S
 where
     T: Real,
-    S: Surface<T, Psd: SamplingPsd<T>, Specular: Interface<T>>,
+    S: Surface<T, Specular: Interface<T>>,
 {
 }
 

@@ -55,11 +55,11 @@
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 
-use super::lobes::{GaussLobe, PowerLobe, PsdLobes};
+use super::lobes::{GaussLobe, PowerLobe};
 use super::orders::{DISK_SHARE, OrderLobes, disk_point};
 use crate::frame::Frame;
 use crate::interaction::{CoherenceLevel, Side};
-use crate::psd::GaussianPsd;
+use crate::psd::{GaussianPsd, Shape};
 use crate::real::Real;
 
 /// The narrowest Gaussian lobe a sampler accepts, in machine epsilons of the scalar type
@@ -309,8 +309,8 @@ pub(crate) struct Setup<'a, T: Real> {
     pub reflectance: T,
     /// The PSD's variance `σ²`.
     pub variance: T,
-    /// The PSD's lobes.
-    pub lobes: PsdLobes<'a, T>,
+    /// The PSD's form (its shape names the scattered lobes).
+    pub lobes: Shape<'a, T, 2>,
     /// The coherence level.
     pub level: CoherenceLevel,
     /// Whether the kernel has a specular lobe (no section of a partially coherent packet: none).
@@ -457,7 +457,8 @@ impl<'a, T: Real> LobeSampler<'a, T> {
         let v_r = T::lit(2.0) * ka * cos_a;
         let v_t = ka * cos_a - kb * cos_b;
         let scatter = match (setup.rough, setup.lobes, setup.level) {
-            (true, PsdLobes::Gaussian(cp), CoherenceLevel::PlaneWave | CoherenceLevel::Partial) => {
+            (true, Shape::Gaussian(g), CoherenceLevel::PlaneWave | CoherenceLevel::Partial) => {
+                let cp = *g.spectral_shape().covariance();
                 let blur = setup.blur.as_ref();
                 Scatter::Series([
                     OrderLobes::new(v_r * v_r * sigma2, &cp, blur, ka)?,
@@ -917,22 +918,25 @@ fn scatter_lobes<'a, T: Real>(
     if setup.level == CoherenceLevel::Incoherent {
         // K ∝ g^Ξ(h_t) ∫p: the lobe is the coherence's alone.
         return Some(match (setup.lobes, blur) {
-            (PsdLobes::None, _) => Scatter::None,
+            (Shape::Zero, _) => Scatter::None,
             (_, Some(b)) => Scatter::One(GaussLobe::new(Vector2::zeros(), &b)?),
             (_, None) => Scatter::None,
         });
     }
     Some(match setup.lobes {
-        PsdLobes::None => Scatter::None,
-        PsdLobes::Origin => match blur {
+        Shape::Zero => Scatter::None,
+        Shape::Origin => match blur {
             Some(b) => Scatter::One(GaussLobe::new(Vector2::zeros(), &b)?),
             None => Scatter::OriginDelta(setup.variance),
         },
-        PsdLobes::Gaussian(cp) => Scatter::One(GaussLobe::new(
-            Vector2::zeros(),
-            &blur.map_or(cp, |b| cp + b),
-        )?),
-        PsdLobes::Mixture(comps) => {
+        Shape::Gaussian(g) => {
+            let cp = *g.spectral_shape().covariance();
+            Scatter::One(GaussLobe::new(
+                Vector2::zeros(),
+                &blur.map_or(cp, |b| cp + b),
+            )?)
+        }
+        Shape::Mixture(comps) => {
             if comps.is_empty() {
                 Scatter::None
             } else {
@@ -940,7 +944,7 @@ fn scatter_lobes<'a, T: Real>(
                 Scatter::Mixture { comps, blur, total }
             }
         }
-        PsdLobes::Orders(orders) => {
+        Shape::Orders(orders) => {
             let (shape, reach) = match blur {
                 Some(b) => (
                     Some(GaussLobe::new(Vector2::zeros(), &b)?),
@@ -962,7 +966,7 @@ fn scatter_lobes<'a, T: Real>(
                 totals,
             }
         }
-        PsdLobes::KCorrelation { t, gamma } => {
+        Shape::KCorrelation { t, gamma } => {
             let core = match blur {
                 Some(b) => {
                     let c = T::one() / ((gamma + T::one()) * t);

@@ -133,8 +133,8 @@ pub use material::{
     SmoothConductor, SmoothDielectric, Surface,
 };
 pub use pbsdf::{
-    ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PhaseScreen,
-    RayleighRice, TangentPlane,
+    ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PbsdfForm,
+    PhaseScreen, RayleighRice, TangentPlane,
 };
 pub use polarization::{
     Full, Intensity, IntensityResponse, KernelOutput, LevelResponse, MuellerResponse, OneShape,

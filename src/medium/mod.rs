@@ -107,7 +107,7 @@
 //!   (`tests/medium_f32.rs`: `σ_s` 5e-49 and 1e40 in `f32`, `F` within 1e-5 of `f64`).
 //! - A medium that does not scatter (`δε = 0`, `ln σ_s = −∞`): `σ_s = 0`, `F = 0`, `dI/dV = 0`,
 //!   sample weights 0, and the sampler still draws with a finite positive pdf.
-//! - `σ_s` that did not resolve the phase function's lobe — a [`VolumePsd`] that names a lobe
+//! - `σ_s` that did not resolve the phase function's lobe — a PSD whose form names a lobe
 //!   far wider than its PSD's, so that every quadrature node misses it — is refused:
 //!   [`PhaseFunction::prepare`] returns [`crate::Error::Unrealizable`] when `F` forward exceeds
 //!   `64 c max(k²/2πs², 1/4π)` (`s` the lobe's finest named scale, `c = 2ν` for a power lobe, 1
@@ -138,7 +138,7 @@
 //! weight, and the `Partial` weight of a Gaussian PSD whose blur is exact for Gaussians, are
 //! Gaussian lobes `c − ½|L⁻¹Bᵀh|²` whose rows are formed in `f64`, and an isotropic mixture
 //! with a closed-form blur is blurred with the diagonal `Ξ_α` at `Bᵀh`
-//! ([`VolumePsd::exact_lobes`], [`VolumeCoherence::closed_form_for_gaussians`]). Quadrature
+//! ([`crate::psd::Form::is_exact`], [`VolumeCoherence::closed_form_for_gaussians`]). Quadrature
 //! blurs and PSDs not known to be Gaussian or isotropic get `Ξ_α` in world axes (factored in
 //! `f64`, rounded to `T`). The lobe that places the quadrature's nodes is the 3-D lobe restricted
 //! to the sphere (the slice at `h·d̂ = 0`, narrowed where `h·d̂ = −|h|²/2k` limits it: a long
@@ -162,7 +162,6 @@ pub use phase::{
     LevelLight, PhaseFunction, PhaseSample, PhaseValue, ScatteredLight, VolumeIncident,
 };
 pub use scatterer::{Dipole, Scalar, Scatterer};
-pub use spectrum::{VolumeLobes, VolumePsd};
 
 #[cfg(doc)]
 use crate::packet::WavePacket;
@@ -174,7 +173,8 @@ use crate::packet::WavePacket;
 /// (locally-stationary) matter is a different medium per region.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RandomMedium<P, M = Dipole> {
-    /// The 3-D PSD of `δε` (rad/length in, length³ out; [`VolumePsd`]).
+    /// The 3-D PSD of `δε` (rad/length in, length³ out; read through its
+    /// [`crate::psd::Psd::form`]).
     pub psd: P,
     /// The mean scattering matrix `m̄` ([`Scatterer`]).
     pub scatterer: M,

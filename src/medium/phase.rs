@@ -33,12 +33,13 @@ use super::lobes::LobeModel;
 use super::sampler::DirectionMixture;
 use super::scatterer::Scatterer;
 use super::scattering::Channels;
-use super::spectrum::VolumePsd;
+use super::spectrum::VolumeLobes;
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::{Kernel, PolarizationModel, Throughput};
 use crate::mueller::Mueller;
 use crate::packet::{Channel, WavePacket};
+use crate::psd::Psd;
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -238,12 +239,12 @@ where
     /// [`Error::NotPositiveDefinite`] when its inverse coherence is not representable;
     /// [`Error::Unrealizable`] when the quadrature of `σ_s` did not resolve the phase
     /// function's lobe (`F` forward beyond what a resolved lobe of the named shape allows: a
-    /// [`VolumePsd`] naming a lobe far wider than its PSD's), where `F` would be ~∞
+    /// PSD whose [`Psd::form`] names a lobe far wider than its own), where `F` would be ~∞
     /// ([module docs](super), "When `σ_s` is 0 or not representable").
     pub fn prepare<T>(&self, packet: &WavePacket<T>) -> Result<VolumeIncident<T, Pol, Coh>, Error>
     where
         T: Real,
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
@@ -255,7 +256,7 @@ where
             Channels::unpolarized(packet, psd, coherence)?
         };
         let model = LobeModel::new(
-            self.medium.psd.lobes(),
+            VolumeLobes::of(self.medium.psd.form())?,
             Coh::LEVEL,
             phase_channels.xi_half.as_ref(),
             packet.frame(),
@@ -288,7 +289,7 @@ where
             if !resolved {
                 return Err(Error::Unrealizable {
                     reason: "the σ_s quadrature did not resolve the phase function's lobe (F \
-                             forward beyond what a resolved lobe allows: a VolumePsd naming a \
+                             forward beyond what a resolved lobe allows: a PSD whose form names a \
                              lobe far wider than its PSD's)",
                 });
             }
@@ -314,7 +315,7 @@ where
     ) -> Result<PhaseValue<T, Pol::Throughput<T>>, Error>
     where
         T: Real,
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
@@ -329,7 +330,7 @@ where
     ) -> PhaseValue<T, Pol::Throughput<T>>
     where
         T: Real,
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
@@ -388,7 +389,7 @@ where
     ) -> PhaseSample<T, Pol::Throughput<T>>
     where
         T: Real,
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
@@ -419,7 +420,7 @@ where
     ) -> Result<ScatteredLight<T, LevelLight<T, Pol>>, Error>
     where
         T: Real,
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         M: Scatterer<T>,
         Coh: VolumeCoherence<T, P>,
     {
@@ -483,7 +484,7 @@ impl<P, M> RandomMedium<P, M> {
     ) -> Result<ScatteredLight<T, LevelLight<T, Pol>>, Error>
     where
         T: Real,
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         M: Scatterer<T>,
         Pol: PolarizationModel,
         Coh: VolumeCoherence<T, P>,

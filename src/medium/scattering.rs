@@ -20,7 +20,7 @@ use super::basis::{ChannelBasis, PacketLobe, PacketXi, packet_inverse_coherence}
 use super::coherence::VolumeCoherence;
 use super::geometry::ScatteringGeometry;
 use super::scatterer::Scatterer;
-use super::spectrum::{VolumeLobes, VolumePsd};
+use super::spectrum::VolumeLobes;
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::gaussian::Gaussian;
@@ -51,7 +51,7 @@ pub(crate) fn ln_born<T: Real>(k: T) -> T {
 /// the PSD's spectral variance along d̂): `1e-14 (ℓ/w)²`.
 ///
 /// The world form is what a blur method is handed for a PSD that is not known to be isotropic
-/// or Gaussian ([`super::VolumePsd::exact_lobes`]); its rounding to `T` keeps `Ξ_α`'s small
+/// or Gaussian ([`crate::psd::Form::is_exact`]); its rounding to `T` keeps `Ξ_α`'s small
 /// variances only to a relative `~ε κ` in sums such as `Λ + Ξ_α` (`κ` the condition of the
 /// sum), which is why the medium prefers the channel's own basis ([`super::basis`]).
 ///
@@ -139,7 +139,7 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
     /// As [`inverse_coherence`], for the levels that use the shapes (`Partial`, `Incoherent`).
     pub(crate) fn new<P>(packet: &WavePacket<T>, psd: &P, coherence: &Coh) -> Result<Self, Error>
     where
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         Coh: VolumeCoherence<T, P>,
     {
         let single = packet.has_single_shape();
@@ -152,8 +152,8 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         };
         let prepared = PreparedPacket::new(packet, packet.frame(), packet.frame(), plan);
         let partial = Coh::LEVEL == CoherenceLevel::Partial;
-        let lobes = psd.lobes();
-        let exact = psd.exact_lobes();
+        let lobes = VolumeLobes::of(psd.form())?;
+        let exact = psd.form().is_exact();
         let isotropic = exact && lobes_isotropic(&lobes);
         // A closed-form blur in the channel's basis (a quadrature blur keeps the world axes its
         // nodes were placed in: its error depends on their orientation).
@@ -220,7 +220,7 @@ impl<T: Real, Pol: PolarizationModel, Coh: CoherenceModel> Channels<T, Pol, Coh>
         coherence: &Coh,
     ) -> Result<Self, Error>
     where
-        P: VolumePsd<T>,
+        P: Psd<T, 3>,
         Coh: VolumeCoherence<T, P>,
     {
         let mut p = WavePacket::new(

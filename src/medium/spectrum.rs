@@ -13,12 +13,13 @@
 
 use nalgebra::Matrix3;
 
-use crate::psd::{GaussianMixturePsd, GaussianPsd, KCorrelation, Psd};
+use crate::error::Error;
+use crate::psd::{Form, GaussianPsd, Shape};
 use crate::real::Real;
 
-/// The shape of a 3-D PSD's lobe ([`VolumePsd::lobes`]).
+/// The shape of a 3-D PSD's lobe, read from its [`Form`] (`crate::psd::Psd::form`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum VolumeLobes<'a, T: Real> {
+pub(crate) enum VolumeLobes<'a, T: Real> {
     /// A Gaussian PSD of spectral covariance `Λ` (rad²/length², world axes).
     Gaussian(Matrix3<T>),
     /// A Gaussian mixture: each component with weight `σ_j²/σ²`.
@@ -32,63 +33,22 @@ pub enum VolumeLobes<'a, T: Real> {
     },
 }
 
-/// A 3-D PSD that a [`crate::medium::RandomMedium`] can use: it names the shape of its lobe, which
-/// places the nodes of the scattering-coefficient quadrature and the lobes of the sampler.
-///
-/// Implemented for [`GaussianPsd`], [`GaussianMixturePsd`] and [`KCorrelation`] in 3-D; a
-/// downstream PSD can implement it by naming the closest shape (the sampler stays exact and
-/// unbiased for any PSD, only less efficient, and the quadrature less accurate the further the
-/// named shape is from the PSD's).
-pub trait VolumePsd<T: Real>: Psd<T, 3> {
-    /// The lobe's shape.
-    fn lobes(&self) -> VolumeLobes<'_, T>;
-
-    /// `true` when the PSD *is* the shape [`Self::lobes`] names, not merely the closest one:
-    /// the medium may then evaluate it through that shape — a Gaussian PSD's blur in closed
-    /// form (where the coherence level's blur is exact for Gaussians,
-    /// [`super::VolumeCoherence::closed_form_for_gaussians`]), and an isotropic shape (a
-    /// Gaussian or mixture with `Λ ∝ I`, the K-correlation) in any orthonormal basis — in the
-    /// packet's own axes, where a long correlation length beside a short `σ_zz` keeps its
-    /// precision in `f32` ([module docs](crate::medium)). `false` by default (a downstream PSD
-    /// that names its closest shape); `true` for [`GaussianPsd`], [`GaussianMixturePsd`] and
-    /// [`KCorrelation`].
-    fn exact_lobes(&self) -> bool {
-        false
-    }
-}
-
-impl<T: Real> VolumePsd<T> for GaussianPsd<T, 3> {
-    #[inline]
-    fn lobes(&self) -> VolumeLobes<'_, T> {
-        VolumeLobes::Gaussian(*self.spectral_shape().covariance())
-    }
-    #[inline]
-    fn exact_lobes(&self) -> bool {
-        true
-    }
-}
-
-impl<T: Real> VolumePsd<T> for GaussianMixturePsd<T, 3> {
-    #[inline]
-    fn lobes(&self) -> VolumeLobes<'_, T> {
-        VolumeLobes::Mixture(self.components())
-    }
-    #[inline]
-    fn exact_lobes(&self) -> bool {
-        true
-    }
-}
-
-impl<T: Real> VolumePsd<T> for KCorrelation<T, 3> {
-    #[inline]
-    fn lobes(&self) -> VolumeLobes<'_, T> {
-        VolumeLobes::KCorrelation {
-            t: self.t(),
-            gamma: self.gamma(),
+impl<'a, T: Real> VolumeLobes<'a, T> {
+    /// The lobe of a PSD of form `form`.
+    ///
+    /// # Errors
+    /// [`Error::Unrealizable`] for a form without a continuous lobe ([`Shape::Zero`],
+    /// [`Shape::Origin`], [`Shape::Orders`]): a medium's permittivity has a continuous PSD.
+    pub(crate) fn of(form: Form<'a, T, 3>) -> Result<Self, Error> {
+        match form.shape() {
+            Shape::Gaussian(g) => Ok(Self::Gaussian(*g.spectral_shape().covariance())),
+            Shape::Mixture(c) => Ok(Self::Mixture(c)),
+            Shape::KCorrelation { t, gamma } => Ok(Self::KCorrelation { t, gamma }),
+            Shape::Zero | Shape::Origin | Shape::Orders(_) => Err(Error::Unrealizable {
+                reason: "a random medium takes a PSD of continuous form (a Gaussian, a mixture, \
+                         a K-correlation, or a PSD naming one as its closest form); this one \
+                         is zero or Dirac",
+            }),
         }
-    }
-    #[inline]
-    fn exact_lobes(&self) -> bool {
-        true
     }
 }

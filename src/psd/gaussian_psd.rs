@@ -2,7 +2,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::{BlurMethod, ClosedForm, ClosedFormBlur, CorrelationPowers, Psd};
+use super::{BlurMethod, ClosedForm, ClosedFormBlur, CorrelationPowers, Form, Psd, Shape};
 use crate::error::Error;
 use crate::gaussian::{Gaussian, cholesky_of_sum, mahalanobis_from_cholesky};
 use crate::numerics::{in_normal_range, log_det_from_cholesky, log_sum_exp};
@@ -309,6 +309,10 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianPsd<T, N> {
     fn variance(&self) -> T {
         self.variance
     }
+    #[inline]
+    fn form(&self) -> Form<'_, T, N> {
+        Form::exact(Shape::Gaussian(self))
+    }
     /// The smallest diagonal entry of the spectral Cholesky factor.
     #[inline]
     fn feature_width(&self) -> T {
@@ -433,6 +437,10 @@ impl<T: Real, const N: usize> Psd<T, N> for GaussianMixturePsd<T, N> {
     fn variance(&self) -> T {
         self.variance
     }
+    #[inline]
+    fn form(&self) -> Form<'_, T, N> {
+        Form::exact(Shape::Mixture(&self.components))
+    }
     /// The narrowest component's width.
     #[inline]
     fn feature_width(&self) -> T {
@@ -517,6 +525,15 @@ impl<T: Real, const N: usize> Psd<T, N> for Smooth<T> {
     #[inline]
     fn variance(&self) -> T {
         self.weight
+    }
+    /// [`Shape::Origin`], or [`Shape::Zero`] for a weight of 0.
+    #[inline]
+    fn form(&self) -> Form<'_, T, N> {
+        Form::exact(if self.weight > T::zero() {
+            Shape::Origin
+        } else {
+            Shape::Zero
+        })
     }
 }
 

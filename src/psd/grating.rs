@@ -2,7 +2,7 @@
 
 use nalgebra::SVector;
 
-use super::{BlurMethod, ClosedForm, ClosedFormBlur, Psd};
+use super::{BlurMethod, ClosedForm, ClosedFormBlur, Form, Psd, Shape};
 use crate::error::Error;
 use crate::gaussian::Gaussian;
 use crate::real::Real;
@@ -475,6 +475,10 @@ impl<T: Real, const N: usize> Psd<T, N> for Grating<T, N> {
     #[inline]
     fn variance(&self) -> T {
         self.kept
+    }
+    #[inline]
+    fn form(&self) -> Form<'_, T, N> {
+        Form::exact(Shape::Orders(&self.orders))
     }
 }
 

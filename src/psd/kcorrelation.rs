@@ -3,7 +3,7 @@
 use nalgebra::SVector;
 
 use super::special::{ln_gamma, ln_gamma_ratio};
-use super::{GaussianMixturePsd, GaussianPsd, Psd};
+use super::{Form, GaussianMixturePsd, GaussianPsd, Psd, Shape};
 use crate::error::Error;
 use crate::gaussian::Gaussian;
 use crate::real::Real;
@@ -374,6 +374,13 @@ impl<T: Real, const N: usize> Psd<T, N> for KCorrelation<T, N> {
     #[inline]
     fn variance(&self) -> T {
         self.variance
+    }
+    #[inline]
+    fn form(&self) -> Form<'_, T, N> {
+        Form::exact(Shape::KCorrelation {
+            t: self.t,
+            gamma: self.gamma,
+        })
     }
     /// `1/√T`, the scale of the spectral core.
     #[inline]

@@ -25,6 +25,7 @@
 //! - [`Adaptive`]: nested adaptive Gauss–Kronrod to a relative tolerance — the reference.
 
 mod autocorrelation;
+mod form;
 mod gaussian_psd;
 mod grating;
 mod kcorrelation;
@@ -33,6 +34,7 @@ mod quadrature;
 pub(crate) mod special;
 
 pub use autocorrelation::{Autocorrelation, matern};
+pub use form::{Form, Shape};
 pub use gaussian_psd::{GaussianMixturePsd, GaussianPsd, Smooth};
 pub use grating::{Grating, OrderCutoff, bessel_j};
 pub use kcorrelation::KCorrelation;
@@ -76,6 +78,11 @@ pub trait Psd<T: Real, const N: usize> {
     /// The variance `σ² = R(0)` (squared rms height for a height field).
     #[must_use]
     fn variance(&self) -> T;
+
+    /// The PSD's spectral form: its shape, exactly or the closest one ([`Form`]). The BSDF
+    /// sampler, the medium and the kernel's SIMD lanes read the PSD through it.
+    #[must_use]
+    fn form(&self) -> Form<'_, T, N>;
 
     /// `∫ p dⁿζ = (2π)^{n/2} R(0)` under the unitary transform (Dirac parts included).
     #[inline]
@@ -222,27 +229,34 @@ pub struct ClosedForm;
 /// use gmueller::frame::Frame;
 /// use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, PhaseScreen, RoughSurface};
 /// use gmueller::packet::{CoherenceShape, WavePacket};
-/// use gmueller::psd::{BlurMethod, ClosedForm, ClosedFormBlur, Psd};
+/// use gmueller::psd::{BlurMethod, ClosedForm, ClosedFormBlur, Form, Psd, Shape};
 /// use gmueller::real::Real;
 /// use gmueller::stokes::Stokes;
 /// use nalgebra::{SVector, Vector2, Vector3};
 ///
 /// /// `p = (2π) w [δ(ζ − ζ₀) + δ(ζ + ζ₀)] / 2`: two orders of total weight `w`.
-/// struct TwoOrders<T: Real> { zeta0: Vector2<T>, weight: T }
+/// struct TwoOrders<T: Real> { orders: [(Vector2<T>, T); 2] }
 ///
+/// impl<T: Real> TwoOrders<T> {
+///     fn new(zeta0: Vector2<T>, weight: T) -> Self {
+///         let half = T::lit(0.5) * weight;
+///         Self { orders: [(zeta0, half), (-zeta0, half)] }
+///     }
+/// }
 /// impl<T: Real> Psd<T, 2> for TwoOrders<T> {
 ///     fn value(&self, _zeta: &SVector<T, 2>) -> T { T::zero() } // no continuous part
-///     fn variance(&self) -> T { self.weight }
+///     fn variance(&self) -> T { self.orders[0].1 + self.orders[1].1 }
+///     // Exactly the grating's form: the BSDF sampler draws its orders.
+///     fn form(&self) -> Form<'_, T, 2> { Form::exact(Shape::Orders(&self.orders)) }
 /// }
 /// impl<T: Real> ClosedFormBlur<T, 2> for TwoOrders<T> {
 ///     // (p * g^Σ)(h) = (2π)^{−1} ∫ p(ζ) g^Σ(h − ζ) d²ζ = w [g^Σ(h − ζ₀) + g^Σ(h + ζ₀)] / 2
 ///     fn closed_form_blur(&self, cov: &Gaussian<T, 2>, h: &SVector<T, 2>) -> T {
-///         let half = T::lit(0.5) * self.weight;
-///         half * (cov.value(&(h - self.zeta0)) + cov.value(&(h + self.zeta0)))
+///         self.orders.iter().fold(T::zero(), |s, (z, e)| s + *e * cov.value(&(h - z)))
 ///     }
 /// }
 ///
-/// let p = TwoOrders { zeta0: Vector2::new(3.0_f64, 0.0), weight: 1e-4 };
+/// let p = TwoOrders::new(Vector2::new(3.0_f64, 0.0), 1e-4);
 /// let cov = Gaussian::<f64, 2>::isotropic(0.5)?; // Σ = 0.5² I
 /// let h = Vector2::new(2.5, 0.1);
 /// let exact = ClosedForm.blur(&p, &cov, &h);
@@ -259,7 +273,7 @@ pub struct ClosedForm;
 ///     Stokes::unpolarized(1.0)?, CoherenceShape::isotropic(5.0)?,
 ///     Frame::sp(travel, Vector3::x())?, 0.5)?;
 /// let material = RoughSurface {
-///     psd: TwoOrders { zeta0: Vector2::new(2.0, 0.0), weight: 1e-4 },
+///     psd: TwoOrders::new(Vector2::new(2.0, 0.0), 1e-4),
 ///     specular: PhaseScreen::new(1.0)?,
 ///     scatter: PhaseScreen::new(1.0)?,
 /// };

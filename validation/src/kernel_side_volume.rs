@@ -52,10 +52,10 @@
 use gmueller::frame::{Frame, mueller_to_frames, stokes_to_frame};
 use gmueller::interaction::{Full, Kernel, Partial, surface_coherence_term, volume_coherence_term};
 use gmueller::jones::JonesMatrix;
-use gmueller::medium::{Dipole, RandomMedium, VolumePsd};
+use gmueller::medium::{Dipole, RandomMedium};
 use gmueller::mueller::Mueller;
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
-use gmueller::psd::{ClosedForm, ClosedFormBlur, GaussianPsd, KCorrelation};
+use gmueller::psd::{ClosedForm, ClosedFormBlur, GaussianPsd, KCorrelation, Psd};
 use gmueller::stokes::Stokes;
 use nalgebra::{Complex, Matrix2, Vector2, Vector3, Vector4};
 
@@ -87,7 +87,7 @@ fn packet(scene: &VolumeScene, input: [f64; 4]) -> WavePacket<f64> {
 }
 
 /// The medium's `dI/dV` for `packet` toward `exit`, in the exit frame `Frame::sp(r̂, ẑ)`.
-fn medium_intensity<P: VolumePsd<f64> + ClosedFormBlur<f64, 3>>(
+fn medium_intensity<P: Psd<f64, 3> + ClosedFormBlur<f64, 3>>(
     psd: P,
     packet: &WavePacket<f64>,
     exit: Vector3<f64>,

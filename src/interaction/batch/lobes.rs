@@ -137,10 +137,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     ) -> Result<(), Error>
     where
         T: Real,
-        P: Psd<T, 2> + 'static,
-        Coh: CoherenceWeights<T, P> + 'static,
-        Sp: Pbsdf<T> + 'static,
-        Sc: Pbsdf<T> + 'static,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
     {
         let n = exits.len();
         check_lengths(&exits, core::slice::from_ref(out), frames.as_deref())?;

@@ -36,8 +36,6 @@
 //! [`OneShape`]: crate::interaction::OneShape
 //! [`Intensity`]: crate::interaction::Intensity
 
-use core::any::Any;
-
 use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
 
@@ -48,14 +46,14 @@ use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::pbsdf::Pbsdf;
+use crate::interaction::pbsdf::{Pbsdf, PbsdfForm};
 use crate::interaction::polarization::{KernelOutput, PolarizationLevel};
 use crate::interaction::{
-    CoherenceWeights, FresnelInterface, FresnelReflection, Geometry, Incoherent, Kernel, Partial,
-    PolarizationModel, PreparedPacket, RayleighRice, RoughSurface,
+    CoherenceLevel, CoherenceWeights, FresnelInterface, Geometry, Kernel, PolarizationModel,
+    PreparedPacket, RayleighRice, RoughSurface,
 };
 use crate::packet::WavePacket;
-use crate::psd::{ClosedForm, GaussianMixturePsd, GaussianPsd, Psd};
+use crate::psd::{GaussianPsd, Psd};
 use crate::real::Real;
 
 /// One exit evaluated by the per-direction kernel: the specular and scattered Stokes vectors
@@ -426,22 +424,24 @@ pub(crate) fn lane_prep<T, P, Sp, Sc, Pol, Coh>(
 ) -> Option<LobePrep<T>>
 where
     T: Real,
-    P: Psd<T, 2> + 'static,
-    Sp: Pbsdf<T> + 'static,
-    Sc: Pbsdf<T> + 'static,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
     Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, P> + 'static,
+    Coh: CoherenceWeights<T, P>,
 {
     let (full, intensity) = match Pol::LEVEL {
         PolarizationLevel::Full => (true, false),
         PolarizationLevel::OneShape => (false, false),
         PolarizationLevel::Intensity => (false, true),
     };
-    let coherence: &dyn Any = kernel.coherence();
-    let incoherent = coherence.is::<Incoherent>();
-    if !(incoherent || coherence.is::<Partial<ClosedForm>>()) {
-        return None;
-    }
+    // The lanes' weights are the closed forms: the incoherent level's, and the partially
+    // coherent level's where its blur of a Gaussian is exact (`Partial<ClosedForm>`).
+    let incoherent = match Coh::LEVEL {
+        CoherenceLevel::Incoherent => true,
+        CoherenceLevel::Partial if kernel.coherence().closed_form_gaussian() => false,
+        _ => return None,
+    };
     let parts: LaneMaterial<'_, T> = LaneMaterial::of(material)?;
     // A conductor's Fresnel reflection has no transmitted lobe: its interface goes exit by exit.
     if interface.is_some() && parts.dielectric.is_none() {
@@ -499,33 +499,28 @@ struct LaneMaterial<'a, T: Real> {
 }
 
 impl<'a, T: Real> LaneMaterial<'a, T> {
-    /// The parts, each recognised by its own type (`None` for any other PSD or pBSDF).
-    fn of<P: Psd<T, 2> + 'static, Sp: 'static, Sc: 'static>(
+    /// The parts, each read from its form (`None` for any other PSD or pBSDF).
+    fn of<P: Psd<T, 2>, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
         material: &'a RoughSurface<P, Sp, Sc>,
     ) -> Option<Self> {
-        let psd: &dyn Any = &material.psd;
-        let components = match psd.downcast_ref::<GaussianPsd<T, 2>>() {
-            Some(g) => core::slice::from_ref(g),
-            None => psd.downcast_ref::<GaussianMixturePsd<T, 2>>()?.components(),
+        let components = material.psd.form().exact_gaussians()?;
+        let (index, dielectric) = match material.specular.form() {
+            PbsdfForm::FresnelReflection(f) => (f.index(), None),
+            PbsdfForm::FresnelInterface(d) => (
+                num_complex::Complex::new(d.relative_index(), T::zero()),
+                Some(d),
+            ),
+            _ => return None,
         };
-        let scatter: &dyn Any = &material.scatter;
-        let specular: &dyn Any = &material.specular;
-        let (index, dielectric) = match specular.downcast_ref::<FresnelReflection<T>>() {
-            Some(f) => (f.index(), None),
-            None => {
-                let d = specular.downcast_ref::<FresnelInterface<T>>()?;
-                (
-                    num_complex::Complex::new(d.relative_index(), T::zero()),
-                    Some(d),
-                )
-            }
+        let PbsdfForm::RayleighRice(scatter) = material.scatter.form() else {
+            return None;
         };
         Some(Self {
             components,
             variance: material.psd.variance(),
             integral: material.psd.integral(),
             index,
-            scatter: scatter.downcast_ref::<RayleighRice<T>>()?,
+            scatter,
             dielectric,
         })
     }
@@ -583,11 +578,11 @@ pub(crate) fn try_evaluate<T, P, Sp, Sc, Pol, Coh>(
 ) -> Option<Result<(), Error>>
 where
     T: Real,
-    P: Psd<T, 2> + 'static,
-    Sp: Pbsdf<T> + 'static,
-    Sc: Pbsdf<T> + 'static,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
     Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, P> + 'static,
+    Coh: CoherenceWeights<T, P>,
 {
     let prep = lane_prep(kernel, material, prepared, packet, surface, interface)?;
     let mut scalar = |_: usize, i: usize| {
@@ -613,8 +608,9 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interaction::{Full, RoughConductor};
+    use crate::interaction::{Full, Incoherent, Partial, RoughConductor};
     use crate::packet::CoherenceShape;
+    use crate::psd::GaussianMixturePsd;
     use crate::stokes::Stokes;
     use num_complex::Complex;
 

@@ -119,10 +119,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     ) -> Result<(), Error>
     where
         T: Real,
-        P: Psd<T, 2> + 'static,
-        Coh: CoherenceWeights<T, P> + 'static,
-        Sp: Pbsdf<T> + 'static,
-        Sc: Pbsdf<T> + 'static,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
     {
         if outs.len() != wavelengths.len() {
             return Err(Error::OutOfRange {
@@ -173,10 +173,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     ) -> Result<(), Error>
     where
         T: Real,
-        P: Psd<T, 2> + 'static,
-        Coh: CoherenceWeights<T, P> + 'static,
-        Sp: Pbsdf<T> + 'static,
-        Sc: Pbsdf<T> + 'static,
+        P: Psd<T, 2>,
+        Coh: CoherenceWeights<T, P>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
     {
         let mut prepared = [const { None }; MAX_WAVELENGTHS];
         let mut preps: [Option<LobePrep<T>>; MAX_WAVELENGTHS] = [None; MAX_WAVELENGTHS];
@@ -335,10 +335,10 @@ mod tests {
     where
         T: Real,
         Pol: PolarizationModel,
-        Coh: CoherenceWeights<T, P> + CoherenceModel + Default + 'static,
-        P: Psd<T, 2> + 'static,
-        Sp: Pbsdf<T> + 'static,
-        Sc: Pbsdf<T> + 'static,
+        Coh: CoherenceWeights<T, P> + CoherenceModel + Default,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
     {
         let kernel = Kernel::<Pol, Coh>::default();
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();

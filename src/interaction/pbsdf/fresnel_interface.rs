@@ -3,7 +3,7 @@
 
 use num_complex::Complex;
 
-use super::{Geometry, Pbsdf, Side};
+use super::{Geometry, Pbsdf, PbsdfForm, Side};
 use crate::error::Error;
 use crate::frame::frame_change_mueller;
 use crate::fresnel;
@@ -68,6 +68,10 @@ impl<T: Real> FresnelInterface<T> {
 }
 
 impl<T: Real> Pbsdf<T> for FresnelInterface<T> {
+    #[inline]
+    fn form(&self) -> PbsdfForm<'_, T> {
+        PbsdfForm::FresnelInterface(self)
+    }
     #[inline]
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
         match self.jones(g) {

@@ -2,7 +2,7 @@
 
 use num_complex::Complex;
 
-use super::{Geometry, Pbsdf, Side, validate_eta};
+use super::{Geometry, Pbsdf, PbsdfForm, Side, validate_eta};
 use crate::error::Error;
 use crate::frame::frame_change_mueller;
 use crate::fresnel;
@@ -49,6 +49,10 @@ impl<T: Real> FresnelReflection<T> {
 }
 
 impl<T: Real> Pbsdf<T> for FresnelReflection<T> {
+    #[inline]
+    fn form(&self) -> PbsdfForm<'_, T> {
+        PbsdfForm::FresnelReflection(self)
+    }
     #[inline]
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
         if g.side() == Side::Transmission {

@@ -51,6 +51,31 @@ pub trait Pbsdf<T: Real> {
     fn m00(&self, g: &Geometry<T>) -> T {
         self.mueller(g).0[(0, 0)]
     }
+
+    /// What the pBSDF is, where the kernel's SIMD lanes have it built in ([`PbsdfForm`]);
+    /// [`PbsdfForm::Other`] by default (the kernel then evaluates it exit by exit).
+    #[inline]
+    #[must_use]
+    fn form(&self) -> PbsdfForm<'_, T> {
+        PbsdfForm::Other
+    }
+}
+
+/// The pBSDFs the kernel's SIMD lanes have built in ([`Pbsdf::form`]): a rough surface whose
+/// specular pBSDF is a [`FresnelReflection`] or a [`FresnelInterface`] and whose scattering
+/// pBSDF is a [`RayleighRice`] (with an exact Gaussian or mixture PSD,
+/// [`crate::psd::Form::exact_gaussians`]) is evaluated in lanes by
+/// [`super::Kernel::evaluate_batch`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PbsdfForm<'a, T: Real> {
+    /// A conductor's (or any opaque reflector's) Fresnel reflection.
+    FresnelReflection(&'a FresnelReflection<T>),
+    /// A dielectric interface's Fresnel reflection and transmission.
+    FresnelInterface(&'a FresnelInterface<T>),
+    /// The Rayleigh–Rice scattering pBSDF.
+    RayleighRice(&'a RayleighRice<T>),
+    /// Any other pBSDF.
+    Other,
 }
 
 /// `Ok` for a refractive index `η = n + iκ` with `n > 0`, `κ ≥ 0`, both finite.

@@ -3,7 +3,7 @@
 use nalgebra::Matrix2;
 use num_complex::Complex;
 
-use super::{Geometry, Pbsdf, Side, validate_eta};
+use super::{Geometry, Pbsdf, PbsdfForm, Side, validate_eta};
 use crate::error::Error;
 use crate::jones::JonesMatrix;
 use crate::mueller::Mueller;
@@ -226,6 +226,10 @@ fn transmission_factors<T: Real>(e: Complex<T>, g: &Geometry<T>) -> Matrix2<Comp
 }
 
 impl<T: Real> Pbsdf<T> for RayleighRice<T> {
+    #[inline]
+    fn form(&self) -> PbsdfForm<'_, T> {
+        PbsdfForm::RayleighRice(self)
+    }
     #[inline]
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
         Mueller::from_jones(&self.jones(g))

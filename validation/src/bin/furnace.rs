@@ -22,11 +22,12 @@
 
 use std::fmt::Write as _;
 
-use gmueller::bsdf::{Bsdf, Interface, SamplingPsd, SurfaceCoherence};
+use gmueller::bsdf::{Bsdf, Interface, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::{
     CoherenceWeights, Full, Kernel, Partial, Pbsdf, RoughSurface, SmoothConductor, SmoothDielectric,
 };
+use gmueller::psd::Psd;
 use gmueller::stokes::Stokes;
 use gmueller::verify::rng::SplitMix64;
 use nalgebra::Vector3;
@@ -97,7 +98,7 @@ fn row<P, Sp, Sc>(
     worst: &mut f64,
 ) -> String
 where
-    P: SamplingPsd<f32>,
+    P: Psd<f32, 2>,
     Sp: Interface<f32>,
     Sc: Pbsdf<f32>,
     Partial: CoherenceWeights<f32, P>,

@@ -38,9 +38,11 @@ use gmueller::interaction::{
     Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
     Throughput,
 };
-use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence, VolumePsd};
+use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation};
+use gmueller::psd::{
+    Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd,
+};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3, Vector4};
 
@@ -174,7 +176,7 @@ fn run<T, P, Pol, Coh>(
 ) -> Option<Outcome>
 where
     T: Real,
-    P: VolumePsd<T>,
+    P: Psd<T, 3>,
     Pol: PolarizationModel,
     Coh: VolumeCoherence<T, P>,
 {
@@ -318,7 +320,7 @@ fn dispatch(v: &Variant, spec: Spec, s: &Scene, reps: usize) -> Option<Outcome> 
     }
 }
 
-fn with_blur<T: Real, P: VolumePsd<T>, B>(
+fn with_blur<T: Real, P: Psd<T, 3>, B>(
     pol: &str,
     m: &RandomMedium<P, Dipole>,
     b: B,
@@ -335,7 +337,7 @@ where
     }
 }
 
-fn limits<T: Real, P: VolumePsd<T>>(
+fn limits<T: Real, P: Psd<T, 3>>(
     v: &Variant,
     m: &RandomMedium<P, Dipole>,
     s: &Scene,

@@ -9,8 +9,8 @@ use gmueller::interaction::{
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{
-    BlurMethod, ClosedForm, ClosedFormBlur, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation,
-    OrderCutoff, Psd,
+    BlurMethod, ClosedForm, ClosedFormBlur, Form, GaussianMixturePsd, GaussianPsd, Grating,
+    KCorrelation, OrderCutoff, Psd, Shape,
 };
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, SVector, Vector2, Vector3};
@@ -100,6 +100,10 @@ impl<T: Real> Psd<T, 2> for HeightGrating<T> {
     }
     fn variance(&self) -> T {
         self.variance_scale * self.grating.variance()
+    }
+    /// The grating's orders (weights `η_m/Σ η`, the same once scaled).
+    fn form(&self) -> Form<'_, T, 2> {
+        Form::closest(Shape::Orders(self.grating.orders()))
     }
 }
 
