@@ -56,6 +56,7 @@ mod packet;
 mod propagation;
 mod psd;
 mod psd_kcorrelation;
+mod psd_power_law;
 mod psd_validation;
 mod roughness_limits;
 mod roughness_quadrature;

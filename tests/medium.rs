@@ -593,7 +593,7 @@ fn sphere_integral(
     total
 }
 
-fn check_coefficient<P, Pol, Coh>(
+pub(crate) fn check_coefficient<P, Pol, Coh>(
     name: &str,
     medium: &RandomMedium<P, Dipole>,
     kernel: Kernel<Pol, Coh>,

@@ -114,7 +114,7 @@ fn counts(f: &Frame<f64>, k: f64, edges: &[f64], draws: &[Vector3<f64>]) -> Vec<
 
 /// The sampler of one medium and level: pdf integral, chi-square, exactness, weights, the Monte
 /// Carlo furnace. Returns (χ², quantile).
-fn check<P, Pol, Coh>(
+pub(crate) fn check<P, Pol, Coh>(
     name: &str,
     medium: &RandomMedium<P, Dipole>,
     kernel: Kernel<Pol, Coh>,

@@ -6,8 +6,7 @@ use core::fmt::Debug;
 use super::coherence::{CoherenceLevel, CoherenceWeights, Incoherent, Partial, PlaneWave};
 use super::geometry::Geometry;
 use super::kernel::Kernel;
-use super::material::RoughSurface;
-use super::pbsdf::Pbsdf;
+use super::material::Surface;
 use super::polarization::{
     Full, Intensity, KernelOutput, LevelResponse, OneShape, PolarizationLevel, PolarizationModel,
 };
@@ -284,33 +283,29 @@ impl Level {
 
     /// [`super::Kernel::evaluate`] at this level (see [`Level::dispatch`]).
     #[must_use]
-    pub fn evaluate<T, P, B, Sp, Sc>(
+    pub fn evaluate<T, S, B>(
         self,
         blur: B,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         packet: &WavePacket<T>,
         g: &Geometry<T>,
     ) -> LevelResponse<T>
     where
         T: Real,
-        P: Psd<T, 2>,
-        B: BlurMethod<T, 2, P> + Clone + Debug,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        B: BlurMethod<T, 2, S::Psd> + Clone + Debug,
     {
-        struct Evaluate<'a, T: Real, P, Sp, Sc> {
-            material: &'a RoughSurface<P, Sp, Sc>,
+        struct Evaluate<'a, T: Real, S> {
+            material: &'a S,
             packet: &'a WavePacket<T>,
             g: &'a Geometry<T>,
         }
-        impl<T: Real, P: Psd<T, 2>, Sp: Pbsdf<T>, Sc: Pbsdf<T>> LevelVisitor<T, P>
-            for Evaluate<'_, T, P, Sp, Sc>
-        {
+        impl<T: Real, S: Surface<T>> LevelVisitor<T, S::Psd> for Evaluate<'_, T, S> {
             type Output = LevelResponse<T>;
             fn visit<Pol, Coh>(self, _level: Level, kernel: Kernel<Pol, Coh>) -> LevelResponse<T>
             where
                 Pol: PolarizationModel,
-                Coh: CoherenceWeights<T, P>,
+                Coh: CoherenceWeights<T, S::Psd>,
             {
                 kernel
                     .evaluate(self.material, self.packet, self.g)

@@ -68,13 +68,12 @@
 use nalgebra::{Matrix2, Vector2, Vector3};
 
 use super::{
-    CoherenceWeights, Geometry, Kernel, KernelOutput, Pbsdf, PolarizationModel, Response,
-    RoughSurface,
+    CoherenceWeights, Geometry, Kernel, KernelOutput, PolarizationModel, Response, Surface,
 };
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::numerics::chebyshev::{CdfTable, TableError};
-use crate::psd::{GaussianPsd, KCorrelation, Psd};
+use crate::psd::{GaussianPsd, KCorrelation};
 use crate::real::Real;
 
 /// Interpolation tolerance relative to the peak of `F(ρ_max(ψ))`.
@@ -627,19 +626,17 @@ impl<T: Real> ScatterSampler<T> {
     /// `response` (it has to be handled by the caller). `None` only if the geometry is
     /// rejected ([`Geometry::for_packet`], e.g. a packet arriving from below).
     #[must_use]
-    pub fn sample_weighted<Pol, Coh, P, Sp, Sc>(
+    pub fn sample_weighted<Pol, Coh, S>(
         &self,
         kernel: &Kernel<Pol, Coh>,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         packet: &crate::packet::WavePacket<T>,
         u: [T; 2],
     ) -> Option<WeightedSample<T, Pol::Output<T>>>
     where
         Pol: PolarizationModel,
-        Coh: CoherenceWeights<T, P>,
-        P: Psd<T, 2>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        S: Surface<T>,
     {
         let sample = self.sample(u);
         let g = Geometry::for_packet(packet, &self.surface, sample.direction).ok()?;

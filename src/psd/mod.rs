@@ -15,13 +15,19 @@
 //! `S(f) = ∫ R(x) e^{−2πi f·x} dⁿx` (so `∫ S dⁿf = σ²`): `S(f) = (2π)^{n/2} p(2π f)`
 //! ([`Psd::value_cycles`]).
 //!
+//! # Forms
+//! Every PSD declares its [`Form`] ([`Psd::form`]): which [`Shape`] it is, or the closest one.
+//! That is all the BSDF sampler, the medium and the kernel's SIMD lanes read of it, so a new
+//! PSD is one file ([`PowerLaw`] is: it names the K-correlation as its closest form).
+//!
 //! # Blur methods
 //! A blur method is a type implementing [`BlurMethod`]; the choice is monomorphised:
 //! - [`ClosedForm`]: exact, for every PSD implementing [`ClosedFormBlur`] — [`GaussianPsd`],
 //!   [`GaussianMixturePsd`], [`Grating`], [`Smooth`], and a downstream crate's own PSDs;
 //! - mixture fit: [`KCorrelation::mixture_fit`] builds a [`GaussianMixturePsd`] once, then
 //!   [`ClosedForm`] applies;
-//! - [`GaussHermite`]: tensor Gauss–Hermite quadrature of a fixed order, any PSD;
+//! - [`GaussHermite`]: tensor Gauss–Hermite quadrature of a fixed order, any PSD (e.g. the
+//!   band-limited power law [`PowerLaw`], which has no closed form);
 //! - [`Adaptive`]: nested adaptive Gauss–Kronrod to a relative tolerance — the reference.
 
 mod autocorrelation;
@@ -29,6 +35,7 @@ mod form;
 mod gaussian_psd;
 mod grating;
 mod kcorrelation;
+mod power_law;
 mod powers;
 mod quadrature;
 pub(crate) mod special;
@@ -38,6 +45,7 @@ pub use form::{Form, Shape};
 pub use gaussian_psd::{GaussianMixturePsd, GaussianPsd, Smooth};
 pub use grating::{Grating, OrderCutoff, bessel_j};
 pub use kcorrelation::KCorrelation;
+pub use power_law::PowerLaw;
 pub use powers::CorrelationPowers;
 pub use quadrature::{Adaptive, GaussHermite};
 

@@ -15,12 +15,11 @@ use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::RoughSurface;
-use crate::interaction::pbsdf::Pbsdf;
 use crate::interaction::polarization::KernelOutput;
-use crate::interaction::{CoherenceModel, CoherenceWeights, Geometry, Kernel, PolarizationModel};
+use crate::interaction::{
+    CoherenceModel, CoherenceWeights, Geometry, Kernel, PolarizationModel, Surface,
+};
 use crate::packet::WavePacket;
-use crate::psd::Psd;
 use crate::real::Real;
 use nalgebra::Vector3;
 
@@ -125,9 +124,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         clippy::too_many_arguments,
         reason = "the material, the packet, the surface, the interface, the exits and two outputs"
     )]
-    pub fn evaluate_batch<T, P, Sp, Sc>(
+    pub fn evaluate_batch<T, S>(
         &self,
-        material: &RoughSurface<P, Sp, Sc>,
+        material: &S,
         packet: &WavePacket<T>,
         surface: &Frame<T>,
         interface: Option<T>,
@@ -137,10 +136,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     ) -> Result<(), Error>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
     {
         let n = exits.len();
         check_lengths(&exits, core::slice::from_ref(out), frames.as_deref())?;

@@ -50,7 +50,7 @@ use crate::interaction::pbsdf::{Pbsdf, PbsdfForm};
 use crate::interaction::polarization::{KernelOutput, PolarizationLevel};
 use crate::interaction::{
     CoherenceLevel, CoherenceWeights, FresnelInterface, Geometry, Kernel, PolarizationModel,
-    PreparedPacket, RayleighRice, RoughSurface,
+    PreparedPacket, RayleighRice, Surface,
 };
 use crate::packet::WavePacket;
 use crate::psd::{GaussianPsd, Psd};
@@ -414,9 +414,9 @@ impl<F: Real> WithSimd for PartialLobes<'_, '_, '_, '_, F> {
 /// the module docs and the per-packet constants are inside what the lanes reproduce (see
 /// [`LobePrep::new`], and [`LobePrep::at_interface`] with `interface = Some(η)`); `None`
 /// otherwise, and the caller goes exit by exit.
-pub(crate) fn lane_prep<T, P, Sp, Sc, Pol, Coh>(
+pub(crate) fn lane_prep<T, S, Pol, Coh>(
     kernel: &Kernel<Pol, Coh>,
-    material: &RoughSurface<P, Sp, Sc>,
+    material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
     surface: &Frame<T>,
@@ -424,11 +424,9 @@ pub(crate) fn lane_prep<T, P, Sp, Sc, Pol, Coh>(
 ) -> Option<LobePrep<T>>
 where
     T: Real,
-    P: Psd<T, 2>,
-    Sp: Pbsdf<T>,
-    Sc: Pbsdf<T>,
+    S: Surface<T>,
     Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, P>,
+    Coh: CoherenceWeights<T, S::Psd>,
 {
     let (full, intensity) = match Pol::LEVEL {
         PolarizationLevel::Full => (true, false),
@@ -500,9 +498,8 @@ struct LaneMaterial<'a, T: Real> {
 
 impl<'a, T: Real> LaneMaterial<'a, T> {
     /// The parts, each read from its form (`None` for any other PSD or pBSDF).
-    fn of<P: Psd<T, 2>, Sp: Pbsdf<T>, Sc: Pbsdf<T>>(
-        material: &'a RoughSurface<P, Sp, Sc>,
-    ) -> Option<Self> {
+    fn of<S: Surface<T>>(material: &'a S) -> Option<Self> {
+        let material = material.parts();
         let components = material.psd.form().exact_gaussians()?;
         let (index, dielectric) = match material.specular.form() {
             PbsdfForm::FresnelReflection(f) => (f.index(), None),
@@ -528,9 +525,9 @@ impl<'a, T: Real> LaneMaterial<'a, T> {
 
 /// Exit `exit` of `packet` by the per-direction kernel (in reflection, or at the interface
 /// `Some(η)`), as the lanes write it.
-pub(crate) fn scalar_exit<T, P, Sp, Sc, Pol, Coh>(
+pub(crate) fn scalar_exit<T, S, Pol, Coh>(
     kernel: &Kernel<Pol, Coh>,
-    material: &RoughSurface<P, Sp, Sc>,
+    material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
     (surface, interface): (&Frame<T>, Option<T>),
@@ -538,11 +535,9 @@ pub(crate) fn scalar_exit<T, P, Sp, Sc, Pol, Coh>(
 ) -> Result<ScalarExit<T>, Error>
 where
     T: Real,
-    P: Psd<T, 2>,
-    Sp: Pbsdf<T>,
-    Sc: Pbsdf<T>,
+    S: Surface<T>,
     Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, P>,
+    Coh: CoherenceWeights<T, S::Psd>,
 {
     let g = match interface {
         Some(eta) => Geometry::for_packet_at_interface(packet, surface, eta, exit)?,
@@ -566,9 +561,9 @@ where
     clippy::too_many_arguments,
     reason = "evaluate_batch's arguments and its prepared packet"
 )]
-pub(crate) fn try_evaluate<T, P, Sp, Sc, Pol, Coh>(
+pub(crate) fn try_evaluate<T, S, Pol, Coh>(
     kernel: &Kernel<Pol, Coh>,
-    material: &RoughSurface<P, Sp, Sc>,
+    material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
     (surface, interface): (&Frame<T>, Option<T>),
@@ -578,11 +573,9 @@ pub(crate) fn try_evaluate<T, P, Sp, Sc, Pol, Coh>(
 ) -> Option<Result<(), Error>>
 where
     T: Real,
-    P: Psd<T, 2>,
-    Sp: Pbsdf<T>,
-    Sc: Pbsdf<T>,
+    S: Surface<T>,
     Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, P>,
+    Coh: CoherenceWeights<T, S::Psd>,
 {
     let prep = lane_prep(kernel, material, prepared, packet, surface, interface)?;
     let mut scalar = |_: usize, i: usize| {
@@ -608,7 +601,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interaction::{Full, Incoherent, Partial, RoughConductor};
+    use crate::interaction::{Full, Incoherent, Partial, RoughConductor, RoughSurface};
     use crate::packet::CoherenceShape;
     use crate::psd::GaussianMixturePsd;
     use crate::stokes::Stokes;

@@ -16,12 +16,8 @@ use super::partial::{PartialLobes, lane_prep, scalar_exit};
 use super::prep::LobePrep;
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::pbsdf::Pbsdf;
-use crate::interaction::{
-    CoherenceModel, CoherenceWeights, Kernel, PolarizationModel, RoughSurface,
-};
+use crate::interaction::{CoherenceModel, CoherenceWeights, Kernel, PolarizationModel, Surface};
 use crate::packet::WavePacket;
-use crate::psd::Psd;
 use crate::real::Real;
 
 /// At most this many wavelengths share one pass over the exits; more are taken this many at a
@@ -32,9 +28,9 @@ pub const MAX_WAVELENGTHS: usize = 8;
 /// (wavelength, Stokes vector, coherence shapes; the direction of every wavelength's packet must
 /// be the same) and, for a dielectric interface, its relative index.
 #[derive(Debug)]
-pub struct Wavelength<'a, T: Real, P, Sp, Sc> {
+pub struct Wavelength<'a, T: Real, S> {
     /// The surface at this wavelength.
-    pub material: &'a RoughSurface<P, Sp, Sc>,
+    pub material: &'a S,
     /// The incident packet at this wavelength.
     pub packet: &'a WavePacket<T>,
     /// `interface` of [`Kernel::evaluate_batch`]: `None` in reflection, `Some(η)` at a
@@ -42,13 +38,13 @@ pub struct Wavelength<'a, T: Real, P, Sp, Sc> {
     pub interface: Option<T>,
 }
 
-impl<T: Real, P, Sp, Sc> Clone for Wavelength<'_, T, P, Sp, Sc> {
+impl<T: Real, S> Clone for Wavelength<'_, T, S> {
     fn clone(&self) -> Self {
         *self
     }
 }
 
-impl<T: Real, P, Sp, Sc> Copy for Wavelength<'_, T, P, Sp, Sc> {}
+impl<T: Real, S> Copy for Wavelength<'_, T, S> {}
 
 impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// [`Kernel::evaluate_batch`] for several wavelengths along one path: `outs[w]` receives
@@ -109,9 +105,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// assert!(outs[1].scattered.s[0][0] > 0.0);
     /// # Ok::<(), gmueller::Error>(())
     /// ```
-    pub fn evaluate_batch_spectral<T, P, Sp, Sc>(
+    pub fn evaluate_batch_spectral<T, S>(
         &self,
-        wavelengths: &[Wavelength<'_, T, P, Sp, Sc>],
+        wavelengths: &[Wavelength<'_, T, S>],
         surface: &Frame<T>,
         exits: DirectionsSoa<'_, T>,
         outs: &mut [LobesSoa<'_, T>],
@@ -119,10 +115,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     ) -> Result<(), Error>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
     {
         if outs.len() != wavelengths.len() {
             return Err(Error::OutOfRange {
@@ -163,9 +157,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     }
 
     /// One pass over the exits for at most [`MAX_WAVELENGTHS`] wavelengths of one direction.
-    fn spectral_pass<T, P, Sp, Sc>(
+    fn spectral_pass<T, S>(
         &self,
-        ws: &[Wavelength<'_, T, P, Sp, Sc>],
+        ws: &[Wavelength<'_, T, S>],
         surface: &Frame<T>,
         exits: DirectionsSoa<'_, T>,
         outs: &mut [LobesSoa<'_, T>],
@@ -173,10 +167,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     ) -> Result<(), Error>
     where
         T: Real,
-        P: Psd<T, 2>,
-        Coh: CoherenceWeights<T, P>,
-        Sp: Pbsdf<T>,
-        Sc: Pbsdf<T>,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
     {
         let mut prepared = [const { None }; MAX_WAVELENGTHS];
         let mut preps: [Option<LobePrep<T>>; MAX_WAVELENGTHS] = [None; MAX_WAVELENGTHS];
@@ -242,10 +234,11 @@ mod tests {
     use super::*;
     use crate::interaction::batch::StokesSoa;
     use crate::interaction::{
-        Full, Incoherent, Intensity, OneShape, Partial, PlaneWave, RoughConductor, RoughDielectric,
+        Full, Incoherent, Intensity, OneShape, Partial, Pbsdf, PlaneWave, RoughConductor,
+        RoughDielectric, RoughSurface,
     };
     use crate::packet::CoherenceShape;
-    use crate::psd::GaussianPsd;
+    use crate::psd::{GaussianPsd, Psd};
     use crate::stokes::Stokes;
     use num_complex::Complex;
 
@@ -488,7 +481,7 @@ mod tests {
         fn wavelengths<'a, T: Real, P, Sp, Sc>(
             m: &'a RoughSurface<P, Sp, Sc>,
             ps: &'a [WavePacket<T>],
-        ) -> Vec<Wavelength<'a, T, P, Sp, Sc>> {
+        ) -> Vec<Wavelength<'a, T, RoughSurface<P, Sp, Sc>>> {
             ps.iter()
                 .map(|p| Wavelength {
                     material: m,
