@@ -446,3 +446,20 @@ fn medium_through_the_named_form() {
 /// The accuracy of the medium's `σ_s` for the power law (a closest form: its nodes follow the
 /// K-correlation's lobe, not the band's edges), as measured by `medium_through_the_named_form`.
 const POWER_LAW_SIGMA_TOL: f64 = 1e-3;
+
+#[test]
+fn scratch_medium_partial() {
+    let light = WavePacket::from_stokes(
+        Stokes::new(1.0, 0.2, -0.1, 0.3).unwrap(),
+        CoherenceShape::isotropic(4.0).unwrap(),
+        Frame::sp(Vector3::new(0.2, -0.1, 1.0).normalize(), Vector3::x()).unwrap(),
+        0.6,
+    )
+    .unwrap();
+    let medium = RandomMedium::new(PowerLaw::<f64, 3>::new(1e-3, 3.6, 1.0, 30.0).unwrap(), Dipole);
+    let order: usize = std::env::var("GH").unwrap().parse().unwrap();
+    let t = std::time::Instant::now();
+    let _ = std::panic::catch_unwind(|| crate::medium::check_coefficient(
+        "GH", &medium, Kernel::<Full, _>::new(Partial(GaussHermite::new(order).unwrap())), &light, 1.0, 1e-12));
+    println!("GH({order}) {:?}", t.elapsed());
+}
