@@ -1,0 +1,5 @@
+//! Mirrors `src/psd/`: the tests of `psd`.
+
+mod kcorrelation;
+mod models;
+mod validation;
