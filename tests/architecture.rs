@@ -1,7 +1,8 @@
 //! The module graph of `docs/architecture.md`, checked against the source: every `crate::…`
 //! (and, inside `interaction`, `super::…`) path in code — not in comments or docs — must point
 //! to a module *below* the one that uses it in the documented order. A new import that runs up
-//! the stack, or a cycle, fails here with the file and the line.
+//! the stack, or a cycle, fails here with the file and the line. And the folders of `tests/`
+//! mirror those of `src/`.
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -450,5 +451,81 @@ fn the_cycle_finder_and_path_resolver_work() {
     assert_eq!(
         paths_named("let x = crate::psd::two_pi(); my_crate::a::b", &at),
         [["psd", "two_pi"]]
+    );
+}
+
+/// The folders of `tests/` that hold no module's tests: the shared helpers and the reference
+/// values.
+const NOT_MIRRORS: &[&str] = &["common", "data"];
+
+/// The folders below `dir`, as paths relative to `root`, except those of `skip` (relative paths)
+/// and everything under them.
+fn folders(root: &Path, dir: &Path, skip: &[&str], out: &mut Vec<PathBuf>) {
+    for entry in fs::read_dir(dir).expect("readable dir") {
+        let path = entry.expect("dir entry").path();
+        if !path.is_dir() {
+            continue;
+        }
+        let rel = path
+            .strip_prefix(root)
+            .expect("dir under root")
+            .to_path_buf();
+        if skip.iter().any(|s| rel == Path::new(s)) {
+            continue;
+        }
+        folders(root, &path, skip, out);
+        out.push(rel);
+    }
+}
+
+/// The folders of `folders` (paths relative to `tests/`) with no folder at the same relative
+/// path under `src`.
+fn unmirrored(src: &Path, folders: &[PathBuf]) -> Vec<String> {
+    folders
+        .iter()
+        .filter(|f| !src.join(f).is_dir())
+        .map(|f| f.display().to_string())
+        .collect()
+}
+
+/// The folders of `tests/` mirror those of `src/`: every folder but `common/` and `data/` is
+/// named after a folder of `src/` at the same relative path (`tests/interaction/roughness/`
+/// holds the tests of `src/interaction/roughness/`), so a module's tests are where its source is.
+#[test]
+fn every_test_folder_mirrors_a_source_folder() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tests = root.join("tests");
+    let mut found = Vec::new();
+    folders(&tests, &tests, NOT_MIRRORS, &mut found);
+    found.sort();
+    let bad = unmirrored(&root.join("src"), &found);
+    assert!(
+        bad.is_empty(),
+        "folders of tests/ with no folder of src/ at the same path: {bad:?}"
+    );
+    // The walk saw the real structure, nested folders included, and left out the exceptions.
+    for f in ["bsdf", "interaction", "interaction/roughness", "medium"] {
+        assert!(found.contains(&PathBuf::from(f)), "{f} not in {found:?}");
+    }
+    for f in NOT_MIRRORS {
+        assert!(!found.contains(&PathBuf::from(f)), "{f} in {found:?}");
+    }
+}
+
+#[test]
+fn the_mirror_check_rejects_a_made_up_folder() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let folders: Vec<PathBuf> = [
+        "interaction/roughness",
+        "interaction/made_up",
+        "made_up",
+        "psd/kcorrelation", // a file of src/, not a folder
+    ]
+    .iter()
+    .map(PathBuf::from)
+    .collect();
+    assert_eq!(
+        unmirrored(&src, &folders),
+        ["interaction/made_up", "made_up", "psd/kcorrelation"]
     );
 }

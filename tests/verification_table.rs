@@ -1,7 +1,9 @@
 //! The table "Every numbered result, its test and its oracle" (`docs/results.md`, the guide
 //! `gmueller::guide::results`) against the tests: every
-//! `file::function` it names is a function of `tests/<file>.rs`, and every numbered result of
-//! the supplemental — S1.1–S1.7, S2.1–S2.20, Lemma S2.1, Corollary S2.2 — has a row.
+//! `file::function` it names is a function of `tests/<file>.rs` (`file` a path under `tests/`,
+//! `medium/born::…` for `tests/medium/born.rs`, `frame::…` for `tests/frame.rs`), and every
+//! numbered result of the supplemental — S1.1–S1.7, S2.1–S2.20, Lemma S2.1, Corollary S2.2 — has
+//! a row.
 
 use std::fs;
 use std::path::Path;
@@ -23,7 +25,8 @@ fn rows() -> Vec<String> {
         .collect()
 }
 
-/// The `file::function` names in backticks in `text`.
+/// The `file::function` names in backticks in `text` (`file` a path under `tests/` whose
+/// segments are joined by `/`: `medium/born::function`).
 fn tests_named(text: &str) -> Vec<(String, String)> {
     let mut out = Vec::new();
     for chunk in text.split('`').skip(1).step_by(2) {
@@ -33,7 +36,7 @@ fn tests_named(text: &str) -> Vec<(String, String)> {
                     && s.chars()
                         .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
             };
-            if ident(file) && ident(function) {
+            if file.split('/').all(ident) && ident(function) {
                 out.push((file.to_owned(), function.to_owned()));
             }
         }

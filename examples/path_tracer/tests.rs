@@ -13,7 +13,7 @@
 //! `16/k` ≈ 2.5 λ, and then the uniform render is too noisy for its own error bars — block
 //! z scores up to 52 against the lobe render, and 44 for the 20 %-biased control (one run,
 //! issue 36). The rule's sampler is checked against its pdf (chi-square) and by the furnace
-//! in `tests/bsdf_horizon.rs`.
+//! in `tests/bsdf/horizon.rs`.
 
 use super::{Options, Render, Sampling, render};
 use crate::scene::Scene;

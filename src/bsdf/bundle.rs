@@ -57,7 +57,7 @@
 //! only where every `p_j` follows `M_i`. With one surface coherence width (µm) and one PSD for
 //! the whole bundle, the coherent lobe's width `1/(k w)` and the scattered lobes' widths in
 //! direction go as `λ`, so the `p_j` of a bundle spread over the visible differ by the ratio
-//! of its wavelengths. Measured under uniform light (`tests/bsdf_bundle.rs`, 0.4–0.75 µm,
+//! of its wavelengths. Measured under uniform light (`tests/bsdf/bundle.rs`, 0.4–0.75 µm,
 //! 5 µm of coherence, equal numbers of draws) the variance of a wavelength's `M₀₀` weight was
 //! 1.2–18× the single-wavelength sampler's for rough glass at Full·Partial (8 wavelengths),
 //! 5.5–135× for rough gold at Intensity·Partial (4; its own sampler is nearly exact there) and

@@ -38,7 +38,7 @@
 //! 9·10⁻⁶ (rule, the sun at 88°), but 5.8·10⁻⁵ at θ = 0.8, `t = 1/12`; for `t > 1/12` (fixed
 //! widths narrow against the horizon only) it differs from the midpoint rule by up to 1·10⁻⁴,
 //! which of the two is off there is not settled. Against the verification kit's hemisphere
-//! quadrature of the kernel's own lobe (`tests/bsdf_horizon.rs`): within 6.9·10⁻⁶ over 0–89° and
+//! quadrature of the kernel's own lobe (`tests/bsdf/horizon.rs`): within 6.9·10⁻⁶ over 0–89° and
 //! 2 µm to sunlight. Everything in `f64`.
 
 use nalgebra::{Matrix2, Vector2};

@@ -6,7 +6,7 @@
 //! A [`Material`] owns its [`RoughSurface`] and the kernel of its [`Level`] (and roughness
 //! level), monomorphised once when it is built ([`Level::dispatch`], [`Level::dispatch_rough`]);
 //! a call costs one dynamic dispatch and then runs the static [`super::Bsdf`] of that choice, so
-//! the answers are those of the static form bit for bit (`tests/bsdf_material.rs`). Every
+//! the answers are those of the static form bit for bit (`tests/bsdf/material.rs`). Every
 //! throughput is a [`Mueller`] matrix: at the intensity level the matrix with `M₀₀` alone
 //! ([`Throughput::to_mueller`]), which acts on `S0` and leaves the light unpolarized.
 //!

@@ -47,7 +47,7 @@
 //! 25 % share of the projected disk. Either is drawn exactly and [`LobeSampler::pdf`] is its
 //! density (Pearson's chi-square for 20 proposals, `vσ ≈ 1, 3, 10`, both directions and sides,
 //! total internal reflection, the plane wave, a geometric conductor, a K-correlation:
-//! `tests/bsdf_rough.rs`). Furnace of lossless rough glass at `vσ ≈ 1, 3, 10`, incidence 0–60°
+//! `tests/bsdf/rough.rs`). Furnace of lossless rough glass at `vσ ≈ 1, 3, 10`, incidence 0–60°
 //! and from inside: the sampler's estimate agrees with quadrature within 4 standard errors; the
 //! albedo is 0.993–1.003 (the tangent plane has no shadowing, so it is not exactly
 //! conservative); the variance at equal sample count is 1.6–13 000× (`vσ ≈ 1`), 17–570×
@@ -59,7 +59,7 @@
 //! # Reciprocity
 //! The plane-wave level is reciprocal, `M(b → a) = D M(a → b)ᵀ D` with `D = diag(1, 1, −1, 1)`
 //! in reflection (and `f_t(i → o)/n_o² = f_t(o → i)/n_i²` across an interface, in the same
-//! `D`-transposed form; `tests/bsdf_reciprocity.rs`: residuals ≤ 3.4e-13). The partially
+//! `D`-transposed form; `tests/bsdf/reciprocity.rs`: residuals ≤ 3.4e-13). The partially
 //! coherent kernel is **not**: the incident footprint (the section `Ξ` of the light's
 //! coherence) enters, and it belongs to the light, not to the exit direction. With a
 //! direction-dependent footprint (the sun's van Cittert–Zernike packet, fixed widths across
@@ -82,7 +82,8 @@
 //! **evaluates in the physical direction**, `M(ŝ → r̂)` with the coherence of the light arriving
 //! along ŝ — never `M(r̂ → ŝ)` with the roles swapped: under uniform light of 1 µm surface
 //! coherence the swapped estimate of rough glass misses the physical one (which agrees with
-//! quadrature within one standard error) by 5–490 standard errors, 0.6–4 % (`tests/bsdf_reciprocity.rs`).
+//! quadrature within one standard error) by 5–490 standard errors, 0.6–4 %
+//! (`tests/bsdf/reciprocity.rs`).
 //!
 //! # Near the horizon
 //! The kernel's coherent lobe is a Gaussian in the tangential wave vector, of width `1/(k w)` in
@@ -99,7 +100,7 @@
 //! expansion, or a 576-node quadrature within reach of the horizon or for lobes wider than
 //! about `1/24` of the disk): a lossless interface then keeps `R + T = 1` at every incidence
 //! (within 8.7·10⁻⁵ in `f64`, 3.8·10⁻⁴ in `f32`, up to 89°, for the sun, 2–100 µm, with and
-//! without the horizon rule: `tests/bsdf_horizon.rs`). For a packet with two shapes
+//! without the horizon rule: `tests/bsdf/horizon.rs`). For a packet with two shapes
 //! (`Θ_x ≠ Θ_y`) `E` averages the channels' masses with their intensities, not with their
 //! Fresnel shares: within 7.2·10⁻³ of 1 in the same test (every packet of the source helpers
 //! has one shape). What remains: the lobe carries the Fresnel matrix of its centre (not each
@@ -207,7 +208,7 @@ pub struct Bsdf<'m, T: Real, S, K> {
 /// # Reuse
 /// An `Incident` borrows nothing: it serves every [`Bsdf`] with the same material (the same
 /// value: the one it was prepared with or a copy), kernel, shading frame and wavelength, which
-/// answer with it exactly as the one that prepared it (`tests/bsdf_material.rs`,
+/// answer with it exactly as the one that prepared it (`tests/bsdf/material.rs`,
 /// `an_incident_serves_every_bsdf_of_the_same_shading_point`). With another frame, wavelength,
 /// kernel or material its numbers are of another shading point and the answers are wrong:
 /// debug builds assert that the wavenumbers agree (`Kernel::evaluate_mueller_prepared`),
@@ -559,7 +560,7 @@ where
     /// [`Material::eval_incident`] evaluate — without building the packet: its section
     /// on the surface is `I/w²` with `w` the [`Bsdf::surface_width`] of `to_source`, its Stokes
     /// vector `(1, 0, 0, 0)` in the incident s/p frame. The same numbers as the packet's path
-    /// up to rounding (`tests/bsdf_eval.rs`, `prepare_surface_is_the_surface_packet_prepared`).
+    /// up to rounding (`tests/bsdf/eval.rs`, `prepare_surface_is_the_surface_packet_prepared`).
     ///
     /// # Errors
     /// As [`Bsdf::surface_width`].

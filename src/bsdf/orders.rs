@@ -33,7 +33,7 @@
 //! (`p_ω = cos θ/π`), so that every propagating direction keeps a density of at least
 //! `DISK_SHARE · P_part cos θ/π` however wide the kernel's lobe grows. The Gaussian series'
 //! lobes have no disk lobe: they cover ℝ², and a disk share only adds a variance floor (the
-//! furnace of `tests/bsdf_rough.rs` measured the relative standard error at `vσ = 1`, normal
+//! furnace of `tests/bsdf/rough.rs` measured the relative standard error at `vσ = 1`, normal
 //! incidence: 5.5·10⁻⁶ without it, 2.0·10⁻⁴ with a share of 1 %, 4.5·10⁻⁴ with 5 %; no case
 //! improved with it).
 

@@ -34,7 +34,7 @@
 //! p_ω(ŝ) += P_spec · ½ · 𝒩(x(ŝ); x_c, Σ_x) · θ/sin θ        (the h_t term of the part halved)
 //! ```
 //! (measured: at 85° and 20 µm of coherence the largest of 200 000 weights fell from 320× to
-//! 9× the mean, `tests/bsdf_sampling.rs`).
+//! 9× the mean, `tests/bsdf/sampling.rs`).
 //!
 //! # Part probabilities
 //! ```text
@@ -51,7 +51,7 @@
 //! floor keeps every existing part drawable whatever its estimate,
 //! and leaves the parts above it exactly proportional to their estimates: where one lobe carries
 //! almost everything (sunlit glass), a uniform floor of 1/50 had made the furnace estimate five
-//! times noisier than the best mixture (`tests/bsdf_furnace.rs`).
+//! times noisier than the best mixture (`tests/bsdf/furnace.rs`).
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 

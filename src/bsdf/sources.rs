@@ -65,7 +65,7 @@ use crate::stokes::Stokes;
 /// at a **fixed** width (the white furnace, which must give 1), the backward estimate depends
 /// on `q` alone from 60° to 89°: 0.63 at `q = 1`, 0.95 at 2, 1.15 at 4, 1.041 at 8, 1.015 at
 /// 12, 1.008 at 16, 1.0035 at 24, 1.0019 at 32 — `1 + 2/q²` for large `q`
-/// (`tests/bsdf_horizon.rs`). `Q = 16` keeps the excess below 1 % at every angle: under the
+/// (`tests/bsdf/horizon.rs`). `Q = 16` keeps the excess below 1 % at every angle: under the
 /// rule the furnace is 0.996–1.009 from 0° to 89° for σ = 2–100 µm, on a conductor and on glass
 /// (`cargo run --release -p gmueller-validation --bin furnace`; `docs/renderer.md`). The width
 /// grows toward the horizon, which sharpens grazing reflections toward the plane-wave limit

@@ -377,10 +377,11 @@ impl<T: Real> Geometry<T> {
     /// `z`; relative to the flat one, the incident wave travels `z cos θ_i` less in the medium
     /// of incidence (phase `−k cos θ_i z` at the surface), and the refracted wave travels
     /// `z cos θ_o` more in the exit medium before reaching the mean plane (phase
-    /// `+η k cos θ_o z`): in all `−v z`. Only `v²` enters the results (`tests/interaction_transmission.rs`
-    /// checks the phase against explicitly propagated plane waves). It sets the Debye–Waller
-    /// attenuation `exp(−(vσ)²)` ([`super::roughness_attenuation`]) and the phase-screen
-    /// scattering `τ v²` ([`super::PhaseScreen`]).
+    /// `+η k cos θ_o z`): in all `−v z`. Only `v²` enters the results
+    /// (`tests/interaction/transmission.rs` checks the phase against explicitly propagated plane
+    /// waves). It sets the Debye–Waller attenuation `exp(−(vσ)²)`
+    /// ([`super::roughness_attenuation`]) and the phase-screen scattering `τ v²`
+    /// ([`super::PhaseScreen`]).
     #[inline]
     #[must_use]
     pub fn phase_factor(&self) -> T {

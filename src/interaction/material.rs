@@ -75,7 +75,7 @@ where
 /// real part at the interface and Beer–Lambert attenuation `exp(−4πκ d/λ₀)` along the path `d`
 /// inside, applied by the renderer: the interface's reflectance changes only at second order,
 /// `|R(n + iκ) − R(n)| ≤ 3κ²` for `n ≥ 1.2` and `≤ 0.4κ²` for `n ≥ 1.5`, at every incidence
-/// (measured for κ ≤ 0.05 in `tests/interaction_transmission.rs`; largest 2.7κ² at n = 1.2,
+/// (measured for κ ≤ 0.05 in `tests/interaction/transmission.rs`; largest 2.7κ² at n = 1.2,
 /// 80°). For metals use [`RoughConductor`].
 pub type RoughDielectric<T, P> = RoughSurface<P, FresnelInterface<T>, RayleighRice<T>>;
 

@@ -28,7 +28,7 @@
 //! its width in direction space is `|Ξ|`-wide in `h_t = η k r̂_t + k ŝ_t`, i.e. `1/η` times the
 //! reflected one. Radiometry: the kernel returns `f · cos θ_i` per unit beam irradiance, so the
 //! BSDF is `f = L_o/(S0 cos θ_i)`; in the plane-wave limit the transmitted part obeys the
-//! generalized reciprocity `f_t(i→o)/n_o² = f_t(o→i)/n_i²` (`tests/interaction_transmission.rs`).
+//! generalized reciprocity `f_t(i→o)/n_o² = f_t(o→i)/n_i²` (`tests/interaction/transmission.rs`).
 //!
 //! `Ξ_α` is the 2-D *section* of the 3-D inverse coherence (the packet's coherence function
 //! evaluated at separations that lie in the surface), not the marginal: the kernel needs the
@@ -91,8 +91,8 @@
 //!   the `f32` sections of 10⁶-anisotropic shapes agree with `f64` to ~1e-8.
 //!
 //! Tested in `tests/extremes.rs` and `docs/numerical.md` (the crate docs, "Numerical
-//! behaviour"), against independent oracles in `tests/interaction_channels.rs`,
-//! `tests/interaction_s2_10.rs` and `tests/interaction_reference.rs`.
+//! behaviour"), against independent oracles in `tests/interaction/polarization/channels.rs`,
+//! `tests/interaction/s2_10.rs` and `tests/interaction/reference.rs`.
 //!
 //! # Cost
 //! A call splits into per-packet work — the sections `Ξ_α` (one 2×2 Cholesky each: three at

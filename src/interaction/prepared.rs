@@ -232,7 +232,7 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     /// quadrature errors of [`crate::psd::GaussHermite`] — it lowers `K_½` by no more than their
     /// own error: the exact weights satisfy it. The `|μ|_max` form is the one the BSDF form
     /// ([`Self::channel_matrix`]) must use (a matrix does not know `|μ|`), so both forms agree
-    /// where a quadrature blur breaks the inequality (`tests/bsdf_eval.rs`); the second `min`
+    /// where a quadrature blur breaks the inequality (`tests/bsdf/eval.rs`); the second `min`
     /// keeps validity for a packet at the realizability slack.
     #[inline]
     #[expect(
@@ -425,10 +425,10 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
 ///
 /// Each entry rounds to the subnormal grid on its own (steps of the smallest subnormal number
 /// `δ = MIN_POSITIVE · ε`), which can leave `S1² + S2² + S3² > S0²` by up to half a step per
-/// entry (f32, measured by `tests/lobe_batch.rs`: `(9, 9, 1, 0) δ`). The entries in steps are
-/// whole numbers (exact), so the test is done on them, and the polarized entries are shrunk
-/// toward 0 by one step at a time until the vector is valid (after four steps, to 0). The change
-/// is below `4 δ` per entry, within the `MIN_POSITIVE` of every documented bound. Unchanged
+/// entry (f32, measured by `tests/interaction/batch/lobes.rs`: `(9, 9, 1, 0) δ`). The entries in
+/// steps are whole numbers (exact), so the test is done on them, and the polarized entries are
+/// shrunk toward 0 by one step at a time until the vector is valid (after four steps, to 0). The
+/// change is below `4 δ` per entry, within the `MIN_POSITIVE` of every documented bound. Unchanged
 /// when `S0` is normal, zero or negative.
 #[inline]
 pub(crate) fn subnormal_onto_cone<T: Real>(v: Vector4<T>) -> Vector4<T> {
@@ -555,9 +555,10 @@ fn scaled_then<T: Real, const R: usize, const C: usize>(
 
 #[cfg(test)]
 mod tests {
-    /// A subnormal vector that rounding left outside the cone (the f32 case `tests/lobe_batch.rs`
-    /// found, `(9, 9, 1, 0) δ`: 81 + 1 > 81) comes back inside by one step of its polarized
-    /// entries; a valid one, a normal one and a negative `S0` are unchanged.
+    /// A subnormal vector that rounding left outside the cone (the f32 case
+    /// `tests/interaction/batch/lobes.rs` found, `(9, 9, 1, 0) δ`: 81 + 1 > 81) comes back inside
+    /// by one step of its polarized entries; a valid one, a normal one and a negative `S0` are
+    /// unchanged.
     #[test]
     fn a_subnormal_vector_outside_the_cone_comes_back_inside() {
         fn run<T: Real>() {

@@ -26,8 +26,8 @@
 //! `⟨𝓜(p₁, p₂)⟩ = c(p₁ − p₂) Σ_t 𝓜[J̄_t(p₁), J̄_t(p₂)]`, and S2.8 holds *exactly* for
 //! Gaussian windows `J̄_t(p) = e^{−¼(p−c_t)ᵀW⁻¹(p−c_t)} J_t` of one shape W (Silverman's
 //! construction, [`JonesFieldGenerator`]): `m̄(ζ) = Σ_t g^W(ζ − c_t) Mueller(J_t)` and
-//! `R(ξ) = c(ξ) e^{−⅛ ξᵀW⁻¹ξ}`. `tests/matter.rs` estimates `⟨𝓜⟩` from such realizations by
-//! Monte Carlo and compares it with S2.8 within standard errors.
+//! `R(ξ) = c(ξ) e^{−⅛ ξᵀW⁻¹ξ}`. `tests/matter/locally_stationary.rs` estimates `⟨𝓜⟩` from such
+//! realizations by Monte Carlo and compares it with S2.8 within standard errors.
 
 mod field;
 mod window;

@@ -19,7 +19,7 @@
 //! In world axes a 3-D Gaussian whose variances span more than `1/ε` cannot be held in `T`:
 //! every entry carries an error `ε λ_max`, which is the whole of the small variances. A packet
 //! of a 2.7·10³ λ coherence width and a 0.27 λ `σ_zz` (ratio 10⁸) lost its transverse
-//! coherence in `f32` (the scattering coefficient came out 0, `tests/medium_f32.rs`); a short
+//! coherence in `f32` (the scattering coefficient came out 0, `tests/medium/f32.rs`); a short
 //! `σ_zz` beside a long correlation length did the same to the `Partial` blur `Λ + Ξ` (ratio
 //! `(ℓ/σ_zz)²`). In `B_α` nothing large meets anything small: the matrices are formed and
 //! factored in `f64`, and each term of `|L⁻¹ B_αᵀ h|²` is a square of one projection, whose only

@@ -22,7 +22,7 @@
 //! at the rim (the backward direction) is odd in `v` and cancels between `ψ` and `ψ + π`,
 //! which the even node count pairs (in the symmetric case the integrand depends on `|v|²`
 //! alone). Accuracy against adaptive quadrature on the sphere
-//! (`tests/medium.rs`, `scattering_coefficient_against_adaptive_quadrature`): ≤ 3e-15 where
+//! (`tests/medium/born.rs`, `scattering_coefficient_against_adaptive_quadrature`): ≤ 3e-15 where
 //! the integrand is symmetric, 4e-11–8e-11 for anisotropic media and coherence (1.8e-7 with 8
 //! azimuths, 1e-15 with 32), 1e-7 for a Gauss–Hermite blur of a K-correlation PSD.
 

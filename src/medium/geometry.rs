@@ -45,7 +45,7 @@ fn orthogonalize<T: Real>(v: &Vector3<T>, k: &Vector3<T>) -> Vector3<T> {
 /// 3.5e-4 rad in `f32`): the scattering plane is undefined, and `ê_⊥` is the packet's own x̂
 /// made orthogonal to r̂. A scatterer whose forward and backward matrices are those of a
 /// symmetric particle ([`super::Scatterer`]) then gives the same light whichever ê_⊥ is chosen
-/// (`tests/medium_limits.rs`: continuous in a fixed frame across the switch).
+/// (`tests/medium/limits.rs`: continuous in a fixed frame across the switch).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScatteringGeometry<T: Real> {
     pub(crate) h: Vector3<T>,

@@ -55,7 +55,7 @@
 //! (`Ξ_zz = 1/σ_zz²`, from the single-frequency propagation of a packet with a longitudinal
 //! envelope). Light whose equal-time coherence has that length has a bandwidth `Δk = 1/σ_zz`, and
 //! its frequencies scatter independently, each with its own `h = k'(r̂ − d̂)`: no blur forward, a
-//! blur of `2/σ_zz` backward. The two differ (`tests/medium_spectrum.rs`,
+//! blur of `2/σ_zz` backward. The two differ (`tests/medium/spectrum.rs`,
 //! `longitudinal_coherence_against_bandwidth`: forward, the packet gives `(1 + ℓ²/σ_zz²)^{−1/2}`
 //! of the plane wave, 0.71 at `ℓ = σ_zz`, bandwidth `E[(k'/k)⁴] ≈ 1`). A spectral renderer, whose
 //! packets carry one wavelength each, should leave `σ_zz` unbounded: the `Partial` level takes
@@ -71,7 +71,7 @@
 //!   fluctuations `δn` in a background of index `n`, `ε = (n + δn)² = n²(1 + δε)` gives
 //!   `δε = 2δn/n + (δn/n)²`, so `p_δε ≈ (4/n²) p_δn` — in air or vacuum `δε ≈ 2δn` and
 //!   `p_δε = 4 p_δn`: a `δn` spectrum passed in unchanged understates `σ_s` (and `dI/dV`) by a
-//!   factor 4 (`tests/medium_conventions.rs`: against the classical `2πk⁴Φ_n sin²χ` of index
+//!   factor 4 (`tests/medium/conventions.rs`: against the classical `2πk⁴Φ_n sin²χ` of index
 //!   fluctuations, to 1e-12). [`RandomMedium::new`] has the formula.
 //! - **`GaussianPsd::isotropic(σ, ℓ)` is the correlation `σ² e^{−r²/2ℓ²}`** (its PSD
 //!   `σ²ℓ³ e^{−ℓ²|q|²/2}`, the unitary transform, checked by radial quadrature). Much of the
@@ -85,7 +85,7 @@
 //! The packet's coherence `e^{ik d̂·ξ} g^{Θ}(ξ)` puts its plane waves on the plane tangent to the
 //! sphere `|K| = k` at `k d̂`; a real beam's lie on the sphere, `κ⊥²/2k` behind the plane. Against
 //! an exact sum of plane waves (a Gaussian Schell-model beam in a Gaussian medium, each plane
-//! wave scattered by the exact first-Born formula; `tests/medium_paraxial.rs`) the packet is low
+//! wave scattered by the exact first-Born formula; `tests/medium/paraxial.rs`) the packet is low
 //! by `e = I_exact/I_packet − 1 ≈ 2(ℓ/w)²(1 − cos Θ)/2` (`ℓ` this crate's correlation length, `w`
 //! the coherence width; exactly `2ℓ²/(w² − ℓ²)` backward for a scalar scatterer), more off axis
 //! where `kℓ²/w` is not small, plus `O((ℓ/w)² sin²Θ + 1/(kw)²)` from the dipole factor taken at
@@ -104,7 +104,7 @@
 //! - `F`, the pdf and the sample weight are computed from `ln σ_s`
 //!   ([`VolumeIncident::ln_scattering_coefficient`]): a `σ_s` that underflows the type
 //!   ([`VolumeIncident::scattering_coefficient`] 0) or overflows it (∞) leaves them finite and exact
-//!   (`tests/medium_f32.rs`: `σ_s` 5e-49 and 1e40 in `f32`, `F` within 1e-5 of `f64`).
+//!   (`tests/medium/f32.rs`: `σ_s` 5e-49 and 1e40 in `f32`, `F` within 1e-5 of `f64`).
 //! - A medium that does not scatter (`δε = 0`, `ln σ_s = −∞`): `σ_s = 0`, `F = 0`, `dI/dV = 0`,
 //!   sample weights 0, and the sampler still draws with a finite positive pdf.
 //! - `σ_s` that did not resolve the phase function's lobe — a PSD whose form names a lobe
@@ -121,7 +121,7 @@
 //! `(3/16π)(1 + cos²Θ)`, which is this module's `F₀₀` for unpolarized light in the Rayleigh
 //! limit), and no renderer or scattering library we know makes a phase function
 //! coherence-aware: the coherence levels here have no peer to compare with; they are tested
-//! against the Born integral itself (`tests/medium.rs`).
+//! against the Born integral itself (`tests/medium/born.rs`).
 //!
 //! # Numerics
 //! The weights are logarithms combined with `ln S0` and `ln(k⁴/16π²)` before anything is
@@ -133,7 +133,7 @@
 //! **Each channel in its own axes.** `Ξ_α`'s variances span `(w/σ_zz)²` — 10⁸ for a 2.7·10³ λ
 //! width beside a 0.27 λ `σ_zz` — and a 3-D matrix in world axes cannot hold more than `1/ε` of
 //! span in `T`: rounded to `f32`, its transverse block was noise, the `σ_s` quadrature missed the
-//! lobe and `σ_s` came out 0 (issue 36; `tests/medium_f32.rs`). `Ξ_α` is diagonal in the basis
+//! lobe and `σ_s` came out 0 (issue 36; `tests/medium/f32.rs`). `Ξ_α` is diagonal in the basis
 //! of the channel's transverse eigenvectors and d̂, formed in `f64`; there the `Incoherent`
 //! weight, and the `Partial` weight of a Gaussian PSD whose blur is exact for Gaussians, are
 //! Gaussian lobes `c − ½|L⁻¹Bᵀh|²` whose rows are formed in `f64`, and an isotropic mixture
@@ -193,7 +193,7 @@ impl<P, M> RandomMedium<P, M> {
     /// medium described by its refractive-index fluctuations `δn` (rms `σ_n`), pass the `δε`
     /// spectrum: `4/n²` times the `δn` spectrum (`GaussianPsd::isotropic(2σ_n/n, ℓ)` for a
     /// Gaussian one); passed in unchanged, a `δn` spectrum in air understates `σ_s` and `dI/dV`
-    /// by a factor 4 (`tests/medium_conventions.rs`, against the classical cross-section
+    /// by a factor 4 (`tests/medium/conventions.rs`, against the classical cross-section
     /// `2πk⁴Φ_n sin²χ` of index fluctuations). `GaussianPsd::isotropic(σ, ℓ)` is the correlation
     /// `σ² e^{−r²/2ℓ²}` ([module docs](self)).
     ///

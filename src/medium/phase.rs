@@ -139,7 +139,7 @@ impl<T: Real, Th: Throughput<T>> PhaseValue<T, Th> {
     /// the input (polarized scattered light leaving near the dipole's null, `F S₀ ∝ cos²Θ`) the
     /// rounding of `F`'s entries is amplified by about `1/cos²Θ`, and in `f32` the raw product
     /// can leave the cone by a few `10⁻⁶` of `S0` (4.8e-6 at `Θ = 85°` in
-    /// `tests/medium_extremes.rs`, `f_s_near_the_dipole_null`).
+    /// `tests/medium/extremes.rs`, `f_s_near_the_dipole_null`).
     #[must_use]
     pub fn apply(&self, light: &Th::Light) -> Th::Light {
         on_cone::<T, Th>(self.phase.apply(light))
@@ -228,7 +228,7 @@ where
     /// trapezoid rule over 16 azimuths — one where the integrand is symmetric about d̂ (an
     /// isotropic PSD and isotropic transverse shapes), where the azimuth-dependent terms of
     /// the first row of `m̄ T` integrate to 0. Accuracy against adaptive quadrature on the
-    /// sphere (`tests/medium.rs`): ≤ 3e-15 symmetric, ≤ 8e-11 for anisotropic media and
+    /// sphere (`tests/medium/born.rs`): ≤ 3e-15 symmetric, ≤ 8e-11 for anisotropic media and
     /// coherence, 1e-7 with a Gauss–Hermite blur. Cost: 5–15 µs symmetric, 90–250 µs
     /// otherwise (`benches/medium.rs`; the plane-wave level ignores the shapes and is always
     /// symmetric for an isotropic PSD).

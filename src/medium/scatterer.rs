@@ -74,7 +74,7 @@ pub trait Scatterer<T: Real> {
 /// The first-Born scatterer of a fluctuating permittivity: the induced dipole radiates
 /// `E_s ∝ (I − r̂r̂ᵀ) E = −r̂ × (r̂ × E)`, i.e. the Rayleigh matrix: with `S1 = I_⊥ − I_∥`, van
 /// de Hulst's (*Light Scattering by Small Particles*, 1957, §6.1) without its normalisation
-/// (`tests/medium.rs` compares it with Bohren & Huffman's small-sphere matrix).
+/// (`tests/medium/born.rs` compares it with Bohren & Huffman's small-sphere matrix).
 ///
 /// # Formula
 /// ```text

@@ -376,7 +376,7 @@ mod tests {
     //! lanes, which exercise the remainder logic at every width, and AVX2 + FMA and AVX-512
     //! when the CPU has them) against the portable loop, on seeded inputs of lengths 0–41. The scalar back-end
     //! rounds like the portable loop and must agree bit for bit; the others within `4 ε N`
-    //! (`N = ½‖J‖²_F`, see `tests/mueller_batch.rs`).
+    //! (`N = ½‖J‖²_F`, see `tests/mueller/batch.rs`).
     use super::*;
 
     fn inputs<F: Real>(n: usize, seed: u64) -> Vec<Vec<F>> {

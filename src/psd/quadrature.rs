@@ -23,7 +23,7 @@ use crate::real::Real;
 /// `exp(−c δ √order)`; for the K-correlation `δ ≈ 1/(√T · ‖L‖)`. It is therefore accurate when the
 /// blur is narrow compared with the PSD's correlation scale (high coherence), and slow when it is
 /// wide — there, use the mixture fit. No a-priori guarantee for other PSDs; see the accuracy sweep
-/// in `tests/psd.rs` for measured errors.
+/// in `tests/psd/models.rs` for measured errors.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GaussHermite<T: Real> {
     nodes: Vec<T>,

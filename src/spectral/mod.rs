@@ -60,7 +60,7 @@
 //! tables differs by up to 0.04 (copper), 0.05 (nickel), 0.06 (gold), 0.09 (silver, whose
 //! tabulated `n` is 2.5–3.5× J&C's), and 0.16 for chromium (Palik's data, `κ` up to 35 % above
 //! J&C's); aluminium agrees with Rakić (1995) to 0.008 and tungsten with Weaver et al. (1975)
-//! to 0.007 (`tests/spectral.rs` checks three wavelengths of each).
+//! to 0.007 (`tests/spectral/data.rs` checks three wavelengths of each).
 //!
 //! # Example
 //! The colour of gold at normal incidence under equal-energy light:

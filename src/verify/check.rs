@@ -99,7 +99,7 @@ pub fn assert_mueller_close(what: &str, a: &Matrix4<f64>, b: &Matrix4<f64>, tol:
 /// The reverse-path Mueller matrix that reciprocity predicts, `D Mᵀ D` with
 /// `D = diag(1, 1, −1, 1)`, both in the s/p frames of the crate's BSDF
 /// (`docs/renderer.md`): `f(b → a) = D f(a → b)ᵀ D` for a plane-wave BSDF `f = M/cos θ_i` in
-/// reflection (`tests/bsdf_reciprocity.rs` found it the only one of the sixteen sign and
+/// reflection (`tests/bsdf/reciprocity.rs` found it the only one of the sixteen sign and
 /// transpose candidates that holds for rough glass and conductors at any azimuth).
 #[must_use]
 pub fn reciprocal(m: &Matrix4<f64>) -> Matrix4<f64> {

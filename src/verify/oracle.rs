@@ -168,7 +168,7 @@ pub fn section(
 }
 
 /// The S2.10 coherence integral of one channel at `r̂₁ = r̂₂ = r̂`, divided by the area `|P|`
-/// (the window drops out exactly: `tests/interaction_s2_10.rs`, module docs), for a Gaussian
+/// (the window drops out exactly: `tests/interaction/s2_10.rs`, module docs), for a Gaussian
 /// autocorrelation `R(ξ) = σ² exp(−½ ξᵀ C⁻¹ ξ)`:
 /// ```text
 /// f(h) = ∫ e^{−i h·ξ} R(ξ) g^{Ξ⁻¹}(ξ) d²ξ = σ² 2π |G|^{−1/2} exp(−½ hᵀ G⁻¹ h),   G = C⁻¹ + Ξ

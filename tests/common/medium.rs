@@ -1,5 +1,5 @@
-//! Scenes shared by the random medium's tests (`tests/medium_extremes.rs`,
-//! `tests/medium_limits.rs`, `tests/medium_f32.rs`).
+//! Scenes shared by the random medium's tests (`tests/medium/extremes.rs`,
+//! `tests/medium/limits.rs`, `tests/medium/f32.rs`).
 #![allow(
     dead_code,
     reason = "each test file uses a different subset of the helpers"

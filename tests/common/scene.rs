@@ -1,4 +1,4 @@
-//! Scene helpers shared by `tests/interaction_laws.rs` and `tests/interaction_energy.rs`: the
+//! Scene helpers shared by `tests/interaction/laws.rs` and `tests/interaction/energy.rs`: the
 //! surface z = 0, directions by polar angles, isotropic packets, rough glass, one kernel call,
 //! and textbook Fresnel reflectances (the tests' own, independent of the crate's `fresnel`).
 

@@ -1,5 +1,5 @@
-//! Shading-frame helpers shared by the renderer-layer tests (`bsdf_sampling`,
-//! `bsdf_reciprocity`, `bsdf_furnace`, `bsdf_rough`).
+//! Shading-frame helpers shared by the renderer-layer tests (`bsdf::sampling`,
+//! `bsdf::reciprocity`, `bsdf::furnace`, `bsdf::rough`).
 
 use gmueller::frame::Frame;
 use nalgebra::Vector3;

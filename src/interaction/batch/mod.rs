@@ -174,7 +174,7 @@ impl<'a, T> StokesSoa<'a, T> {
 /// `4 ε (4 + |E|) S0` (measured ≤ `0.7 ε (1 + |E|) S0`: ≤ 1e-13 relative in f64 over the whole
 /// range, ≤ 5e-6 in f32 near the lobe), plus the smallest normal number times the output scale
 /// where the per-direction path rounds through subnormal numbers; exactly 0 where the PSD underflows
-/// (`tests/interaction_batch.rs`).
+/// (`tests/interaction/batch/plane_wave.rs`).
 ///
 /// Speed (AMD EPYC, AVX2 + FMA, 1024 exits within 15° of specular, `benches/kernel.rs` group
 /// `kernel_batch`, one run): 23 ns per exit in `f64` and 11 ns in `f32`; 29 and 13 ns at normal

@@ -864,7 +864,8 @@ mod tests {
         assert!(far(&out[0]) > n / 4, "transmitted specular lobe");
         // And the lanes' values against the per-direction kernel, coarsely (10³ ε of the lobe's
         // S0: a wrong side, a missing factor or, with this anisotropic PSD, a PSD left
-        // unmirrored from below would show; tests/lobe_batch.rs checks the documented bound).
+        // unmirrored from below would show; tests/interaction/batch/lobes.rs checks the documented
+        // bound).
         for i in 0..n {
             let exit = Vector3::new(x[i], y[i], z[i]);
             let g = Geometry::for_packet_at_interface(&packet, &surface, eta, exit).unwrap();

@@ -80,7 +80,7 @@ fn exits<F: Real>(theta_i: f64, n: usize) -> Vec<Vector3<F>> {
 /// and AVX2 + FMA and AVX-512 when present) against the per-direction kernel, lengths 0–41,
 /// normal and oblique
 /// incidence, dielectric and metal; tolerance `4 ε (4 + |E|) S0` as in
-/// `tests/interaction_batch.rs`.
+/// `tests/interaction/batch/plane_wave.rs`.
 fn back_ends<F: Real>() {
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
     let psd = GaussianPsd::<F, 2>::isotropic(F::lit(0.02), F::lit(1.5)).unwrap();

@@ -29,7 +29,7 @@ use crate::real::Real;
 /// S = 1/cos θ_i ∫ cos²θ_o/λ² · α(v) v² · 2π p(h_t) dω               (first-order scattered)
 ///   = (1 − α_s) ρ,      T − 1 = (ρ − 1)(1 − α_s) ≈ (ρ − 1)(2kσ cos θ_i)²
 /// ```
-/// with ρ (Gaussian PSD, kσ = 0.1; `tests/interaction_energy.rs`, `energy_at_grazing_incidence`,
+/// with ρ (Gaussian PSD, kσ = 0.1; `tests/interaction/energy.rs`, `energy_at_grazing_incidence`,
 /// where the kernel's total equals this integral, computed independently, to 2e-12):
 /// ```text
 /// θ_i        0°     45°    60°    70°    75°    80°    85°

@@ -50,7 +50,7 @@ use crate::real::Real;
 /// `(ε−1)` above absorbs). Near the specular (Snell) direction of a long-correlated surface the
 /// factors become those of the phase screen with the Fresnel coefficients: `|J|² → |r|² v²`
 /// in reflection and `η |t|² v²` in transmission (`v` = [`Geometry::phase_factor`]), which
-/// `tests/interaction_transmission.rs` checks.
+/// `tests/interaction/transmission.rs` checks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RayleighRice<T: Real> {
     epsilon: Complex<T>,

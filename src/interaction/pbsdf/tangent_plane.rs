@@ -42,7 +42,7 @@ use crate::real::Real;
 /// `r̂·h = ±v cos θ_o` and the factor is `v²`: the matrix is then the phase screen's
 /// `|r|² v²` (or `τ v²`) with the Fresnel polarization, which is also the Rayleigh–Rice
 /// factors' limit there — so at first order the two agree near specular, to a measured
-/// tolerance (`tests/roughness_series.rs`).
+/// tolerance (`tests/interaction/roughness/series.rs`).
 ///
 /// # Validity
 /// The tangent-plane approximation needs radii of curvature much larger than the wavelength

@@ -174,7 +174,7 @@ fn front<T: Real, P: Psd<T, 2>, Pol, Coh>(
 /// polarizing matrix at grazing exit, nearly orthogonal light) its computed `u₀` carries an
 /// error of a few `ε M₀₀ S0` that is large *relative to* `u₀`: a metal grating at 89.99° exit
 /// gave `|u_pol| = u₀ (1 + 4·10⁻¹⁴)` in f64. The projection moves `u` by no more than that
-/// rounding (`tests/bsdf_extremes.rs`).
+/// rounding (`tests/bsdf/extremes.rs`).
 #[inline]
 pub(crate) fn onto_cone<T: Real>(u: Vector4<T>) -> Vector4<T> {
     let u0 = u[0];

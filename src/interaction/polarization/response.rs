@@ -489,7 +489,7 @@ impl<T: Real> Throughput<T> for T {
 /// `M S` the Stokes radiance in the **exit s/p frame** ([`Geometry::exit_sp`]), in the exit
 /// medium: `M` includes the rotation `T` from the packet frame to the incident s/p frame. It is
 /// the kernel's response, divided by nothing: `apply(packet.stokes())` equals the kernel's
-/// Stokes output (`tests/bsdf_eval.rs`). For one coherence shape (`Θ_x = Θ_y`, every packet of
+/// Stokes output (`tests/bsdf/eval.rs`). For one coherence shape (`Θ_x = Θ_y`, every packet of
 /// the source helpers and of [`crate::interaction::exitant_packet`]) `Σ_α K_α P_α = K I`: the
 /// matrix is `K` times the pBSDF's Mueller matrix. With distinct shapes the block
 /// `[[K_x+K_y, K_x−K_y],[K_x−K_y, K_x+K_y]]/2 ⊕ K_½ I₂` is valid on the Stokes vectors those

@@ -178,7 +178,7 @@ pub struct KirchhoffSeries {
 /// The geometric-optics limit of the Kirchhoff series (`vσ ≫ 1`): the single power `n = g`,
 /// `L_scat = C M T ((1 − e^{−g})/g) K[p_g]` — for a Gaussian PSD the Beckmann slope
 /// distribution of covariance `σ²Λ⁻¹`, blurred by the coherence. Its relative error against
-/// the series falls like `1/g` in the lobe (measured in `tests/roughness_series.rs`).
+/// the series falls like `1/g` in the lobe (measured in `tests/interaction/roughness/series.rs`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Geometric;
 
@@ -230,7 +230,8 @@ const DEFAULT_TOLERANCE: f64 = 1e-6;
 /// The measured bound on the geometric limit's relative error in the lobe, times `g`: the
 /// largest `|series/geometric − 1|` where the series is at least 1 % of its peak is
 /// `2.1/g … 2.2/g` for `g` from 10 to 1000, plane wave and partially coherent
-/// (`tests/roughness_series.rs`, `series_large_g_limit_is_the_geometric_level`); rounded up.
+/// (`tests/interaction/roughness/series.rs`, `series_large_g_limit_is_the_geometric_level`);
+/// rounded up.
 pub(crate) const GEOMETRIC_ERROR_TIMES_G: f64 = 2.5;
 
 /// Beyond this `g` the series is never summed (the geometric limit is used whatever the
@@ -279,8 +280,8 @@ impl KirchhoffSeries {
 
     /// The series, replaced by its geometric-optics limit ([`Geometric`]) where `g = (vσ)² ≥
     /// g_from` (`+∞`: only beyond `g = 10⁷`). The limit's error falls like `1/g` in the lobe and
-    /// is larger in the far tails (measured in `tests/roughness_series.rs`); it costs one term
-    /// instead of `~12√g`.
+    /// is larger in the far tails (measured in `tests/interaction/roughness/series.rs`); it costs
+    /// one term instead of `~12√g`.
     ///
     /// # Errors
     /// [`Error::OutOfRange`] unless `g_from > 0` (NaN is refused; `+∞` is allowed).

@@ -17,8 +17,8 @@ use crate::simd::exp::vexp;
 /// `ε y₁²` in `m`, no cancellation after it).
 /// With reciprocals and a fused `h₁ − ℓ₁₀ y₀` (as before) the lanes differed from the scalar by
 /// `ε (|ℓ₁₀ y₀| + |h₁ − ℓ₁₀ y₀|)²/ℓ₁₁²`, which the cancellation in `h₁ − ℓ₁₀ y₀` makes far
-/// larger than `ε m` for a strongly anisotropic blur (`tests/lobe_batch.rs` found 3.3e-5 relative
-/// in f32 at a correlation covariance of condition ≈ 110).
+/// larger than `ε m` for a strongly anisotropic blur (`tests/interaction/batch/lobes.rs` found
+/// 3.3e-5 relative in f32 at a correlation covariance of condition ≈ 110).
 #[inline(always)]
 pub(crate) fn log_gaussian<S: Simd, F: Real>(
     s: S,

@@ -11,7 +11,8 @@
 //!
 //! **Reference.** f64, `Full`, `Partial`, `KirchhoffSeries` at tolerance 10⁻¹⁰ with the
 //! tangent-plane pBSDF (`TangentPlane<FresnelReflection>`) — the series itself is checked
-//! against a direct quadrature of the phase-screen integral in `tests/roughness_series.rs`.
+//! against a direct quadrature of the phase-screen integral in
+//! `tests/interaction/roughness/series.rs`.
 //!
 //! **Rows.** `Full·Partial` with the tangent plane at every roughness level (first order, the
 //! series at 10⁻², 10⁻⁴, 10⁻⁶, the geometric limit; f64, and the series 10⁻⁴ and the

@@ -327,7 +327,7 @@ fn light_s1_in_scattering_frame(
 }
 
 /// The `Partial` weight `K³` is the crate's `volume_coherence_term` (itself checked against the
-/// 6-D closed form of S2.10 in `interaction_s2_10.rs`), channel by channel.
+/// 6-D closed form of S2.10 in `tests/interaction/s2_10.rs`), channel by channel.
 #[test]
 fn partial_weight_is_volume_coherence_term() {
     let (light, sigma2, c) = anisotropic_case();

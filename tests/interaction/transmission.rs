@@ -6,7 +6,7 @@
 //! generalized reciprocity of the plane-wave BTDF, the continuity of the levels into their
 //! plane-wave and incoherent limits, the exitant packet in the new medium, and what a small
 //! absorption would change. The peer values (SCATMECH for all four cases, Mitsuba's Fresnel
-//! transmission) are in `tests/interaction_reference.rs`; the brute-force wave optics in
+//! transmission) are in `tests/interaction/reference.rs`; the brute-force wave optics in
 //! `validation/tests/tracer.rs`.
 //!
 //! Conventions of these tests: the interface is the plane z = 0 with n̂ = +ẑ; the medium above
@@ -188,7 +188,7 @@ fn phase_factor_is_the_optical_path_difference() {
 /// textbook power transmittance `T = 1 − (R_s + R_p)/2` and the transmitted Debye–Waller factor
 /// `α_t = exp(−(k_i σ (cos θ_i − η cos θ_t))²)`; the reflected lobe to `α_r R`. Wide packet
 /// (w = 500 µm), σ = 5 nm, from above and below (below the critical angle), tolerance 1e-4 as
-/// for reflection (`tests/interaction_energy.rs`). (At w = 50 µm the lobe's own width shows at
+/// for reflection (`tests/interaction/energy.rs`). (At w = 50 µm the lobe's own width shows at
 /// 40° from below, 2° from the critical angle, where the transmitted beam is at 74°: the lobe
 /// averages `cos θ_t` and `α_t` over its width and integrates to 1.7e-4 less.)
 #[test]
@@ -375,11 +375,12 @@ fn rayleigh_rice_tends_to_the_phase_screen_at_the_specular_direction() {
 /// transmission alone changes the total by 3e-3 at kσ = 0.1, i.e. 0.3 (kσ)² on top. The
 /// narrower packet (w = 10 λ) is printed, not asserted: there the coherent lobes themselves
 /// integrate to `⟨cos θ_o⟩/cos θ_i` of the Fresnel powers, 1.2e-4 short at normal incidence —
-/// the finite-coherence property of S2.20 that `tests/interaction_energy.rs` tabulates for
+/// the finite-coherence property of S2.20 that `tests/interaction/energy.rs` tabulates for
 /// reflection.
 ///
-/// Measured (`cargo test --release --test integration -- --nocapture interaction_transmission::energy`),
-/// `|1 − R − T|` at w = 100 λ, worst over ℓ, per kσ = 0.02, 0.05, 0.1, 0.2:
+/// Measured (`cargo test --release --test integration -- --nocapture
+/// interaction::transmission::energy`), `|1 − R − T|` at w = 100 λ, worst over ℓ, per kσ = 0.02,
+/// 0.05, 0.1, 0.2:
 /// ```text
 /// above  0°   1.2e-6  3.4e-6  3.5e-5  5.1e-4
 /// above 30°   1.3e-6  2.6e-6  2.3e-5  3.4e-4
@@ -492,7 +493,7 @@ fn generalized_reciprocity_of_the_plane_wave_btdf() {
 
 // ------------------------------------------------------------------ 4. levels and limits
 
-/// In transmission, as in reflection (`tests/interaction_laws.rs`), `Partial` tends to
+/// In transmission, as in reflection (`tests/interaction/laws.rs`), `Partial` tends to
 /// `PlaneWave` as the coherence width grows and to `Incoherent` as it shrinks, monotonically,
 /// at the `OneShape` and `Full` levels, from above and from below; and `Full` equals `OneShape`
 /// on a single-shape packet while two shapes differ.

@@ -18,7 +18,7 @@
 //! `τ_ij = ê′_i·ê_j`); the matter acts as `J C J†` (S1.4) with the Jones matrix of the pBSDF,
 //! constant over the lobe (S2.19); S2.10's double integral then acts entry by entry on the
 //! spatial factors, each being one channel's integral, divided by the area (the window drops out
-//! exactly, `tests/interaction_s2_10.rs`):
+//! exactly, `tests/interaction/s2_10.rs`):
 //! ```text
 //! f_α(h_t) = ∫ e^{−i h·ξ} R(ξ) g^{Θ_α}(Qᵀξ) d²ξ = σ² 2π |G_α|^{−1/2} exp(−½ h_tᵀ G_α⁻¹ h_t),
 //! G_α = C_R⁻¹ + Ξ_α,   Ξ_α = Bᵀ Q Θ_α⁻¹ Qᵀ B,   h = k(r̂ + ŝ)
@@ -50,7 +50,7 @@
 //! ```
 //! every case fails at every shape-using level (588 of 882 comparisons; `PlaneWave`, which uses
 //! no shapes, is unchanged at ≤ 2.3e-14), and so do the f32 test and the proptest; the rest of
-//! the interaction tests (`interaction_laws`, `interaction_s2_10`, `interaction_prepared`) pass
+//! the interaction tests (`interaction::laws`, `interaction::s2_10`, `interaction::prepared`) pass
 //! with each mutation. `channel_oracle_is_sensitive_to_the_shapes` asserts, test-side, that the
 //! oracle separates the first two readings by > 1e-2 in every scene and polarization.
 

@@ -580,7 +580,7 @@ fn after_a_termination_the_hero_continues_alone() {
 const CHI_N: usize = 100_000;
 
 /// Pearson's chi-square of `draw` against `pdf` on quantile grids of the projected disks
-/// (`bsdf_sampling::grids`); returns the outcome.
+/// (`bsdf::sampling::grids`); returns the outcome.
 fn chi_square(
     f: &Frame<f64>,
     pdf: &dyn Fn(&Vector3<f64>) -> f64,
@@ -591,7 +591,7 @@ fn chi_square(
         t2: f.y(),
         n: f.k(),
     };
-    let grids = crate::bsdf_sampling::grids(&disk, &mut |_| draw());
+    let grids = crate::bsdf::sampling::grids(&disk, &mut |_| draw());
     chi2::test(&disk, &grids, pdf, CHI_N, &mut |_| draw())
 }
 

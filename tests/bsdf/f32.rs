@@ -7,7 +7,7 @@
 //!   and map valid Stokes vectors to valid ones; their `M₀₀` is the `f64` one where that is a
 //!   normal `f32` number, and 0 where it is below. The case — the reflected specular
 //!   delta of very rough glass seen from inside, `α ≈ 5·10⁻⁴³` — was a matrix of subnormal
-//!   entries in `f32`. (`tests/bsdf_extremes.rs` checks the rule on every lobe and weight.)
+//!   entries in `f32`. (`tests/bsdf/extremes.rs` checks the rule on every lobe and weight.)
 //! - **Flags that tell the truth** for the packet at hand (`Bsdf::incident_flags`): where the
 //!   section of a very wide coherence is not representable the kernel and the exit sampler
 //!   fall back to the plane wave, whose specular lobe and grating orders are deltas; the

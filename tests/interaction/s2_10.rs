@@ -31,8 +31,8 @@
 //! ingredients, not only Gaussians; the two approximations of the seed are only
 //! `M̃(k r̂₁ − k r̂₂) ≈ M̃(0)` and `½(r̂₁ + r̂₂) ≈ r̂`.
 //!
-//! Everything runs in the default `cargo test --test interaction_s2_10` (≈ 2 s, the brute-force
-//! 4-D trapezoid and 6-D Gauss–Hermite quadratures being most of it).
+//! Everything runs in the default `cargo test --test integration interaction::s2_10::` (≈ 2 s,
+//! the brute-force 4-D trapezoid and 6-D Gauss–Hermite quadratures being most of it).
 
 use crate::common;
 

@@ -6,7 +6,7 @@
 //!   is the albedo `∫ M cos θ_o dω/cos θ_i`) and backward in a white furnace (`sample_incident`:
 //!   unit radiance above, `η²` below, the equilibrium radiance of the two media); the lossless
 //!   dielectrics conserve energy within the first-order bound `0.4 (k₀σ)² + 1e-5` that
-//!   `tests/interaction_transmission.rs` measured by quadrature (plus 4 standard errors).
+//!   `tests/interaction/transmission.rs` measured by quadrature (plus 4 standard errors).
 //! - **The mixture is near the best one** at sunlight coherence (the van Cittert–Zernike packet
 //!   of the sun, `Ω = 6.8·10⁻⁵ sr`, whose coherent specular lobe carries almost all the energy):
 //!   the relative standard error of the albedo estimate with the sampler's part probabilities
@@ -281,7 +281,7 @@ fn furnace_energy_at_most_one_for_conductors_gratings_and_other_psds() {
 /// so the radiance leaving a uniformly lit surface exceeds the albedo by `O(1/(k w cos θ)²)`:
 /// measured 2.1 % at 60° with `w = 3 µm` and 0.03 % with 30 µm. It is the non-reciprocity of
 /// the kernel (`src/bsdf/mod.rs`, "Reciprocity"), not an error of the sampler (whose estimates
-/// agree with quadrature, `tests/bsdf_reciprocity.rs`), and it vanishes as `1/w²`.
+/// agree with quadrature, `tests/bsdf/reciprocity.rs`), and it vanishes as `1/w²`.
 #[test]
 fn backward_furnace_excess_is_the_finite_coherence_term() {
     let f = frame();

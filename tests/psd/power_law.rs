@@ -415,7 +415,7 @@ fn medium_through_the_named_form() {
         PowerLaw::<f64, 3>::new(1e-3, 3.6, 1.0, 30.0).unwrap(),
         Dipole,
     );
-    let rel = crate::medium::check_coefficient(
+    let rel = crate::medium::born::check_coefficient(
         "power law PlaneWave",
         &medium,
         Kernel::<Full, PlaneWave>::default(),
@@ -424,7 +424,7 @@ fn medium_through_the_named_form() {
         POWER_LAW_SIGMA_TOL,
     );
     println!("power law: σ_s relative error {rel:.1e} at k = {k:.3}");
-    crate::medium_sampling::check(
+    crate::medium::sampling::check(
         "power law PlaneWave",
         &medium,
         Kernel::<Full, PlaneWave>::default(),
@@ -433,7 +433,7 @@ fn medium_through_the_named_form() {
         0x5eed_0001,
     );
     let partial = Kernel::<Full, _>::new(Partial(GaussHermite::new(6).unwrap()));
-    crate::medium_sampling::check(
+    crate::medium::sampling::check(
         "power law Partial (Gauss–Hermite)",
         &medium,
         partial,
@@ -456,10 +456,21 @@ fn scratch_medium_partial() {
         0.6,
     )
     .unwrap();
-    let medium = RandomMedium::new(PowerLaw::<f64, 3>::new(1e-3, 3.6, 1.0, 30.0).unwrap(), Dipole);
+    let medium = RandomMedium::new(
+        PowerLaw::<f64, 3>::new(1e-3, 3.6, 1.0, 30.0).unwrap(),
+        Dipole,
+    );
     let order: usize = std::env::var("GH").unwrap().parse().unwrap();
     let t = std::time::Instant::now();
-    let _ = std::panic::catch_unwind(|| crate::medium::check_coefficient(
-        "GH", &medium, Kernel::<Full, _>::new(Partial(GaussHermite::new(order).unwrap())), &light, 1.0, 1e-12));
+    let _ = std::panic::catch_unwind(|| {
+        crate::medium::born::check_coefficient(
+            "GH",
+            &medium,
+            Kernel::<Full, _>::new(Partial(GaussHermite::new(order).unwrap())),
+            &light,
+            1.0,
+            1e-12,
+        )
+    });
     println!("GH({order}) {:?}", t.elapsed());
 }

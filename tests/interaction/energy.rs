@@ -5,7 +5,8 @@
 //! incidence against an independent first-order oracle of the model.
 //!
 //! Measured energy table (printed by `energy_reflected_fraction_table`, run with
-//! `cargo test --test integration interaction_energy:: -- --nocapture`): see that test's doc comment.
+//! `cargo test --test integration interaction::energy:: -- --nocapture`): see that test's doc
+//! comment.
 
 use crate::common;
 
@@ -119,7 +120,7 @@ fn energy_table(ti_deg: f64) -> Vec<(f64, f64, f64, bool)> {
 /// `energy_at_grazing_incidence`. The quadrature is converged to ~1e-8 (doubling the angles and
 /// going from 12 to 20 Gauss–Legendre points per panel changed no printed digit of the 75° case).
 ///
-/// Measured (`cargo test --test integration interaction_energy:: -- --nocapture`),
+/// Measured (`cargo test --test integration interaction::energy:: -- --nocapture`),
 /// total fraction, rows kσ, columns w/λ = 0.5, 1, 3, 10, 30, 100:
 /// ```text
 /// θi = 0°   0.01  0.8825 0.9740 0.9972 0.9997 1.0000 1.0000

@@ -17,7 +17,7 @@
 //! - **Samples near the horizon** have a positive density and a weight (a seed found in f32 at
 //!   89.99° drew a direction 1.3e-8 from the plane, whose weight was refused).
 
-use crate::bsdf_sampling::check;
+use crate::bsdf::sampling::check;
 use crate::common;
 
 use common::rng::SplitMix64;

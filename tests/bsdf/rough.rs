@@ -9,7 +9,7 @@
 //!   `Kernel::<…, Rough>::evaluate_mueller` bit for bit, reflection and transmission, light from
 //!   either side, `f64` and `f32` (and differs from first order by the higher orders).
 //! - **The series proposals sample their own density**: Pearson's chi-square
-//!   (`bsdf_sampling::check`, 100 000 draws) for rough glass at `vσ ≈ 1, 3, 10`, both tracing
+//!   (`bsdf::sampling::check`, 100 000 draws) for rough glass at `vσ ≈ 1, 3, 10`, both tracing
 //!   directions, both sides, total internal reflection, the plane wave's deltas, the geometric
 //!   level on a conductor, and the quadrature level's K-correlation (first-order lobes with the
 //!   projected-disk lobe).
@@ -345,7 +345,7 @@ fn rough_eval_in_f32() {
 /// Chi-square of the series proposals (module docs).
 #[test]
 fn series_proposals_sample_their_density() {
-    use crate::bsdf_sampling::check;
+    use crate::bsdf::sampling::check;
     let f = frame();
     let c = SurfaceCoherence::new(3.0).unwrap();
     let kernel = Kernel::<Full, Partial>::default().with_roughness(KirchhoffSeries::default());
@@ -459,7 +459,7 @@ fn series_proposals_sample_their_density() {
 
 /// The forward albedo of rough glass at the series level (`Full · Partial`, 3 µm surface
 /// coherence, unpolarized light): the adaptive quadrature of `∫ M₀₀/cos θ_i d²u_o` over both
-/// exit hemispheres (`bsdf_reciprocity::disk_quadrature`), and the mean of `sample_exit`'s
+/// exit hemispheres (`bsdf::reciprocity::disk_quadrature`), and the mean of `sample_exit`'s
 /// weights with `n` draws, once with the series proposal and once with the first-order proposal
 /// (the same weights `M cos θ_o/(cos θ_i p)` of the series kernel, the first-order sampler's
 /// `p`). Returns `(quadrature, series estimate, first-order-proposal estimate)`.
@@ -470,10 +470,10 @@ fn albedos(
     seed: u64,
 ) -> (
     f64,
-    crate::bsdf_reciprocity::Estimate,
-    crate::bsdf_reciprocity::Estimate,
+    crate::bsdf::reciprocity::Estimate,
+    crate::bsdf::reciprocity::Estimate,
 ) {
-    use crate::bsdf_reciprocity::{Estimate, disk_quadrature, tangential};
+    use crate::bsdf::reciprocity::{Estimate, disk_quadrature, tangential};
     let f = frame();
     let c = SurfaceCoherence::new(3.0).unwrap();
     let first = Kernel::<Full, Partial>::default();
@@ -531,10 +531,10 @@ fn albedos(
 /// - the series proposal's estimate agrees with the quadrature of the albedo within 4 standard
 ///   errors (the sampler is unbiased for the rough kernel);
 /// - energy: the albedo of this lossless interface is at most `1 + 0.02` — the tangent plane
-///   without shadowing is not exactly conservative (`tests/roughness_limits.rs` measured it
-///   with mirror facets: within 2·10⁻³ of 1 up to 30° at `vσ ≤ 3`, growing toward grazing
-///   incidence and slopes), and at least `0.9` (what leaves toward the horizon is lost to the
-///   model's `cos θ_o` and evanescent tails; printed);
+///   without shadowing is not exactly conservative (`tests/interaction/roughness/limits.rs`
+///   measured it with mirror facets: within 2·10⁻³ of 1 up to 30° at `vσ ≤ 3`, growing toward
+///   grazing incidence and slopes), and at least `0.9` (what leaves toward the horizon is lost to
+///   the model's `cos θ_o` and evanescent tails; printed);
 /// - the variance of the series proposal's estimate is at least 4× below the first-order
 ///   proposal's at every `vσ ≥ 3` case (the ratio at equal sample count is printed: measured
 ///   1.6–13 000 at `vσ ≈ 1`, 17–570 at 3, 31–46 000 at 10). Where it stays large (`vσ ≈ 10`,

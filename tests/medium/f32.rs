@@ -728,7 +728,8 @@ fn a_lobe_the_quadrature_cannot_see_is_refused() {
 /// The f32 errors of the property test's region, measured: `|Δ ln σ_s|` per coherence level
 /// (`Partial`, `PlaneWave`, `Incoherent`) outside and inside bands ([`band`]) over 3 000 cases
 /// drawn from the fixed seed (the numbers in `docs/numerical.md`):
-/// `cargo test --release --test integration medium_f32::f32_sigma_s_sweep -- --ignored --nocapture`.
+/// `cargo test --release --test integration medium::f32::f32_sigma_s_sweep -- --ignored
+/// --nocapture`.
 #[test]
 #[ignore = "3 000 cases at nine levels in both precisions, ~1 min in release"]
 fn f32_sigma_s_sweep() {

@@ -13,7 +13,7 @@
 //! `Ã` (κ the transverse wave vector; evanescent ones, `|κ| > k`, carry `e^{−(kw)²/2}` and are
 //! left out). Each scatters by the exact first-Born formula of a plane wave: the PSD of `δε`
 //! at `k r̂ − K`, times `m = 1` (scalar) or `(1 + (K̂·r̂)²)/2` (dipole, unpolarized). `p` is the
-//! unitary transform of `R = σ² e^{−r²/2ℓ²}` (`tests/medium_conventions.rs`). The crate's
+//! unitary transform of `R = σ² e^{−r²/2ℓ²}` (`tests/medium/conventions.rs`). The crate's
 //! packet puts the same plane waves on the tangent plane, `K = k d̂ + κ`, and the dipole factor
 //! at `d̂`; with that one change (`exact = false` below) this sum reproduces the crate to 3e-13,
 //! which checks the quadrature and the constants, so what remains is the paraxial error.
@@ -213,7 +213,7 @@ fn the_packet_against_an_exact_plane_wave_sum() {
 }
 
 /// The same over a finer and wider grid (w = 1.5–200 λ, kℓ = 0.1–10, every 10°):
-/// `cargo test --release --test integration medium_paraxial -- --ignored --nocapture`.
+/// `cargo test --release --test integration medium::paraxial:: -- --ignored --nocapture`.
 #[test]
 #[ignore = "a larger sweep, several minutes in release"]
 fn the_packet_against_an_exact_plane_wave_sum_wide() {

@@ -1,10 +1,10 @@
 //! Verifies the structure-of-arrays batch path `mueller::batch::mueller_from_jones_soa` (run-time
 //! dispatched SIMD: AVX2 + FMA on this machine) entry by entry against the single-matrix closed
-//! form `Mueller::from_jones` (itself tested against the literal S1.7 formula in tests/mueller.rs)
-//! in f64 and f32, relative to the matrix scale `N = ½‖J‖²_F`: random inputs, lengths that are
-//! not multiples of the SIMD width, zero and huge / tiny magnitudes; the f32 path also against the
-//! literal S1.7 formula evaluated in f64; plus the strided layouts (`from_strided`, `padded_stride`)
-//! and the length validation.
+//! form `Mueller::from_jones` (itself tested against the literal S1.7 formula in
+//! tests/mueller/matrix.rs) in f64 and f32, relative to the matrix scale `N = ½‖J‖²_F`: random
+//! inputs, lengths that are not multiples of the SIMD width, zero and huge / tiny magnitudes; the
+//! f32 path also against the literal S1.7 formula evaluated in f64; plus the strided layouts
+//! (`from_strided`, `padded_stride`) and the length validation.
 //!
 //! Tolerance: each entry `M_kl` is a sum of four products (or of eight squares times ½) whose
 //! absolute values add up to at most `N`; computed with at most four roundings it is within

@@ -318,7 +318,7 @@ fn check_angles(name: &str, f: &Frame<f64>, sampler: &LobeSampler<'_, f64>, side
 /// The grazing backward lobes (module docs of the sampler, "Grazing specular lobes"): 85° and
 /// 88° from the air, and from inside the glass at 41° (its Snell partner near 80°), at fixed
 /// widths (`SurfaceCoherence::fixed`: the horizon rule would keep these lobes off the horizon;
-/// its own sampler is checked in `tests/bsdf_horizon.rs`).
+/// its own sampler is checked in `tests/bsdf/horizon.rs`).
 #[test]
 fn grazing_backward_lobes_draw_from_their_pdf() {
     let f = frame();

@@ -1,12 +1,12 @@
 //! Verifies the quadrature roughness level (`KirchhoffQuadrature`, the Kirchhoff phase screen
 //! for any PSD with a spatial autocorrelation) against independent computations: on a Gaussian
 //! PSD against the series (`KirchhoffSeries`, itself checked against a direct quadrature in
-//! `tests/roughness_series.rs`); on a two-component Gaussian mixture against the multinomial
-//! closed form written here (each pair of orders a Gaussian, summed with the closed coherence
-//! integral of `verify::oracle`); on the exponential (K-correlation γ = 2) surface against the
-//! series of its powers, `F{e^{−nr/ℓ}} = (ℓ/n)² (1 + (ℓ|ζ|/n)²)^{−3/2}`, written here; and at
-//! small `g` against the first-order kernel for K-correlations of γ = 2, 3, 4.5 (which checks
-//! the Matérn autocorrelation against the closed-form PSD).
+//! `tests/interaction/roughness/series.rs`); on a two-component Gaussian mixture against the
+//! multinomial closed form written here (each pair of orders a Gaussian, summed with the closed
+//! coherence integral of `verify::oracle`); on the exponential (K-correlation γ = 2) surface
+//! against the series of its powers, `F{e^{−nr/ℓ}} = (ℓ/n)² (1 + (ℓ|ζ|/n)²)^{−3/2}`, written here;
+//! and at small `g` against the first-order kernel for K-correlations of γ = 2, 3, 4.5 (which
+//! checks the Matérn autocorrelation against the closed-form PSD).
 
 use crate::common;
 

@@ -5,7 +5,7 @@
 //! at `h_t = 0` (the specular direction) and is even in `h_t`; Stokes validity is preserved
 //! (proptest, f64 and f32, opaque surfaces and glass interfaces in all four cases); Helmholtz reciprocity of the plane-wave Rayleigh–Rice BRDF; the
 //! known bugs of the authors' renderers (frame identity, `R_s` for s light, Malus with 2θ); the
-//! documented geometry errors. Energy conservation is in `tests/interaction_energy.rs`.
+//! documented geometry errors. Energy conservation is in `tests/interaction/energy.rs`.
 
 use crate::common;
 

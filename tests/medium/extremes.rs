@@ -4,7 +4,7 @@
 //! exact forward and backward among them, at every coherence level); f32 within a stated
 //! bound of f64; invariance under the scale of `S0` (1e±300 f64, 1e±30 f32) and of the length
 //! unit. The limits (frame switch, coherence levels, bad input, extreme anisotropy) are in
-//! `tests/medium_limits.rs`.
+//! `tests/medium/limits.rs`.
 
 use crate::common;
 

@@ -1,0 +1,13 @@
+//! Mirrors `src/bsdf/`: the tests of `bsdf`.
+
+mod bundle;
+mod eval;
+mod extremes;
+mod f32;
+mod furnace;
+mod horizon;
+mod material;
+mod path;
+mod reciprocity;
+mod rough;
+mod sampling;

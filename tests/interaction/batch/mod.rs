@@ -1,0 +1,4 @@
+//! Mirrors `src/interaction/batch/`: the tests of `interaction::batch`.
+
+mod lobes;
+mod plane_wave;

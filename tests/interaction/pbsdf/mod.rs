@@ -1,0 +1,3 @@
+//! Mirrors `src/interaction/pbsdf/`: the tests of `interaction::pbsdf`.
+
+mod tangent_plane;

@@ -1,0 +1,3 @@
+//! Mirrors `src/interaction/polarization/`: the tests of `interaction::polarization`.
+
+mod channels;

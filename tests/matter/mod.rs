@@ -1,0 +1,3 @@
+//! Mirrors `src/matter/`: the tests of `matter`.
+
+mod locally_stationary;

@@ -1,0 +1,6 @@
+//! Mirrors `src/psd/`: the tests of `psd`.
+
+mod kcorrelation;
+mod models;
+mod power_law;
+mod validation;

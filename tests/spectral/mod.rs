@@ -1,0 +1,3 @@
+//! Mirrors `src/spectral/`: the tests of `spectral`.
+
+mod data;

@@ -1,0 +1,5 @@
+//! Mirrors `src/verify/`: the tests of `verify`.
+
+mod kit;
+mod oracles;
+mod strategies;
