@@ -155,8 +155,12 @@ fn quadrature_blurs_against_a_lattice_sum() {
             lattice,
             Tol::new(1e-9 * lattice.abs(), 2e-3),
         );
-        // Gauss–Hermite smooths the band's edge: a few per cent there.
-        assert_close("Gauss–Hermite blur", g, lattice, Tol::new(0.0, 5e-2));
+        // Gauss–Hermite is exact for smooth integrands only: at 4 blur widths from both edges
+        // (h = (5, 1)) it agrees; at the inner edge and inside the hole its fixed nodes see the
+        // step (3 % and 17 % off: the type docs' warning), so it is asserted only away from them.
+        if (h.norm() - 2.0).abs() > 3.0 {
+            assert_close("Gauss–Hermite blur", g, lattice, Tol::new(0.0, 1e-4));
+        }
     }
 }
 
@@ -200,17 +204,25 @@ fn bad_input_is_refused() {
         (1e-3, 3.0, nan, 10.0),
         (1e200, 3.0, 0.1, 10.0),
         (1e-3, 3.0, 1e-200, 10.0),
-        (1e-3, 300.0, 1e-3, 10.0),
     ] {
         assert!(
             PowerLaw::<f64, 2>::new(s, a, lo, hi).is_err(),
             "accepted σ {s}, α {a}, band [{lo}, {hi}]"
         );
     }
-    // In f32: ζ_max² overflows, 1/ζ_min² overflows, the peak overflows.
+    // In f32: ζ_max² overflows, 1/ζ_min² overflows, c (σ² = 1e36 in a narrow band) overflows.
     assert!(PowerLaw::<f32, 2>::new(1e-3, 3.0, 0.1, 1e20).is_err());
     assert!(PowerLaw::<f32, 2>::new(1e-3, 3.0, 1e-20, 1.0).is_err());
-    assert!(PowerLaw::<f32, 2>::new(1.0, 30.0, 1e-3, 1.0).is_err());
+    assert!(PowerLaw::<f32, 2>::new(1e18, 3.0, 1.0, 1.0001).is_err());
+    // A steep law (α = 300) is not bad input: c = e^{−2050} underflows, but p is formed in
+    // logs, and its mass — all but e^{−28} of it within 10 % of ζ_min — is 2πσ² (radial
+    // quadrature).
+    let steep = PowerLaw::<f64, 2>::new(1e-3, 300.0, 1e-3, 10.0).unwrap();
+    let peak = steep.value(&Vector2::new(1e-3, 0.0));
+    assert!(peak.is_finite() && peak > 0.0);
+    let mut f = |r: f64| TAU * r * steep.value(&Vector2::new(0.0, r));
+    let mass = crate::common::quadrature::integrate(&mut f, 1e-3, 1.1e-3, 32, 1e-16);
+    assert_close("steep ∫p", mass, TAU * 1e-6, Tol::new(0.0, 1e-9));
     // 3-D needs α > 3.
     assert!(PowerLaw::<f64, 3>::new(1e-3, 3.0, 0.1, 10.0).is_err());
     assert!(PowerLaw::<f64, 3>::new(1e-3, 3.01, 0.1, 10.0).is_ok());
@@ -254,7 +266,8 @@ proptest! {
 /// A rough conductor with the power-law PSD: the importance sampler (which draws from the
 /// K-correlation lobes the PSD names) and uniform sampling of the sphere estimate the same
 /// scattered reflectance, within 4.5 standard errors in every Mueller entry — at the
-/// plane-wave level (`K = 2π p(h_t)`, no blur) and partially coherent (Gauss–Hermite blur).
+/// plane-wave level (`K = 2π p(h_t)`, no blur) and partially coherent (Gauss–Hermite blur of
+/// order 12).
 /// The plane wave's specular delta is left out of both (uniform sampling cannot reach it).
 #[test]
 fn bsdf_sampler_is_unbiased_through_the_named_form() {
@@ -263,11 +276,11 @@ fn bsdf_sampler_is_unbiased_through_the_named_form() {
     let frame = Frame::from_normal(Vector3::new(0.1, -0.2, 1.0)).unwrap();
     let at = ShadingPoint::new(frame, 0.55).unwrap();
     let coherence = SurfaceCoherence::fixed(2.0).unwrap();
-    let blur = GaussHermite::new(6).unwrap();
+    let blur = GaussHermite::new(12).unwrap();
     let mut rng = SplitMix64(0x00fa_57a1);
     for (name, level) in [
         ("Full·PlaneWave", Level::ALL[6]),
-        ("Full·Partial (Gauss–Hermite)", Level::ALL[7]),
+        ("Full·Partial (Gauss–Hermite 12)", Level::ALL[7]),
     ] {
         let m = Material::with_blur(gold.clone(), level, blur.clone());
         let r = (frame.x() * 0.6 + frame.k() * 0.8).normalize();
@@ -432,9 +445,11 @@ fn medium_through_the_named_form() {
         1.0,
         0x5eed_0001,
     );
-    let partial = Kernel::<Full, _>::new(Partial(GaussHermite::new(6).unwrap()));
+    // Gauss–Hermite of order 12: order 6 left the furnace at 1.058 ± 0.003 here (a 4 µm
+    // coherence blurs by ζ_min/4, and 6 nodes a side miss the band's edge; the type docs).
+    let partial = Kernel::<Full, _>::new(Partial(GaussHermite::new(12).unwrap()));
     crate::medium::sampling::check(
-        "power law Partial (Gauss–Hermite)",
+        "power law Partial (Gauss–Hermite 12)",
         &medium,
         partial,
         &light,
@@ -443,34 +458,6 @@ fn medium_through_the_named_form() {
     );
 }
 
-/// The accuracy of the medium's `σ_s` for the power law (a closest form: its nodes follow the
-/// K-correlation's lobe, not the band's edges), as measured by `medium_through_the_named_form`.
-const POWER_LAW_SIGMA_TOL: f64 = 1e-3;
-
-#[test]
-fn scratch_medium_partial() {
-    let light = WavePacket::from_stokes(
-        Stokes::new(1.0, 0.2, -0.1, 0.3).unwrap(),
-        CoherenceShape::isotropic(4.0).unwrap(),
-        Frame::sp(Vector3::new(0.2, -0.1, 1.0).normalize(), Vector3::x()).unwrap(),
-        0.6,
-    )
-    .unwrap();
-    let medium = RandomMedium::new(
-        PowerLaw::<f64, 3>::new(1e-3, 3.6, 1.0, 30.0).unwrap(),
-        Dipole,
-    );
-    let order: usize = std::env::var("GH").unwrap().parse().unwrap();
-    let t = std::time::Instant::now();
-    let _ = std::panic::catch_unwind(|| {
-        crate::medium::born::check_coefficient(
-            "GH",
-            &medium,
-            Kernel::<Full, _>::new(Partial(GaussHermite::new(order).unwrap())),
-            &light,
-            1.0,
-            1e-12,
-        )
-    });
-    println!("GH({order}) {:?}", t.elapsed());
-}
+/// The medium's `σ_s` against adaptive quadrature, as for the crate's own PSDs
+/// (`medium::born::scattering_coefficient_against_adaptive_quadrature`; measured here 3.9e-11).
+const POWER_LAW_SIGMA_TOL: f64 = 1e-9;
