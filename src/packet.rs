@@ -658,6 +658,17 @@ impl<T: Real> WavePacket<T> {
         self.k
     }
 
+    /// The packet at exactly the wavenumber `k` of its source (the shading point's, which owns
+    /// it: [`crate::bsdf::Bsdf::wavenumber`]), in place of the `2π/(2π/k)` its wavelength
+    /// round trip gave (within an ulp or two: [`same_wavenumber`]).
+    #[inline]
+    #[must_use]
+    pub(crate) fn at_wavenumber(mut self, k: T) -> Self {
+        debug_assert!(same_wavenumber(self.k, k), "{:?} vs {:?}", self.k, k);
+        self.k = k;
+        self
+    }
+
     /// The wavelength `λ = 2π/k`.
     #[inline]
     #[must_use]
@@ -789,6 +800,14 @@ impl<T: Real> WavePacket<T> {
             ..*self
         }
     }
+}
+
+/// `true` when two wavenumbers of the same light agree within 16 ulps: a packet's own, and one
+/// derived from its wavelength elsewhere (`λ/η` computed another way, a geometry's). The one
+/// test of "the same wavelength" for the kernel's and the BSDF layer's checks.
+#[inline]
+pub(crate) fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
+    crate::numerics::within_ulps(a, b, 16.0)
 }
 
 /// `k = 2π/λ` for a finite, positive, normal wavelength whose `k` is finite (a subnormal λ

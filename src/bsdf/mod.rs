@@ -198,7 +198,10 @@ pub struct Bsdf<'m, T: Real, S, K> {
     material: &'m S,
     kernel: K,
     surface: Frame<T>,
-    k_above: T,
+    /// The wavenumbers above and below (`η k` below an interface, as [`Geometry`] derives it;
+    /// the one above for an opaque surface): the shading point owns them, and the packets it
+    /// builds carry them exactly.
+    k: [T; 2],
     eta: Option<T>,
 }
 
@@ -300,12 +303,6 @@ pub type SampleResult<T, Pol> =
 pub type WeightResult<T, Pol> =
     Result<(<Pol as PolarizationModel>::Throughput<T>, Geometry<T>), Error>;
 
-/// `true` when two wavenumbers agree within 16 ulps (a packet's own wavenumber, and the one
-/// the `Bsdf` derives from its wavelength and the source's medium).
-fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
-    crate::numerics::within_ulps(a, b, 16.0)
-}
-
 /// `v/|v|`, rejecting zero and non-finite directions.
 fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
     crate::error::ensure_finite(what, v.iter().copied())?;
@@ -346,7 +343,7 @@ where
             material,
             kernel,
             surface,
-            k_above: k,
+            k: [k, eta.map_or(k, |e| k * e)],
             eta,
         })
     }
@@ -410,10 +407,10 @@ where
     pub fn wavenumber(&self, direction: &Vector3<T>) -> Result<T, Error> {
         let c = direction.dot(&self.surface.k());
         if c > T::zero() {
-            return Ok(self.k_above);
+            return Ok(self.k[0]);
         }
         match self.eta {
-            Some(eta) if c < T::zero() => Ok(self.k_above * eta),
+            Some(_) if c < T::zero() => Ok(self.k[1]),
             _ => Err(Error::OutOfRange {
                 what: "direction at the shading point (in the surface's plane, or below an opaque surface)",
                 value: c.to_f64(),
@@ -464,11 +461,11 @@ where
     /// [`Bsdf::surface_width`] of the unit direction `s` in the medium of wavenumber `k`.
     fn width_of(&self, s: &Vector3<T>, k: T, coherence: &SurfaceCoherence<T>) -> T {
         let cos = s.dot(&self.surface.k()).abs();
-        let partner = self.eta.and_then(|eta| {
+        let partner = self.eta.and_then(|_| {
             let k_t = if s.dot(&self.surface.k()) > T::zero() {
-                self.k_above * eta
+                self.k[1]
             } else {
-                self.k_above
+                self.k[0]
             };
             let ratio = k / k_t;
             let sin2 = (T::one() - cos) * (T::one() + cos) * ratio * ratio;
@@ -493,9 +490,11 @@ where
         to_source: Vector3<T>,
         coherence: &SurfaceCoherence<T>,
     ) -> Result<WavePacket<T>, Error> {
-        let lambda = self.wavelength(&to_source)?;
+        let k = self.wavenumber(&to_source)?;
         let width = self.surface_width(&to_source, coherence)?;
-        SurfaceCoherence::fixed(width)?.packet(stokes, to_source, &self.surface, lambda)
+        SurfaceCoherence::fixed(width)?
+            .packet(stokes, to_source, &self.surface, T::two_pi() / k)
+            .map(|p| p.at_wavenumber(k))
     }
 
     /// A sample of a distant disk source of solid angle `Ω` along `to_source`
@@ -509,8 +508,15 @@ where
         solid_angle: T,
         to_source: Vector3<T>,
     ) -> Result<WavePacket<T>, Error> {
-        let lambda = self.wavelength(&to_source)?;
-        distant_disk(stokes, solid_angle, to_source, &self.surface, lambda)
+        let k = self.wavenumber(&to_source)?;
+        distant_disk(
+            stokes,
+            solid_angle,
+            to_source,
+            &self.surface,
+            T::two_pi() / k,
+        )
+        .map(|p| p.at_wavenumber(k))
     }
 
     /// The kernel's per-packet work for `packet` at this shading point.
@@ -522,7 +528,7 @@ where
     pub fn prepare(&self, packet: &WavePacket<T>) -> Result<Incident<T, K::Pol, K::Coh>, Error> {
         let s = -packet.direction();
         let k = self.wavenumber(&s)?;
-        if !same_wavenumber(k, packet.wavenumber()) {
+        if !crate::packet::same_wavenumber(k, packet.wavenumber()) {
             return Err(Error::OutOfRange {
                 what: "packet wavelength (not the wavelength of the medium it arrives from)",
                 value: packet.wavelength().to_f64(),
@@ -774,13 +780,7 @@ where
         let r = unit(exit, "exit direction")?;
         let k = self.wavenumber(&r)?;
         let below = r.dot(&self.surface.k()) < T::zero();
-        let k_across = self.eta.map(|e| {
-            if below {
-                self.k_above
-            } else {
-                self.k_above * e
-            }
-        });
+        let k_across = self.eta.map(|_| if below { self.k[0] } else { self.k[1] });
         let facing = self.surface.facing(&r);
         let cos_o = r.dot(&facing.k());
         // The width of light arriving along r̂'s mirror (the same angle, medium and Snell

@@ -10,7 +10,7 @@ use super::prepared::PreparedPacket;
 use super::roughness::{FirstOrder, RoughnessModel, RoughnessWeights};
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::packet::WavePacket;
+use crate::packet::{WavePacket, same_wavenumber};
 use crate::real::Real;
 
 /// The S2.20 kernel at a chosen model level: polarization `Pol` ([`super::Intensity`],
@@ -317,12 +317,6 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
         );
         Pol::evaluate(&self.coherence, &self.roughness, material, prepared, g)
     }
-}
-
-/// `true` when two wavenumbers agree within 8 ulps.
-#[inline]
-fn same_wavenumber<T: Real>(a: T, b: T) -> bool {
-    crate::numerics::within_ulps(a, b, 8.0)
 }
 
 /// `Ok` when `g` was built for `packet`: its wavenumber and its reversed direction.
