@@ -24,9 +24,10 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, Incident, SurfaceCoherence};
-use gmueller::interaction::{
-    CoherenceWeights, Geometry, Kernel, Level, LevelVisitor, PolarizationModel, RoughDielectric,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::level::LevelVisitor;
+use gmueller::interaction::polarization::PolarizationModel;
+use gmueller::interaction::{Geometry, Kernel, Level, RoughDielectric};
 use gmueller::psd::{ClosedForm, GaussianPsd};
 use gmueller::stokes::Stokes;
 use nalgebra::Vector3;

@@ -15,9 +15,8 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, SurfaceCoherence};
-use gmueller::interaction::{
-    Full, Geometric, Kernel, KirchhoffDielectric, KirchhoffSeries, Partial, RoughnessWeights,
-};
+use gmueller::interaction::roughness::{Geometric, KirchhoffSeries, RoughnessWeights};
+use gmueller::interaction::{Full, Kernel, KirchhoffDielectric, Partial};
 use gmueller::psd::{ClosedForm, GaussianPsd};
 use gmueller::stokes::Stokes;
 use gmueller::verify::rng::SplitMix64;

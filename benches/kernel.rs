@@ -28,9 +28,12 @@ use gmueller::fresnel;
 use gmueller::interaction::batch::{
     DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa, plane_wave_rayleigh_rice,
 };
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::level::LevelVisitor;
+use gmueller::interaction::pbsdf::{FresnelReflection, Pbsdf, RayleighRice};
+use gmueller::interaction::polarization::PolarizationModel;
 use gmueller::interaction::{
-    CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, Level, LevelVisitor, OneShape,
-    Partial, Pbsdf, PlaneWave, PolarizationModel, RayleighRice, RoughDielectric, RoughSurface,
+    Full, Geometry, Kernel, Level, OneShape, Partial, PlaneWave, RoughDielectric, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::mueller::batch::padded_stride;

@@ -16,10 +16,10 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::bsdf::{Bsdf, Material, ShadingPoint, SurfaceCoherence};
 use gmueller::frame::Frame;
-use gmueller::interaction::Throughput;
+use gmueller::interaction::polarization::PolarizationModel;
+use gmueller::interaction::polarization::Throughput;
 use gmueller::interaction::{
-    Full, Intensity, Kernel, Level, Partial, PolarizationModel, RoughConductor, RoughDielectric,
-    RoughSurface,
+    Full, Intensity, Kernel, Level, Partial, RoughConductor, RoughDielectric, RoughSurface,
 };
 use gmueller::psd::GaussianPsd;
 use gmueller::verify::rng::SplitMix64;
@@ -60,7 +60,7 @@ fn cases<T: Real>() -> Vec<Call<T>> {
 fn run<T: Real, Sp, Pol>(
     c: &mut Criterion,
     name: &str,
-    surface: &RoughSurface<GaussianPsd<T, 2>, Sp, gmueller::interaction::RayleighRice<T>>,
+    surface: &RoughSurface<GaussianPsd<T, 2>, Sp, gmueller::interaction::pbsdf::RayleighRice<T>>,
     level: Level,
 ) where
     Sp: gmueller::bsdf::Interface<T> + Clone + std::fmt::Debug + Send + Sync + 'static,
@@ -108,7 +108,9 @@ fn run<T: Real, Sp, Pol>(
                     .unwrap();
                 // The whole value is used, as in the erased form (whose call boundary keeps
                 // the compiler from dropping what the sum does not read).
-                acc += gmueller::interaction::Throughput::m00(&black_box(&v).response.total());
+                acc += gmueller::interaction::polarization::Throughput::m00(
+                    &black_box(&v).response.total(),
+                );
             }
             black_box(acc)
         });

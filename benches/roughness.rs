@@ -1,4 +1,4 @@
-//! Criterion benches of the roughness levels (`gmueller::interaction::{FirstOrder,
+//! Criterion benches of the roughness levels (`gmueller::interaction::roughness::{FirstOrder,
 //! KirchhoffSeries, Geometric}`): the cost per exit direction of a prepared packet against
 //! the first-order kernel, as a function of `g = (vσ)²` at the specular direction (10⁻², 1, 10,
 //! 100, 10³, 10⁴), for `Intensity/Partial` with the phase screen and `Full/Partial` with the
@@ -14,11 +14,11 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    CoherenceWeights, FirstOrder, FresnelReflection, Full, Geometric, Geometry, Intensity, Kernel,
-    KirchhoffSeries, Partial, PhaseScreen, PolarizationModel, RoughSurface, RoughnessWeights,
-    TangentPlane,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::{FresnelReflection, PhaseScreen, TangentPlane};
+use gmueller::interaction::polarization::PolarizationModel;
+use gmueller::interaction::roughness::{FirstOrder, Geometric, KirchhoffSeries, RoughnessWeights};
+use gmueller::interaction::{Full, Geometry, Intensity, Kernel, Partial, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussianPsd};
 use gmueller::stokes::Stokes;
@@ -88,8 +88,8 @@ fn time<T, Pol, R, Sp, Sc>(
     Pol: PolarizationModel,
     Partial: CoherenceWeights<T, GaussianPsd<T, 2>>,
     R: RoughnessWeights<T, GaussianPsd<T, 2>, Partial>,
-    Sp: gmueller::interaction::Pbsdf<T>,
-    Sc: gmueller::interaction::Pbsdf<T>,
+    Sp: gmueller::interaction::pbsdf::Pbsdf<T>,
+    Sc: gmueller::interaction::pbsdf::Pbsdf<T>,
 {
     let prepared = kernel.prepare(pk, &surface()).unwrap();
     c.bench_with_input(BenchmarkId::new(name, format!("g={g:e}")), &g, |b, _| {

@@ -46,8 +46,8 @@
 //! ## Quick start
 //! ```
 //! use gmueller::frame::Frame;
-//! use gmueller::interaction::{FresnelReflection, Full, Geometry, Kernel, Partial, PlaneWave,
-//!     RayleighRice, RoughSurface};
+//! use gmueller::interaction::{Full, Geometry, Kernel, Partial, PlaneWave, RoughSurface};
+//! use gmueller::interaction::pbsdf::{FresnelReflection, RayleighRice};
 //! use gmueller::packet::WavePacket;
 //! use gmueller::psd::{ClosedForm, GaussianPsd};
 //! use gmueller::stokes::Stokes;

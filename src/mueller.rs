@@ -44,22 +44,22 @@ impl<T: Real> Mueller<T> {
     }
 
     /// `M₀₀`, the intensity throughput of unpolarized light (as
-    /// [`crate::interaction::Throughput::m00`], without importing the trait).
+    /// [`crate::interaction::polarization::Throughput::m00`], without importing the trait).
     #[inline]
     #[must_use]
     pub fn m00(&self) -> T {
         self.0[(0, 0)]
     }
 
-    /// `factor · M` (as [`crate::interaction::Throughput::scaled`]).
+    /// `factor · M` (as [`crate::interaction::polarization::Throughput::scaled`]).
     #[inline]
     #[must_use]
     pub fn scaled(&self, factor: T) -> Self {
         Self(self.0 * factor)
     }
 
-    /// `M S`, the raw product (as [`crate::interaction::Throughput::apply`]; a realizable `M`
-    /// maps valid Stokes vectors to valid ones up to rounding).
+    /// `M S`, the raw product (as [`crate::interaction::polarization::Throughput::apply`]; a
+    /// realizable `M` maps valid Stokes vectors to valid ones up to rounding).
     #[inline]
     #[must_use]
     pub fn apply(&self, s: &Stokes<T>) -> Stokes<T> {

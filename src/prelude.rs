@@ -23,9 +23,11 @@ pub use crate::bsdf::{
 };
 pub use crate::error::Error;
 pub use crate::frame::Frame;
+pub use crate::interaction::polarization::Throughput;
+pub use crate::interaction::roughness::KirchhoffSeries;
 pub use crate::interaction::{
-    Geometry, KirchhoffConductor, KirchhoffDielectric, KirchhoffSeries, Level, RoughConductor,
-    RoughDielectric, Roughness, SmoothConductor, SmoothDielectric, Throughput,
+    Geometry, KirchhoffConductor, KirchhoffDielectric, Level, RoughConductor, RoughDielectric,
+    Roughness, SmoothConductor, SmoothDielectric,
 };
 pub use crate::mueller::Mueller;
 pub use crate::psd::{GaussianMixturePsd, GaussianPsd, Grating, KCorrelation, Smooth};

@@ -26,10 +26,12 @@ use std::hint::black_box;
 use gmueller::Real;
 use gmueller::frame::{Frame, frame_change_mueller, stokes_to_frame};
 use gmueller::fresnel;
-use gmueller::interaction::{
-    CoherenceWeights, FresnelReflection, Geometry, Kernel, KernelOutput, Level, LevelVisitor,
-    PolarizationModel, RayleighRice, RoughDielectric, RoughSurface, RoughnessWeights,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::level::LevelVisitor;
+use gmueller::interaction::pbsdf::{FresnelReflection, RayleighRice};
+use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
+use gmueller::interaction::roughness::RoughnessWeights;
+use gmueller::interaction::{Geometry, Kernel, Level, RoughDielectric, RoughSurface};
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};
@@ -125,8 +127,8 @@ fn run_level<T, Pol, Coh, P, Sp, Sc>(
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P>,
     P: Psd<T, 2>,
-    Sp: gmueller::interaction::Pbsdf<T>,
-    Sc: gmueller::interaction::Pbsdf<T>,
+    Sp: gmueller::interaction::pbsdf::Pbsdf<T>,
+    Sc: gmueller::interaction::pbsdf::Pbsdf<T>,
 {
     let (n, sum) = count(|| {
         let mut acc = T::zero();
@@ -169,8 +171,8 @@ impl<T, P, Sp, Sc> LevelVisitor<T, P> for RunLevel<'_, T, P, Sp, Sc>
 where
     T: Real,
     P: Psd<T, 2>,
-    Sp: gmueller::interaction::Pbsdf<T>,
-    Sc: gmueller::interaction::Pbsdf<T>,
+    Sp: gmueller::interaction::pbsdf::Pbsdf<T>,
+    Sc: gmueller::interaction::pbsdf::Pbsdf<T>,
 {
     type Output = ();
     fn visit<Pol, Coh>(self, level: Level, kernel: Kernel<Pol, Coh>)
@@ -284,13 +286,13 @@ fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
     T: Real,
     P: gmueller::psd::Psd<T, 2>,
     Sp: gmueller::bsdf::Interface<T>,
-    Sc: gmueller::interaction::Pbsdf<T>,
+    Sc: gmueller::interaction::pbsdf::Pbsdf<T>,
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, P>,
     Rough: RoughnessWeights<T, P, Coh>,
 {
     use gmueller::bsdf::{Bsdf, SurfaceCoherence};
-    use gmueller::interaction::Throughput;
+    use gmueller::interaction::polarization::Throughput;
     let frame = Frame::from_normal(Vector3::new(0.1, 0.2, 1.0).map(T::lit)).unwrap();
     let coherence = SurfaceCoherence::new(T::lit(8.0)).unwrap();
     let stokes = Stokes::unpolarized(T::one()).unwrap();
@@ -339,14 +341,15 @@ fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
 /// and on tangent-plane glass at `vσ ≈ 3` at every level × every run-time roughness level
 /// (`Level::dispatch_rough`).
 fn renderer_layer<T: Real>() {
-    use gmueller::interaction::{
-        KirchhoffDielectric, KirchhoffSeries, RoughLevelVisitor, Roughness, RoughnessLevel,
-    };
+    use gmueller::interaction::level::RoughLevelVisitor;
+    use gmueller::interaction::roughness::{KirchhoffSeries, RoughnessLevel};
+    use gmueller::interaction::{KirchhoffDielectric, Roughness};
     use gmueller::psd::Grating;
     use gmueller::psd::Psd;
 
     struct RunBsdf<'a, T: Real, P> {
-        material: &'a RoughSurface<P, gmueller::interaction::FresnelInterface<T>, RayleighRice<T>>,
+        material:
+            &'a RoughSurface<P, gmueller::interaction::pbsdf::FresnelInterface<T>, RayleighRice<T>>,
     }
     impl<T: Real, P: Psd<T, 2>> LevelVisitor<T, P> for RunBsdf<'_, T, P> {
         type Output = ();
@@ -573,7 +576,7 @@ fn batch_evaluation_allocates_nothing() {
 /// `differential_scattering`, `sample`, `pdf` at the Full·Partial, OneShape·PlaneWave and
 /// Intensity·Incoherent levels, Gaussian (closed form) and K-correlation (Gauss–Hermite) PSDs.
 fn medium_levels<T: Real>() {
-    use gmueller::interaction::Throughput;
+    use gmueller::interaction::polarization::Throughput;
     use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence};
     use gmueller::psd::{GaussianPsd as G, KCorrelation as K};
     fn run<T, P, Pol, Coh>(
@@ -601,10 +604,7 @@ fn medium_levels<T: Real>() {
                     ok &= v.phase.is_finite()
                         && smp.weight.is_finite()
                         && phase.pdf(&inc, r).is_finite()
-                        && <Pol::Throughput<T> as gmueller::interaction::Throughput<T>>::intensity(
-                            &d.light,
-                        )
-                        .is_finite();
+                        && <Pol::Throughput<T> as Throughput<T>>::intensity(&d.light).is_finite();
                 }
             }
             ok

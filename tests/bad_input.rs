@@ -18,12 +18,18 @@ use gmueller::Error;
 use gmueller::frame::{self, Frame};
 use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
+use gmueller::interaction::coherence::{
+    surface_coherence_term, surface_inverse_coherence, volume_coherence_term,
+};
+use gmueller::interaction::exitant::exitant_packet;
+use gmueller::interaction::pbsdf::{
+    FresnelInterface, FresnelReflection, IdealDiffuse, PhaseScreen, RayleighRice,
+};
+use gmueller::interaction::roughness::roughness_attenuation;
 use gmueller::interaction::sampling::ScatterSampler;
 use gmueller::interaction::{
-    FresnelInterface, FresnelReflection, Full, Geometry, IdealDiffuse, Incoherent, Intensity,
-    Kernel, OneShape, Partial, PhaseScreen, PlaneWave, RayleighRice, RoughDielectric, RoughSurface,
-    SmoothDielectric, exitant_packet, roughness_attenuation, surface_coherence_term,
-    surface_inverse_coherence, volume_coherence_term,
+    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, RoughDielectric,
+    RoughSurface, SmoothDielectric,
 };
 use gmueller::jones::{JonesMatrix, JonesVector};
 use gmueller::mueller::{GeneralizedMueller, Mueller};

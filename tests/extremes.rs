@@ -19,9 +19,11 @@ use gmueller::Real;
 use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::fresnel;
 use gmueller::gaussian::Gaussian;
+use gmueller::interaction::coherence::{CoherenceWeights, surface_coherence_term};
+use gmueller::interaction::pbsdf::{FresnelReflection, RayleighRice};
+use gmueller::interaction::polarization::KernelOutput;
 use gmueller::interaction::{
-    CoherenceWeights, FresnelReflection, Full, Geometry, Intensity, Kernel, KernelOutput, Level,
-    Partial, PlaneWave, RayleighRice, RoughDielectric, RoughSurface, surface_coherence_term,
+    Full, Geometry, Intensity, Kernel, Level, Partial, PlaneWave, RoughDielectric, RoughSurface,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
@@ -345,8 +347,12 @@ fn kernel_properties<T: Real>(s: &Scene, two_shapes: bool) -> Result<(), TestCas
     // The plane-wave fallback (section not positive definite) is never taken in the §7 ranges.
     for ch in [Channel::X, Channel::Y, Channel::Half] {
         prop_assert!(
-            gmueller::interaction::surface_inverse_coherence(&b.packet, ch, b.g.surface())
-                .is_some(),
+            gmueller::interaction::coherence::surface_inverse_coherence(
+                &b.packet,
+                ch,
+                b.g.surface()
+            )
+            .is_some(),
             "section not SPD: {s:?}"
         );
     }
@@ -381,7 +387,7 @@ fn realizability<T: Real>(s: &Scene) -> Result<(), TestCaseError> {
         );
         Ok(())
     };
-    use gmueller::interaction::Pbsdf;
+    use gmueller::interaction::pbsdf::Pbsdf;
     if b.interface {
         use_pbsdf(b.glass.specular.mueller(&b.g), "FresnelInterface")?;
         use_pbsdf(b.glass.scatter.mueller(&b.g), "RayleighRice (interface)")?;
@@ -390,13 +396,13 @@ fn realizability<T: Real>(s: &Scene) -> Result<(), TestCaseError> {
         use_pbsdf(b.material.scatter.mueller(&b.g), "RayleighRice")?;
     }
     use_pbsdf(
-        gmueller::interaction::PhaseScreen::new(T::lit(0.9))
+        gmueller::interaction::pbsdf::PhaseScreen::new(T::lit(0.9))
             .unwrap()
             .mueller(&b.g),
         "PhaseScreen",
     )?;
     use_pbsdf(
-        gmueller::interaction::IdealDiffuse::new(T::lit(0.7))
+        gmueller::interaction::pbsdf::IdealDiffuse::new(T::lit(0.7))
             .unwrap()
             .mueller(&b.g),
         "IdealDiffuse",
@@ -931,7 +937,7 @@ fn partial_reaches_plane_wave_without_underflow_f32() {
 /// falls as cos²θ_i, so a first difference cannot tell a jump from the physics).
 #[test]
 fn grazing_anisotropic_section_is_continuous() {
-    use gmueller::interaction::surface_inverse_coherence;
+    use gmueller::interaction::coherence::surface_inverse_coherence;
     for aniso in [1.0, 1e3, 1e6] {
         for (angle, azimuth) in [
             (0.0, 0.0),
@@ -1003,7 +1009,7 @@ fn grazing_anisotropic_section_is_continuous() {
 /// the f64 lobe does not depend on the azimuth (to 1e-9: the rounding of the turned directions).
 #[test]
 fn grazing_section_does_not_depend_on_the_azimuth() {
-    use gmueller::interaction::surface_inverse_coherence;
+    use gmueller::interaction::coherence::surface_inverse_coherence;
     fn lobe<T: Real>(phi: f64, w: f64, lambda: f64) -> (bool, f64) {
         let l = |x: f64| T::lit(r32(x));
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
@@ -1414,7 +1420,7 @@ fn error_table(n: usize) -> Vec<Row> {
         // of exp(−½m) grows as m × (the relative error of m), so errors are reported per unit.
         let h_t = b64.g.h_t();
         let spec = b64.material.psd.spectral_shape();
-        let xi = gmueller::interaction::surface_inverse_coherence(
+        let xi = gmueller::interaction::coherence::surface_inverse_coherence(
             &b64.packet,
             Channel::Half,
             b64.g.surface(),
@@ -1746,7 +1752,7 @@ fn bright_lobes_overflow_exactly_beyond_the_type() {
             * e32
             * k
             * (s.ell_over_lambda * s.lambda).max(s.width_over_lambda * s.lambda / cos_i);
-        let xi = gmueller::interaction::surface_inverse_coherence(
+        let xi = gmueller::interaction::coherence::surface_inverse_coherence(
             &b32.packet,
             Channel::Half,
             b32.g.surface(),

@@ -391,7 +391,7 @@ proptest! {
 fn index_matched_interface_reflects_exactly_nothing() {
     fn run<T: Real>() -> usize {
         use gmueller::bsdf::Interface;
-        use gmueller::interaction::{FresnelInterface, FresnelReflection, Pbsdf};
+        use gmueller::interaction::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf};
         let one = Complex::new(T::one(), T::zero());
         let mut cosines: Vec<T> = (0..=2000).map(|i| T::lit(f64::from(i) / 2000.0)).collect();
         cosines.extend((1..=90).map(|d| T::lit(f64::from(d).to_radians().cos())));
@@ -493,9 +493,10 @@ fn index_matched_interface_reflects_exactly_nothing() {
 fn index_matched_specular_lobe_is_exactly_zero() {
     fn run<T: Real>() {
         use gmueller::frame::Frame;
-        use gmueller::interaction::FresnelReflection;
         use gmueller::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
-        use gmueller::interaction::{Full, Geometry, Kernel, Partial, RayleighRice, RoughSurface};
+        use gmueller::interaction::pbsdf::FresnelReflection;
+        use gmueller::interaction::pbsdf::RayleighRice;
+        use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughSurface};
         use gmueller::packet::{CoherenceShape, WavePacket};
         use gmueller::psd::GaussianPsd;
         use nalgebra::Vector3;

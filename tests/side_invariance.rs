@@ -21,9 +21,8 @@ use gmueller::bsdf::Bsdf;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::RoughSurface;
-use gmueller::interaction::{
-    FresnelInterface, Full, Kernel, Partial, RayleighRice, RoughDielectric,
-};
+use gmueller::interaction::pbsdf::{FresnelInterface, RayleighRice};
+use gmueller::interaction::{Full, Kernel, Partial, RoughDielectric};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;

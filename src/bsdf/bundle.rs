@@ -135,7 +135,8 @@ use super::{
 };
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::{Geometry, Side, Throughput};
+use crate::interaction::polarization::Throughput;
+use crate::interaction::{Geometry, Side};
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
 use crate::real::Real;

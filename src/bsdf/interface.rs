@@ -2,7 +2,7 @@
 //! its Fresnel reflectance (the weight that chooses between reflection and transmission).
 
 use crate::fresnel;
-use crate::interaction::{FresnelInterface, FresnelReflection, Pbsdf};
+use crate::interaction::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf};
 use crate::real::Real;
 
 /// The mean interface of a material, as the renderer layer sees it: the specular pBSDF of a

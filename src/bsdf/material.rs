@@ -68,10 +68,13 @@ use super::{
 };
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::interaction::coherence::{CoherenceLevel, CoherenceWeights};
+use crate::interaction::pbsdf::Pbsdf;
+use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
+use crate::interaction::roughness::{FirstOrder, Geometric, RoughnessWeights};
 use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, FirstOrder, Full, Geometric, Geometry, Incoherent, Intensity,
-    Kernel, Level, OneShape, Partial, Pbsdf, PlaneWave, PolarizationLevel, PolarizationModel,
-    RoughSurface, Roughness, RoughnessWeights, Side, Throughput,
+    Full, Geometry, Incoherent, Intensity, Kernel, Level, OneShape, Partial, PlaneWave,
+    RoughSurface, Roughness, Side,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
@@ -565,7 +568,7 @@ struct Model<P, Sp, Sc, Pol, Coh, Rough> {
 fn to_mueller<T: Real, M: Throughput<T>>(v: BsdfValue<T, M>) -> BsdfValue<T, Mueller<T>> {
     let r = v.response;
     BsdfValue {
-        response: crate::interaction::MuellerResponse {
+        response: crate::interaction::polarization::MuellerResponse {
             specular: r.specular.to_mueller(),
             scattered: r.scattered.to_mueller(),
             attenuation: r.attenuation,

@@ -26,18 +26,21 @@
 //!
 //! # Lobes
 //! Each evaluation holds the coherent specular lobe (mirror or Snell direction, widened by the
-//! coherence) and the scattered part separately ([`crate::interaction::MuellerResponse`]), on
-//! the side of the exit direction. At the plane-wave level the specular lobe (and a grating's
-//! orders) are Dirac deltas: `eval` leaves them out and [`Bsdf::flags`] says
+//! coherence) and the scattered part separately
+//! ([`crate::interaction::polarization::MuellerResponse`]), on the side of the exit direction. At
+//! the plane-wave level the specular lobe (and a grating's orders) are Dirac deltas: `eval` leaves
+//! them out and [`Bsdf::flags`] says
 //! [`LobeFlags::DELTA`]; the samplers draw them with their probability and return their
 //! throughput ([`BsdfSample`]).
 //!
 //! # Roughness
 //! The roughness level is the kernel's third type parameter (`Kernel<Pol, Coh, Rough>`,
-//! default [`crate::interaction::FirstOrder`]: first-order results are bit for bit those of
-//! before the parameter existed). Beyond first order ([`crate::interaction::KirchhoffSeries`],
-//! [`crate::interaction::Geometric`], [`crate::interaction::KirchhoffQuadrature`]) use a material
-//! with the tangent-plane scatterer, [`crate::interaction::KirchhoffDielectric`] or
+//! default [`crate::interaction::roughness::FirstOrder`]: first-order results are bit for bit those
+//! of before the parameter existed). Beyond first order
+//! ([`crate::interaction::roughness::KirchhoffSeries`],
+//! [`crate::interaction::roughness::Geometric`],
+//! [`crate::interaction::roughness::KirchhoffQuadrature`]) use a material with the tangent-plane
+//! scatterer, [`crate::interaction::KirchhoffDielectric`] or
 //! [`crate::interaction::KirchhoffConductor`]; [`Bsdf::eval`] is then the kernel's
 //! `evaluate_mueller` at that level, bit for bit. The samplers' scattered part proposes the
 //! series' orders instead of the first-order lobe: for a Gaussian PSD, the Poisson weights of the
@@ -139,12 +142,13 @@ use nalgebra::{Matrix2, Vector3};
 
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::Pbsdf;
-use crate::interaction::{
-    CoherenceLevel, CoherenceModel, Geometry, KernelOutput, MuellerResponse, PolarizationModel,
-    PreparedPacket, RoughnessLevel, RoughnessModel, Side, Throughput, flush_to_normal,
-    throughput_scaled,
+use crate::interaction::coherence::{CoherenceLevel, CoherenceModel};
+use crate::interaction::pbsdf::Pbsdf;
+use crate::interaction::polarization::{
+    KernelOutput, MuellerResponse, PolarizationModel, Throughput,
 };
+use crate::interaction::roughness::{RoughnessLevel, RoughnessModel};
+use crate::interaction::{Geometry, PreparedPacket, Side, flush_to_normal, throughput_scaled};
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
 use crate::psd::{Psd, Shape};

@@ -39,7 +39,10 @@
 use super::Interface;
 #[cfg(doc)]
 use crate::interaction::RoughSurface;
-use crate::interaction::{CoherenceWeights, Kernel, PolarizationModel, RoughnessWeights, Surface};
+use crate::interaction::coherence::CoherenceWeights;
+use crate::interaction::polarization::PolarizationModel;
+use crate::interaction::roughness::RoughnessWeights;
+use crate::interaction::{Kernel, Surface};
 use crate::psd::Psd;
 use crate::real::Real;
 

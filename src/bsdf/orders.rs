@@ -3,8 +3,8 @@
 //!
 //! # Formula
 //! For a Gaussian PSD of spectral covariance `C_p` the series' scattered part is, as a function
-//! of `h_t` (`crate::interaction::KirchhoffSeries`; `Ξ` the section of the coherence, 0 for a
-//! plane wave; the incoherent level has the single lobe `𝒩(0, Ξ)` at every roughness level),
+//! of `h_t` (`crate::interaction::roughness::KirchhoffSeries`; `Ξ` the section of the coherence, 0
+//! for a plane wave; the incoherent level has the single lobe `𝒩(0, Ξ)` at every roughness level),
 //! ```text
 //! Σ_{n≥1} (w_n(g)/g) K[p_n](h_t) ∝ Σ_{n≥1} w_n(g) 𝒩(h_t; 0, n C_p + Ξ),    w_n = e^{−g} gⁿ/n!,  g = (vσ)²
 //! ```

@@ -58,7 +58,8 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 use super::lobes::{GaussLobe, PowerLobe};
 use super::orders::{DISK_SHARE, OrderLobes, disk_point};
 use crate::frame::Frame;
-use crate::interaction::{CoherenceLevel, Side};
+use crate::interaction::Side;
+use crate::interaction::coherence::CoherenceLevel;
 use crate::psd::{GaussianPsd, Shape};
 use crate::real::Real;
 

@@ -25,7 +25,7 @@
 //! | area light | the coherence of the light's projected area at its distance | [`area_light`] |
 //! | sky, environment | a chosen width `w` on the surface ([`SurfaceCoherence`]) | [`SurfaceCoherence::packet`] |
 //! | indirect, backward | the same assumed width as the sky (what the BSDF sampler draws for) | [`SurfaceCoherence`] |
-//! | indirect, forward | the exitant packet of the previous vertex | [`crate::interaction::exitant_packet`] |
+//! | indirect, forward | the exitant packet of the previous vertex | [`crate::interaction::exitant::exitant_packet`] |
 //!
 //! # Surface-isotropic coherence
 //! Coherence that is isotropic **on the surface** (width `σ` along every tangent) is, seen
@@ -78,7 +78,7 @@ use crate::stokes::Stokes;
 /// # Examples
 /// ```
 /// use gmueller::bsdf::SurfaceCoherence;
-/// use gmueller::interaction::surface_inverse_coherence;
+/// use gmueller::interaction::coherence::surface_inverse_coherence;
 /// use gmueller::frame::Frame;
 /// use gmueller::packet::Channel;
 /// use gmueller::stokes::Stokes;

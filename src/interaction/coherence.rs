@@ -7,20 +7,27 @@
 //! Partial<B>:  K = 2π |Σ|^{1/2} (p * g^Ξ)(h_t),        K^spec = 2π |Σ|^{1/2} g^Ξ(h_t)
 //! Incoherent:  K = |Σ|^{1/2} g^Ξ(h_t) ∫p,              K^spec = 2π |Σ|^{1/2} g^Ξ(h_t)
 //! ```
-//! (`Σ = Ξ⁻¹`, the section of the coherence by the surface, [`super::surface_inverse_coherence`]).
+//! (`Σ = Ξ⁻¹`, the section of the coherence by the surface, [`surface_inverse_coherence`]).
 //! Only [`Partial`] blurs the PSD, so only it carries a [`BlurMethod`] (`ClosedForm` by default).
+//!
+//! Here: the level markers [`PlaneWave`], [`Partial`] and [`Incoherent`] (also re-exported at the
+//! top of [`super`], for `Kernel::<Pol, Coh>`), their traits ([`CoherenceModel`], the weights
+//! [`CoherenceWeights`]) and values ([`CoherenceLevel`]), the coherence terms of S2.17 on their
+//! own ([`surface_coherence_term`], [`volume_coherence_term`]) and the section `Ξ_α` of a packet's
+//! coherence by the surface ([`surface_inverse_coherence`]).
 
 use core::fmt::Debug;
 
 use nalgebra::{Vector2, Vector3};
 
-use super::section::surface_inverse_coherence;
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::gaussian::Gaussian;
 use crate::packet::{Channel, WavePacket};
 use crate::psd::{BlurMethod, ClosedForm, Psd, two_pi_pow_half_n};
 use crate::real::Real;
+
+pub use super::section::surface_inverse_coherence;
 
 pub(crate) mod sealed {
     pub trait Sealed {}
@@ -79,7 +86,7 @@ pub trait CoherenceWeights<T: Real, P: Psd<T, 2>>: CoherenceModel {
 
     /// `true` when the weight of a Gaussian PSD is its exact closed form (the plane wave; the
     /// partially coherent level with [`ClosedForm`]): the Kirchhoff series then evaluates all
-    /// its orders by one closed form ([`super::KirchhoffSeries`]). `false` by default.
+    /// its orders by one closed form ([`super::roughness::KirchhoffSeries`]). `false` by default.
     #[inline]
     #[must_use]
     fn closed_form_gaussian(&self) -> bool {

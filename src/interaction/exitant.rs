@@ -2,10 +2,10 @@
 //!
 //! # The shape-matrix update (the rule implemented, and where it is an approximation)
 //! The incident coherence of channel α, restricted to the surface, has the covariance
-//! `Σ_α = Ξ_α⁻¹` in tangent coordinates ([`super::surface_inverse_coherence`]). Seen from the
-//! exit direction r̂, a surface separation ξ appears as its projection on the exit transverse
-//! plane, `ξ⊥ = P ξ` with `P_ij = e_i · t̂_j` (e = the exit s/p frame's x̂, ŷ), so the geometric
-//! image of the footprint is
+//! `Σ_α = Ξ_α⁻¹` in tangent coordinates ([`super::coherence::surface_inverse_coherence`]). Seen
+//! from the exit direction r̂, a surface separation ξ appears as its projection on the exit
+//! transverse plane, `ξ⊥ = P ξ` with `P_ij = e_i · t̂_j` (e = the exit s/p frame's x̂, ŷ), so the
+//! geometric image of the footprint is
 //! ```text
 //! Θ_geo = P Σ_α Pᵀ,        |Θ_geo| = cos²θ_o |Σ_α|
 //! Θ′_α  = U Θ_α Uᵀ  with det U = 1:   Θ′_α = Θ_geo · (|Θ_α| / |Θ_geo|)^{1/2}
@@ -31,7 +31,8 @@
 
 use nalgebra::Matrix2;
 
-use super::{Geometry, Side, surface_inverse_coherence};
+use super::section::surface_inverse_coherence;
+use super::{Geometry, Side};
 use crate::error::Error;
 use crate::numerics::{det2, pow2_scale};
 use crate::packet::{Channel, CoherenceShape, WavePacket};
@@ -81,9 +82,9 @@ pub fn exitant_shape<T: Real>(
     CoherenceShape::new(geo * scale)
 }
 
-/// The exitant packet carrying `stokes` (e.g. a kernel [`super::Response`]'s total, a Stokes
-/// radiance in the exit s/p frame) along `g.exit`, with the shape of [`exitant_shape`], the exit
-/// s/p frame, the wavelength in the exit medium (`λ` in reflection, `λ/η` in transmission) and
+/// The exitant packet carrying `stokes` (e.g. a kernel [`super::polarization::Response`]'s total, a
+/// Stokes radiance in the exit s/p frame) along `g.exit`, with the shape of [`exitant_shape`], the
+/// exit s/p frame, the wavelength in the exit medium (`λ` in reflection, `λ/η` in transmission) and
 /// longitudinal coherence unbounded.
 ///
 /// # Errors

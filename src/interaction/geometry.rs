@@ -380,8 +380,8 @@ impl<T: Real> Geometry<T> {
     /// `+η k cos θ_o z`): in all `−v z`. Only `v²` enters the results
     /// (`tests/interaction/transmission.rs` checks the phase against explicitly propagated plane
     /// waves). It sets the Debye–Waller attenuation `exp(−(vσ)²)`
-    /// ([`super::roughness_attenuation`]) and the phase-screen scattering `τ v²`
-    /// ([`super::PhaseScreen`]).
+    /// ([`super::roughness::roughness_attenuation`]) and the phase-screen scattering `τ v²`
+    /// ([`super::pbsdf::PhaseScreen`]).
     #[inline]
     #[must_use]
     pub fn phase_factor(&self) -> T {
@@ -490,7 +490,7 @@ impl<T: Real> Geometry<T> {
 
     /// The same directions at a facet of the surface whose normal is `normal` (unit, on the
     /// side of the source): the tangent plane of a rough surface, as
-    /// [`super::TangentPlane`] uses it. The side, the relative index and whether the light
+    /// [`super::pbsdf::TangentPlane`] uses it. The side, the relative index and whether the light
     /// came from below are kept; the angles, `h_t` and the s/p frames are those of the facet
     /// (the facet frame's tangents are [`Frame::from_normal`]'s). `None` unless the source is
     /// above the facet (`ŝ·m > 0`) and the exit direction is on the same side of the facet as

@@ -16,8 +16,9 @@ use crate::real::Real;
 /// The S2.20 kernel at a chosen model level: polarization `Pol` ([`super::Intensity`],
 /// [`super::OneShape`], [`super::Full`]), coherence `Coh` ([`super::PlaneWave`],
 /// [`super::Partial`]`<B>` with its blur method `B`, [`super::Incoherent`]) and roughness
-/// `Rough` ([`FirstOrder`] by default, [`super::KirchhoffSeries`], [`super::Geometric`]: how far
-/// beyond first order in the heights, [`super::RoughnessLevel`]).
+/// `Rough` ([`FirstOrder`] by default, [`super::roughness::KirchhoffSeries`],
+/// [`super::roughness::Geometric`]: how far beyond first order in the heights,
+/// [`super::roughness::RoughnessLevel`]).
 ///
 /// `Kernel::<Full, Partial>::default()` blurs with [`crate::psd::ClosedForm`]; another blur
 /// method goes into the coherence model: `Kernel::<Full, _>::new(Partial(GaussHermite::new(8)?))`.
@@ -29,7 +30,8 @@ use crate::real::Real;
 /// # Examples
 /// ```
 /// use gmueller::frame::Frame;
-/// use gmueller::interaction::{Full, Geometry, Kernel, Partial, FresnelReflection, RayleighRice, RoughSurface};
+/// use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughSurface};
+/// use gmueller::interaction::pbsdf::{FresnelReflection, RayleighRice};
 /// use gmueller::packet::{CoherenceShape, WavePacket};
 /// use gmueller::psd::GaussianPsd;
 /// use gmueller::stokes::Stokes;
@@ -92,7 +94,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
         &self.coherence
     }
 
-    /// The roughness model (with its tolerance for [`super::KirchhoffSeries`]).
+    /// The roughness model (with its tolerance for [`super::roughness::KirchhoffSeries`]).
     #[must_use]
     pub fn roughness(&self) -> &Rough {
         &self.roughness
@@ -235,7 +237,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// # Examples
     /// ```
     /// use gmueller::frame::Frame;
-    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, PhaseScreen, RoughSurface};
+    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughSurface};
+    /// use gmueller::interaction::pbsdf::PhaseScreen;
     /// use gmueller::packet::{CoherenceShape, WavePacket};
     /// use gmueller::psd::GaussianPsd;
     /// use gmueller::stokes::Stokes;

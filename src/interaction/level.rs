@@ -1,5 +1,9 @@
 //! Run-time choice among the monomorphised model levels, in one place (as `RustFFT`'s planner
 //! keeps the choice among its algorithms in one library enum, not in every caller).
+//!
+//! Here: [`Level`] (polarization × coherence) and [`Roughness`] (the third axis), both also
+//! re-exported at the top of [`super`], and the computations they dispatch to a monomorphised
+//! kernel ([`LevelVisitor`], [`RoughLevelVisitor`]).
 
 use core::fmt::Debug;
 
@@ -22,10 +26,12 @@ use crate::real::Real;
 ///
 /// # Examples
 /// ```
-/// use gmueller::interaction::{KernelOutput, Level};
+/// use gmueller::interaction::Level;
+/// use gmueller::interaction::polarization::KernelOutput;
 /// use gmueller::psd::ClosedForm;
 /// # use gmueller::frame::Frame;
-/// # use gmueller::interaction::{Geometry, PhaseScreen, RoughSurface};
+/// # use gmueller::interaction::{Geometry, RoughSurface};
+/// # use gmueller::interaction::pbsdf::PhaseScreen;
 /// # use gmueller::packet::{CoherenceShape, WavePacket};
 /// # use gmueller::psd::GaussianPsd;
 /// # use gmueller::stokes::Stokes;
@@ -68,8 +74,8 @@ pub trait LevelVisitor<T: Real, P: Psd<T, 2>> {
 /// It is not a field of [`Level`]: [`Level::dispatch`] serves every PSD (gratings, smooth
 /// surfaces, K-correlations), while the levels beyond first order need the spectra of the
 /// autocorrelation's powers ([`CorrelationPowers`]: the Gaussian PSD). A roughness field would
-/// put that bound on every dispatch. [`super::KirchhoffQuadrature`] (any autocorrelation, but
-/// milliseconds per evaluation) is chosen by type only.
+/// put that bound on every dispatch. [`super::roughness::KirchhoffQuadrature`] (any
+/// autocorrelation, but milliseconds per evaluation) is chosen by type only.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Roughness {
     /// [`FirstOrder`] (the kernel of [`Level::dispatch`]).
@@ -194,8 +200,11 @@ impl Level {
     ///
     /// # Examples
     /// ```
-    /// use gmueller::interaction::{Kernel, KirchhoffSeries, Level, PolarizationModel,
-    ///     RoughLevelVisitor, Roughness, RoughnessWeights, CoherenceWeights};
+    /// use gmueller::interaction::{Kernel, Level, Roughness};
+    /// use gmueller::interaction::coherence::CoherenceWeights;
+    /// use gmueller::interaction::level::RoughLevelVisitor;
+    /// use gmueller::interaction::polarization::PolarizationModel;
+    /// use gmueller::interaction::roughness::{KirchhoffSeries, RoughnessWeights};
     /// use gmueller::psd::{ClosedForm, GaussianPsd};
     ///
     /// struct Name;

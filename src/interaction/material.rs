@@ -18,9 +18,10 @@ use crate::real::Real;
 pub struct RoughSurface<P, Sp, Sc> {
     /// The height PSD `p` (unitary transform; `R(0) = σ²` the squared rms height).
     pub psd: P,
-    /// The specular pBSDF (e.g. [`super::FresnelReflection`], [`super::FresnelInterface`]).
+    /// The specular pBSDF (e.g. [`super::pbsdf::FresnelReflection`],
+    /// [`super::pbsdf::FresnelInterface`]).
     pub specular: Sp,
-    /// The scattering pBSDF (e.g. [`super::RayleighRice`], [`super::PhaseScreen`]).
+    /// The scattering pBSDF (e.g. [`super::pbsdf::RayleighRice`], [`super::pbsdf::PhaseScreen`]).
     pub scatter: Sc,
 }
 
@@ -62,11 +63,12 @@ where
 /// first-order (Rayleigh–Rice) scattering in reflection and transmission, from either side.
 /// Build it with [`RoughDielectric::new`] and its geometries with [`RoughDielectric::geometry`].
 ///
-/// One exit direction gives one side: the kernel's response ([`super::Response::side`]) holds
-/// the coherent (mirror or Snell) lobe and the scattered part of that side, so the four lobes
-/// are reflected/transmitted × specular/scattered. Under total internal reflection (from the
-/// dense side beyond the critical angle) the transmitted specular lobe is 0 and the scattered
-/// transmission into propagating directions remains.
+/// One exit direction gives one side: the kernel's response
+/// ([`super::polarization::Response::side`]) holds the coherent (mirror or Snell) lobe and the
+/// scattered part of that side, so the four lobes are reflected/transmitted × specular/scattered.
+/// Under total internal reflection (from the dense side beyond the critical angle) the
+/// transmitted specular lobe is 0 and the scattered transmission into propagating directions
+/// remains.
 ///
 /// # Absorption
 /// `η` is real: the radiance of a transmitted beam in an absorbing medium is not defined at the
@@ -85,9 +87,10 @@ pub type RoughDielectric<T, P> = RoughSurface<P, FresnelInterface<T>, RayleighRi
 pub type RoughConductor<T, P> = RoughSurface<P, FresnelReflection<T>, RayleighRice<T>>;
 
 /// A rough dielectric interface for the roughness levels beyond first order
-/// ([`super::KirchhoffSeries`], [`super::Geometric`]): Fresnel reflection and transmission for
-/// the coherent lobes and the Kirchhoff tangent-plane scatterer ([`TangentPlane`]: the Fresnel
-/// matrix of the facet at the half vector) for the scattered part, from either side. At first
+/// ([`super::roughness::KirchhoffSeries`], [`super::roughness::Geometric`]): Fresnel reflection
+/// and transmission for the coherent lobes and the Kirchhoff tangent-plane scatterer
+/// ([`TangentPlane`]: the Fresnel matrix of the facet at the half vector) for the scattered part,
+/// from either side. At first
 /// order it agrees with [`RoughDielectric`] near the specular directions; away from them the
 /// tangent plane is the model the series and its geometric (microfacet) limit are derived for.
 /// Build it with [`KirchhoffDielectric::new`].

@@ -1,5 +1,23 @@
 //! The light–matter interaction kernel of S2.20: a wave packet meets rough matter.
 //!
+//! This page holds what a renderer names daily: the [`Kernel`], the [`Geometry`] of an
+//! interaction and its [`Side`], the per-packet [`PreparedPacket`], the materials
+//! ([`RoughSurface`] and the [`Surface`] trait, [`RoughDielectric`], [`RoughConductor`], their
+//! smooth and Kirchhoff forms), the level markers of `Kernel::<Pol, Coh>` ([`Full`],
+//! [`OneShape`], [`Intensity`]; [`PlaneWave`], [`Partial`], [`Incoherent`]) and the run-time
+//! selectors [`Level`] and [`Roughness`]. The markers and the selectors are re-exports: each is
+//! documented in its module. The rest is grouped by concept:
+//! - [`pbsdf`]: the polarimetric BSDFs `M` (S2.19), the [`Pbsdf`] trait and [`PbsdfForm`].
+//! - [`coherence`]: the coherence levels, their traits ([`CoherenceModel`],
+//!   [`CoherenceWeights`]), the coherence terms of S2.17 and the section `Ξ_α`.
+//! - [`polarization`]: the polarization levels, their outputs ([`Response`],
+//!   [`IntensityResponse`], [`MuellerResponse`]) and the [`Throughput`] trait.
+//! - [`roughness`]: the roughness levels (first order, the Kirchhoff series and quadrature, the
+//!   geometric limit), their traits and the Debye–Waller attenuation.
+//! - [`level`]: the run-time choice of a level and its visitors ([`LevelVisitor`]).
+//! - [`exitant`]: the packet that leaves an interaction.
+//! - [`sampling`]: importance sampling of the scattered lobe; [`batch`]: the SIMD batch path.
+//!
 //! # Formula (surface form, n = 2, constants decided by the tests; see the crate Errata)
 //! ```text
 //! L_o = (cos θ_o / λ_t²) · α · [ M_spec T Σ_α K^spec_α S_α  +  M_scat T Σ_α K_α S_α ]
@@ -103,49 +121,55 @@
 //! light sample and a BSDF sample) [`Kernel::prepare`] the packet once and call
 //! [`Kernel::evaluate_prepared`] per direction: the results are bit for bit the same. Measured
 //! costs per level are in the repository's `VALIDATION.md` ("Accuracy and speed") and `benches/kernel.rs`.
+//!
+//! [`RayleighRice`]: pbsdf::RayleighRice
+//! [`Pbsdf`]: pbsdf::Pbsdf
+//! [`PbsdfForm`]: pbsdf::PbsdfForm
+//! [`TangentPlane`]: pbsdf::TangentPlane
+//! [`CoherenceModel`]: coherence::CoherenceModel
+//! [`CoherenceWeights`]: coherence::CoherenceWeights
+//! [`CoherenceWeights::log_scatter_weight`]: coherence::CoherenceWeights::log_scatter_weight
+//! [`surface_inverse_coherence`]: coherence::surface_inverse_coherence
+//! [`PolarizationModel`]: polarization::PolarizationModel
+//! [`Response`]: polarization::Response
+//! [`IntensityResponse`]: polarization::IntensityResponse
+//! [`MuellerResponse`]: polarization::MuellerResponse
+//! [`Throughput`]: polarization::Throughput
+//! [`RoughnessModel`]: roughness::RoughnessModel
+//! [`FirstOrder`]: roughness::FirstOrder
+//! [`KirchhoffSeries`]: roughness::KirchhoffSeries
+//! [`Geometric`]: roughness::Geometric
+//! [`KirchhoffQuadrature`]: roughness::KirchhoffQuadrature
+//! [`LevelVisitor`]: level::LevelVisitor
 
 mod attenuation;
 pub mod batch;
-mod coherence;
-mod exitant;
+pub mod coherence;
+pub mod exitant;
 mod geometry;
 mod kernel;
-mod level;
+pub mod level;
 mod material;
-mod pbsdf;
-mod polarization;
+pub mod pbsdf;
+pub mod polarization;
 mod prepared;
-mod roughness;
+pub mod roughness;
 pub mod sampling;
 mod section;
 
-pub use attenuation::roughness_attenuation;
-pub use coherence::{
-    CoherenceLevel, CoherenceModel, CoherenceWeights, Incoherent, Partial, PlaneWave,
-    surface_coherence_term, volume_coherence_term,
-};
-pub use exitant::{exitant_packet, exitant_shape};
+// The core a user names daily. The level markers and the run-time selectors live in their
+// sub-modules (`polarization`, `coherence`, `level`) and are re-exported here as well, so that
+// `Kernel::<Full, Partial>` needs one import; rustdoc lists them under "Re-exports".
+pub use coherence::{Incoherent, Partial, PlaneWave};
 pub use geometry::{Geometry, Side};
 pub use kernel::Kernel;
-pub use level::{Level, LevelVisitor, RoughLevelVisitor, Roughness};
+pub use level::{Level, Roughness};
 pub use material::{
     KirchhoffConductor, KirchhoffDielectric, RoughConductor, RoughDielectric, RoughSurface,
     SmoothConductor, SmoothDielectric, Surface,
 };
-pub use pbsdf::{
-    ConstantMueller, FresnelInterface, FresnelReflection, IdealDiffuse, Pbsdf, PbsdfForm,
-    PhaseScreen, RayleighRice, TangentPlane,
-};
-pub use polarization::{
-    Full, Intensity, IntensityResponse, KernelOutput, LevelResponse, MuellerResponse, OneShape,
-    PolarizationLevel, PolarizationModel, PreparationPlan, Response, Throughput,
-};
+pub use polarization::{Full, Intensity, OneShape};
 pub use prepared::PreparedPacket;
-pub use roughness::{
-    FirstOrder, Geometric, KirchhoffQuadrature, KirchhoffSeries, RoughnessLevel, RoughnessModel,
-    RoughnessWeights, SeriesSum,
-};
-pub use section::surface_inverse_coherence;
 
 // The per-packet machinery the random medium (`crate::medium`) shares with the surface kernel.
 pub(crate) use polarization::onto_cone;

@@ -387,8 +387,8 @@ impl<T: Real, Pol, Coh> PreparedPacket<T, Pol, Coh> {
     }
 
     /// The section `Ξ_½` of the packet's coherence by the surface (a covariance in `h_t`,
-    /// rad²/length², [`crate::interaction::surface_inverse_coherence`]), when this level computed
-    /// it (every level but the plane wave) and it is positive definite.
+    /// rad²/length², [`crate::interaction::coherence::surface_inverse_coherence`]), when this level
+    /// computed it (every level but the plane wave) and it is positive definite.
     #[inline]
     #[must_use]
     pub fn section(&self) -> Option<&Gaussian<T, 2>> {

@@ -67,9 +67,9 @@
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 
-use super::{
-    CoherenceWeights, Geometry, Kernel, KernelOutput, PolarizationModel, Response, Surface,
-};
+use super::coherence::CoherenceWeights;
+use super::polarization::{KernelOutput, PolarizationModel, Response};
+use super::{Geometry, Kernel, Surface};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::numerics::chebyshev::{CdfTable, TableError};

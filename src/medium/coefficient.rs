@@ -32,7 +32,7 @@ use super::coherence::VolumeCoherence;
 use super::lobes::{LobeModel, eigenvalues2};
 use super::scatterer::Scatterer;
 use super::scattering::Channels;
-use crate::interaction::PolarizationModel;
+use crate::interaction::polarization::PolarizationModel;
 use crate::psd::Psd;
 use crate::real::Real;
 
@@ -249,7 +249,8 @@ mod tests {
     use super::super::scatterer::{Dipole, Scatterer};
     use super::super::scattering::Channels;
     use crate::frame::Frame;
-    use crate::interaction::{Full, Intensity, OneShape, Partial, PolarizationModel};
+    use crate::interaction::polarization::PolarizationModel;
+    use crate::interaction::{Full, Intensity, OneShape, Partial};
     use crate::jones::JonesMatrix;
     use crate::mueller::Mueller;
     use crate::packet::{CoherenceShape, WavePacket};

@@ -8,8 +8,8 @@
 //! Incoherent:  K³ = |Θ_α|^{1/2} g^{Ξ_α}(h) ∫ p d³q
 //! Ξ_α = Q Θ_α⁻¹ Qᵀ  (S2.18; Q = [x̂ ŷ k̂] packet → world),   Θ_α = blockdiag(Θ⊥_α, σ_zz²),   h = k(r̂ + ŝ)
 //! ```
-//! `Partial` is [`crate::interaction::volume_coherence_term`] (its values are the same to
-//! rounding, `tests/medium/born.rs`); as the coherence grows it tends to `PlaneWave`
+//! `Partial` is [`crate::interaction::coherence::volume_coherence_term`] (its values are the same
+//! to rounding, `tests/medium/born.rs`); as the coherence grows it tends to `PlaneWave`
 //! (`|Θ|^{1/2} g^Ξ → (2π)^{3/2} δ`), as it shrinks below the correlation lengths to
 //! `Incoherent`. The weights are computed as logarithms, so a far tail is not lost before it
 //! meets the Stokes vector's own scale.
@@ -17,7 +17,8 @@
 use nalgebra::Vector3;
 
 use crate::gaussian::Gaussian;
-use crate::interaction::{CoherenceModel, Incoherent, Partial, PlaneWave};
+use crate::interaction::coherence::CoherenceModel;
+use crate::interaction::{Incoherent, Partial, PlaneWave};
 use crate::psd::{BlurMethod, Psd};
 use crate::real::Real;
 
@@ -37,8 +38,8 @@ pub(crate) fn ln_two_pi_3_2<T: Real>() -> T {
 /// Incoherent:  K³ = |Θ_α|^{1/2} g^{Ξ_α}(h) ∫ p d³q
 /// Ξ_α = Q Θ_α⁻¹ Qᵀ  (S2.18; Q = [x̂ ŷ k̂] packet → world),   Θ_α = blockdiag(Θ⊥_α, σ_zz²),   h = k(r̂ + ŝ)
 /// ```
-/// `Partial` is [`crate::interaction::volume_coherence_term`] (the same values to rounding,
-/// `tests/medium/born.rs`); as the coherence grows it tends to `PlaneWave`
+/// `Partial` is [`crate::interaction::coherence::volume_coherence_term`] (the same values to
+/// rounding, `tests/medium/born.rs`); as the coherence grows it tends to `PlaneWave`
 /// (`|Θ|^{1/2} g^Ξ → (2π)^{3/2} δ`), as it shrinks below the correlation lengths to
 /// `Incoherent`. Implemented for the crate's three coherence levels (the trait is sealed
 /// through [`CoherenceModel`]).

@@ -25,7 +25,7 @@ use nalgebra::{Matrix2, Matrix3};
 use super::basis::PacketXi;
 use super::spectrum::VolumeLobes;
 use crate::frame::Frame;
-use crate::interaction::CoherenceLevel;
+use crate::interaction::coherence::CoherenceLevel;
 use crate::real::Real;
 
 /// `(λ_min, λ_max)` of a symmetric 2×2 matrix.

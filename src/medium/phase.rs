@@ -20,8 +20,8 @@
 //! ([`super::ScatteringGeometry::exit_frame`]); it includes the rotation `T` from the packet
 //! frame to the incident scattering-plane frame. Forward and backward: see
 //! [`super::ScatteringGeometry`]. Along a path, chain with
-//! [`crate::interaction::Throughput::frame_change`] from one vertex's exit frame to the next
-//! packet's frame.
+//! [`crate::interaction::polarization::Throughput::frame_change`] from one vertex's exit frame to
+//! the next packet's frame.
 
 use nalgebra::{Matrix4, Vector3};
 
@@ -36,7 +36,8 @@ use super::scattering::Channels;
 use super::spectrum::VolumeLobes;
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::{Kernel, PolarizationModel, Throughput};
+use crate::interaction::Kernel;
+use crate::interaction::polarization::{PolarizationModel, Throughput};
 use crate::mueller::Mueller;
 use crate::packet::{Channel, WavePacket};
 use crate::psd::Psd;
@@ -48,7 +49,8 @@ use crate::stokes::Stokes;
 /// # Examples
 /// ```
 /// use gmueller::frame::Frame;
-/// use gmueller::interaction::{Full, Kernel, Partial, Throughput};
+/// use gmueller::interaction::{Full, Kernel, Partial};
+/// use gmueller::interaction::polarization::Throughput;
 /// use gmueller::medium::{Dipole, PhaseFunction, RandomMedium};
 /// use gmueller::packet::{CoherenceShape, WavePacket};
 /// use gmueller::psd::GaussianPsd;
@@ -133,7 +135,7 @@ impl<T: Real, Th: Throughput<T>> PhaseValue<T, Th> {
     /// `F S`: the phase matrix applied to the light `light` (in the packet's frame; the
     /// packet's own Stokes vector, for which `F` was prepared), in the exit frame, a valid
     /// Stokes vector — projected onto the cone where rounding left it outside, as the surfaces'
-    /// [`crate::interaction::MuellerResponse::apply`].
+    /// [`crate::interaction::polarization::MuellerResponse::apply`].
     ///
     /// The raw product `phase.apply(light)` rounds on its own: where the output is far below
     /// the input (polarized scattered light leaving near the dipole's null, `F S₀ ∝ cos²Θ`) the

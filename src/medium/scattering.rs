@@ -24,10 +24,9 @@ use super::spectrum::VolumeLobes;
 use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::gaussian::Gaussian;
-use crate::interaction::{
-    CoherenceLevel, CoherenceModel, Plan, PolarizationLevel, PolarizationModel, PreparedPacket,
-    onto_cone, unit_scaled,
-};
+use crate::interaction::coherence::{CoherenceLevel, CoherenceModel};
+use crate::interaction::polarization::{PolarizationLevel, PolarizationModel};
+use crate::interaction::{Plan, PreparedPacket, onto_cone, unit_scaled};
 use crate::numerics::cholesky;
 use crate::packet::{Channel, CoherenceShape, WavePacket};
 use crate::psd::Psd;

@@ -1,6 +1,6 @@
 //! The normalised autocorrelation `ρ = R/σ²` of a height PSD, in the spatial domain: what the
 //! Kirchhoff phase screen needs for PSDs whose powers `F{ρⁿ}` have no closed form
-//! ([`crate::interaction::KirchhoffQuadrature`]).
+//! ([`crate::interaction::roughness::KirchhoffQuadrature`]).
 
 use nalgebra::Vector2;
 

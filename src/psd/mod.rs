@@ -197,8 +197,8 @@ pub trait BlurMethod<T: Real, const N: usize, P: ?Sized> {
 
     /// `true` when this method's blur of a Gaussian PSD is the exact closed form (as
     /// [`ClosedForm`]'s), so that a caller may use an equivalent closed form of its own (the
-    /// Kirchhoff series sums all its orders in one, [`crate::interaction::KirchhoffSeries`]);
-    /// `false` by default (quadratures).
+    /// Kirchhoff series sums all its orders in one,
+    /// [`crate::interaction::roughness::KirchhoffSeries`]); `false` by default (quadratures).
     #[inline]
     #[must_use]
     fn exact_for_gaussians(&self) -> bool {
@@ -235,7 +235,8 @@ pub struct ClosedForm;
 /// ```
 /// use gmueller::gaussian::Gaussian;
 /// use gmueller::frame::Frame;
-/// use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, PhaseScreen, RoughSurface};
+/// use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, RoughSurface};
+/// use gmueller::interaction::pbsdf::PhaseScreen;
 /// use gmueller::packet::{CoherenceShape, WavePacket};
 /// use gmueller::psd::{BlurMethod, ClosedForm, ClosedFormBlur, Form, Psd, Shape};
 /// use gmueller::real::Real;

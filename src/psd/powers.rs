@@ -1,6 +1,6 @@
 //! The spectra of the powers of a normalised autocorrelation, `F{σ² ρˣ}` with `ρ = R/σ²`: the
 //! terms of the Kirchhoff series of a rough surface beyond first order
-//! ([`crate::interaction::KirchhoffSeries`]).
+//! ([`crate::interaction::roughness::KirchhoffSeries`]).
 
 use nalgebra::Matrix2;
 

@@ -43,11 +43,16 @@ use gmueller::Real;
 use gmueller::bsdf::{Bsdf, LobeFlags, SurfaceCoherence};
 use gmueller::error::Error;
 use gmueller::frame::Frame;
+use gmueller::interaction::coherence::{
+    CoherenceWeights, surface_coherence_term, surface_inverse_coherence,
+};
+use gmueller::interaction::pbsdf::Pbsdf;
+use gmueller::interaction::polarization::{
+    KernelOutput, MuellerResponse, PolarizationModel, Response,
+};
 use gmueller::interaction::{
-    CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput, MuellerResponse,
-    OneShape, Partial, Pbsdf, PlaneWave, PolarizationModel, Response, RoughConductor,
-    RoughDielectric, RoughSurface, SmoothConductor, SmoothDielectric, surface_coherence_term,
-    surface_inverse_coherence,
+    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, RoughConductor,
+    RoughDielectric, RoughSurface, SmoothConductor, SmoothDielectric,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
@@ -1925,7 +1930,7 @@ where
     S: gmueller::bsdf::BsdfSurface<T>,
     K: gmueller::bsdf::BsdfKernel<T, S::Psd>,
 {
-    use gmueller::interaction::Throughput as _;
+    use gmueller::interaction::polarization::Throughput as _;
     let eps = T::EPSILON.to_f64();
     let direct = b.prepare_surface(s, c).unwrap();
     let packet = b

@@ -25,10 +25,11 @@ use gmueller::Real;
 use gmueller::bsdf::{Bsdf, Interface, SurfaceCoherence};
 use gmueller::error::Error;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    CoherenceWeights, Kernel, KernelOutput, Level, LevelVisitor, PolarizationModel, RayleighRice,
-    RoughConductor, RoughDielectric, RoughSurface, Throughput,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::level::LevelVisitor;
+use gmueller::interaction::pbsdf::RayleighRice;
+use gmueller::interaction::polarization::{KernelOutput, PolarizationModel, Throughput};
+use gmueller::interaction::{Kernel, Level, RoughConductor, RoughDielectric, RoughSurface};
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussianPsd, Grating};
 use gmueller::stokes::Stokes;

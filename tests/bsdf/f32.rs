@@ -17,9 +17,8 @@ use gmueller::Real;
 use gmueller::bsdf::{Bsdf, DirectionSample, Part, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::RoughSurface;
-use gmueller::interaction::{
-    Kernel, KirchhoffDielectric, KirchhoffSeries, OneShape, PlaneWave, Side,
-};
+use gmueller::interaction::roughness::KirchhoffSeries;
+use gmueller::interaction::{Kernel, KirchhoffDielectric, OneShape, PlaneWave, Side};
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
@@ -244,17 +243,17 @@ where
     T: Real,
     P: gmueller::psd::Psd<T, 2>,
     Sp: gmueller::bsdf::Interface<T>,
-    Sc: gmueller::interaction::Pbsdf<T>,
-    Pol: gmueller::interaction::PolarizationModel,
-    Coh: gmueller::interaction::CoherenceWeights<T, P>,
-    Rough: gmueller::interaction::RoughnessWeights<T, P, Coh>,
+    Sc: gmueller::interaction::pbsdf::Pbsdf<T>,
+    Pol: gmueller::interaction::polarization::PolarizationModel,
+    Coh: gmueller::interaction::coherence::CoherenceWeights<T, P>,
+    Rough: gmueller::interaction::roughness::RoughnessWeights<T, P, Coh>,
 {
     fn probe(
         &self,
         packet: &WavePacket<T>,
         mirror: Vector3<T>,
     ) -> Option<(gmueller::bsdf::LobeFlags, Vec<(bool, Part)>, T, bool)> {
-        use gmueller::interaction::Throughput;
+        use gmueller::interaction::polarization::Throughput;
         let inc = self.prepare(packet).ok()?;
         let flags = self.incident_flags(&inc);
         let sampler = self.exit_sampler(&inc).ok()?;

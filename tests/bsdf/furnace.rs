@@ -21,9 +21,11 @@ use common::rng::SplitMix64;
 use gmueller::bsdf::{Bsdf, Interface, LobeSampler, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::RoughSurface;
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::Pbsdf;
+use gmueller::interaction::polarization::{PolarizationModel, Throughput};
 use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, Partial, Pbsdf, PolarizationModel, RoughConductor,
-    RoughDielectric, SmoothDielectric, Throughput,
+    Full, Kernel, Partial, RoughConductor, RoughDielectric, SmoothDielectric,
 };
 use gmueller::packet::WavePacket;
 use gmueller::psd::{GaussHermite, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation};

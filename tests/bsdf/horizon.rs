@@ -26,9 +26,9 @@ use gmueller::Real;
 use gmueller::bsdf::{Bsdf, Incident, Interface, SurfaceCoherence};
 use gmueller::frame::Frame;
 use gmueller::interaction::RoughSurface;
-use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, Partial, Pbsdf, Side, SmoothConductor, SmoothDielectric,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::Pbsdf;
+use gmueller::interaction::{Full, Kernel, Partial, Side, SmoothConductor, SmoothDielectric};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::stokes::Stokes;
 use gmueller::verify::quadrature::{Hemisphere, hemisphere_albedo};

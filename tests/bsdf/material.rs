@@ -8,10 +8,13 @@
 
 use gmueller::bsdf::{Bsdf, Interface, Material, ShadingPoint, SurfaceCoherence};
 use gmueller::frame::Frame;
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::level::{LevelVisitor, RoughLevelVisitor};
+use gmueller::interaction::pbsdf::Pbsdf;
+use gmueller::interaction::polarization::{PolarizationModel, Throughput};
+use gmueller::interaction::roughness::{KirchhoffSeries, RoughnessWeights};
 use gmueller::interaction::{
-    CoherenceWeights, Kernel, KirchhoffSeries, Level, LevelVisitor, Pbsdf, PolarizationModel,
-    RoughConductor, RoughDielectric, RoughLevelVisitor, RoughSurface, Roughness, RoughnessWeights,
-    Throughput,
+    Kernel, Level, RoughConductor, RoughDielectric, RoughSurface, Roughness,
 };
 use gmueller::mueller::Mueller;
 use gmueller::psd::{

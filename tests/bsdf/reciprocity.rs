@@ -25,9 +25,9 @@ use common::SplitMix64;
 use common::hemisphere::{Hemisphere, hemisphere_integral};
 use gmueller::bsdf::{Bsdf, Interface, SurfaceCoherence};
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, Partial, Pbsdf, PlaneWave, RoughConductor, RoughDielectric,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::Pbsdf;
+use gmueller::interaction::{Full, Kernel, Partial, PlaneWave, RoughConductor, RoughDielectric};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;

@@ -19,10 +19,11 @@ use crate::common;
 use common::SplitMix64;
 use gmueller::bsdf::{Bsdf, SurfaceCoherence};
 use gmueller::frame::Frame;
+use gmueller::interaction::polarization::Throughput;
+use gmueller::interaction::roughness::{Geometric, KirchhoffQuadrature, KirchhoffSeries};
 use gmueller::interaction::{
-    Full, Geometric, Geometry, Intensity, Kernel, KirchhoffConductor, KirchhoffDielectric,
-    KirchhoffQuadrature, KirchhoffSeries, Partial, PlaneWave, RoughConductor, RoughDielectric,
-    Throughput,
+    Full, Geometry, Intensity, Kernel, KirchhoffConductor, KirchhoffDielectric, Partial, PlaneWave,
+    RoughConductor, RoughDielectric,
 };
 use gmueller::psd::{GaussHermite, GaussianMixturePsd, GaussianPsd, Grating, KCorrelation};
 use gmueller::stokes::Stokes;
@@ -221,7 +222,7 @@ const STEPS: [(f64, f64); 3] = [(0.04, 2.0), (0.12, 2.0), (0.4, 2.0)];
 /// docs), bit for bit; and the series adds to first order where `vσ ≳ 1`.
 #[test]
 fn rough_eval_is_the_kernel_at_that_level() {
-    use gmueller::interaction::MuellerResponse;
+    use gmueller::interaction::polarization::MuellerResponse;
     use gmueller::mueller::Mueller;
     fn same(
         a: &MuellerResponse<f64, Mueller<f64>>,

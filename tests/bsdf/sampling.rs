@@ -613,7 +613,7 @@ impl gmueller::psd::Autocorrelation<f64> for OriginPsd {
 #[test]
 fn a_scattered_delta_beyond_first_order_reports_its_probability() {
     use gmueller::bsdf::Part;
-    use gmueller::interaction::KirchhoffQuadrature;
+    use gmueller::interaction::roughness::KirchhoffQuadrature;
     let f = frame();
     let psd = OriginPsd(GaussianPsd::isotropic(0.05, 2.0).unwrap());
     let m = RoughDielectric::new(psd, 1.5).unwrap();

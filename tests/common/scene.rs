@@ -6,10 +6,10 @@ use std::f64::consts::PI;
 
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    CoherenceWeights, FresnelReflection, Geometry, Kernel, Pbsdf, PolarizationModel, RayleighRice,
-    RoughSurface,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::{FresnelReflection, Pbsdf, RayleighRice};
+use gmueller::interaction::polarization::PolarizationModel;
+use gmueller::interaction::{Geometry, Kernel, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;

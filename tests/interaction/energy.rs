@@ -15,9 +15,9 @@ use std::f64::consts::{PI, TAU};
 use common::hemisphere::{Hemisphere, hemisphere_integral};
 use common::scene::{DEG, dir, fresnel_rs_rp, glass, packet, surface};
 use common::{Tol, assert_close, gauss_legendre};
+use gmueller::interaction::pbsdf::{ConstantMueller, Pbsdf, PhaseScreen};
 use gmueller::interaction::{
-    ConstantMueller, Geometry, Intensity, Kernel, OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave,
-    RoughSurface,
+    Geometry, Intensity, Kernel, OneShape, Partial, PlaneWave, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::psd::GaussianPsd;

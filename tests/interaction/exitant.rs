@@ -1,13 +1,15 @@
-//! Verifies the exitant-packet shape update (`interaction::exitant_shape`): the coherence area is
-//! conserved (det U = 1) in every direction, and in the specular direction the result equals the
-//! incident shape carried by the geometric map "project along the incident direction onto the
-//! surface, then onto the exit transverse plane", computed here independently from dot products.
+//! Verifies the exitant-packet shape update (`interaction::exitant::exitant_shape`): the coherence
+//! area is conserved (det U = 1) in every direction, and in the specular direction the result
+//! equals the incident shape carried by the geometric map "project along the incident direction
+//! onto the surface, then onto the exit transverse plane", computed here independently from dot
+//! products.
 
 use crate::common;
 
 use common::{Tol, assert_all_close, assert_close};
 use gmueller::frame::Frame;
-use gmueller::interaction::{Geometry, exitant_packet, exitant_shape};
+use gmueller::interaction::Geometry;
+use gmueller::interaction::exitant::{exitant_packet, exitant_shape};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Vector3};

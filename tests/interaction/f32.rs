@@ -10,9 +10,8 @@
 
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    Geometry, Intensity, Kernel, KirchhoffDielectric, KirchhoffSeries, Partial, PlaneWave,
-};
+use gmueller::interaction::roughness::KirchhoffSeries;
+use gmueller::interaction::{Geometry, Intensity, Kernel, KirchhoffDielectric, Partial, PlaneWave};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
@@ -191,7 +190,7 @@ struct RrCase {
 /// The Rayleigh–Rice Mueller matrix of `c` in `T` (inputs rounded to `f32` first), entries as
 /// `f64`.
 fn rr_mueller<T: Real>(c: &RrCase) -> Option<[f64; 16]> {
-    use gmueller::interaction::{Pbsdf, RayleighRice};
+    use gmueller::interaction::pbsdf::{Pbsdf, RayleighRice};
     use num_complex::Complex;
     let l = |x: f64| T::lit(r32(x));
     let rr = RayleighRice::new(Complex::new(l(c.eta.0), l(c.eta.1))).ok()?;

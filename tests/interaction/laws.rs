@@ -19,11 +19,16 @@ use common::{Tol, assert_all_close, assert_close};
 use gmueller::Real;
 use gmueller::error::Error;
 use gmueller::frame::{Frame, frame_change_mueller};
+use gmueller::interaction::coherence::{
+    CoherenceModel, surface_coherence_term, surface_inverse_coherence,
+};
+use gmueller::interaction::pbsdf::{
+    ConstantMueller, FresnelReflection, Pbsdf, PhaseScreen, RayleighRice,
+};
+use gmueller::interaction::polarization::{PolarizationModel, Response};
 use gmueller::interaction::{
-    CoherenceModel, ConstantMueller, FresnelReflection, Full, Geometry, Incoherent, Intensity,
-    Kernel, OneShape, Partial, Pbsdf, PhaseScreen, PlaneWave, PolarizationModel, RayleighRice,
-    Response, RoughDielectric, RoughSurface, Side, surface_coherence_term,
-    surface_inverse_coherence,
+    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, RoughDielectric,
+    RoughSurface, Side,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;

@@ -14,10 +14,11 @@ use gmueller::Real;
 use gmueller::error::Error;
 use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::fresnel;
-use gmueller::interaction::{
-    CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, KernelOutput, Level, LevelVisitor,
-    Partial, Pbsdf, PolarizationModel, RayleighRice, RoughSurface,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::level::LevelVisitor;
+use gmueller::interaction::pbsdf::{FresnelReflection, Pbsdf, RayleighRice};
+use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
+use gmueller::interaction::{Full, Geometry, Kernel, Level, Partial, RoughSurface};
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussHermite, GaussianPsd, KCorrelation, Psd};

@@ -20,9 +20,11 @@ use crate::common;
 
 use common::{Tol, assert_close, matrix4_from_rows};
 use gmueller::frame::{Frame, frame_change_mueller};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf, RayleighRice};
+use gmueller::interaction::polarization::{PolarizationModel, Response};
 use gmueller::interaction::{
-    CoherenceWeights, FresnelInterface, FresnelReflection, Full, Geometry, Kernel, Partial, Pbsdf,
-    PlaneWave, PolarizationModel, RayleighRice, Response, RoughDielectric, RoughSurface, Side,
+    Full, Geometry, Kernel, Partial, PlaneWave, RoughDielectric, RoughSurface, Side,
 };
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;

@@ -41,10 +41,9 @@ use std::f64::consts::{PI, TAU};
 use common::{Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::{
-    ConstantMueller, Geometry, Intensity, Kernel, Partial, RoughSurface, surface_coherence_term,
-    volume_coherence_term,
-};
+use gmueller::interaction::coherence::{surface_coherence_term, volume_coherence_term};
+use gmueller::interaction::pbsdf::ConstantMueller;
+use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, RoughSurface};
 use gmueller::mueller::Mueller;
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
 use gmueller::psd::{BlurMethod, ClosedForm, GaussianPsd};

@@ -14,10 +14,9 @@ use common::quadrature::{gauss_legendre, integrate};
 use common::{SplitMix64, Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
+use gmueller::interaction::pbsdf::{FresnelReflection, RayleighRice};
 use gmueller::interaction::sampling::{RadialProfile, ScatterSampler, weight};
-use gmueller::interaction::{
-    FresnelReflection, Geometry, Intensity, Kernel, Partial, RayleighRice, RoughSurface,
-};
+use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{GaussianPsd, KCorrelation};
 use gmueller::stokes::Stokes;

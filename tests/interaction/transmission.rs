@@ -21,10 +21,12 @@ use common::hemisphere::{Hemisphere, hemisphere_integral};
 use common::scene::{DEG, fresnel_rs_rp, rel_diff, surface};
 use common::{Tol, assert_all_close, assert_close, entries4};
 use gmueller::frame::Frame;
+use gmueller::interaction::exitant::exitant_packet;
+use gmueller::interaction::pbsdf::Pbsdf;
+use gmueller::interaction::polarization::{KernelOutput, PolarizationModel, Response};
 use gmueller::interaction::{
-    Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput, Level, OneShape, Partial, Pbsdf,
-    PlaneWave, PolarizationModel, Response, RoughDielectric, Side, SmoothDielectric,
-    exitant_packet,
+    Full, Geometry, Incoherent, Intensity, Kernel, Level, OneShape, Partial, PlaneWave,
+    RoughDielectric, Side, SmoothDielectric,
 };
 use gmueller::jones::JonesMatrix;
 use gmueller::mueller::Mueller;
@@ -521,7 +523,8 @@ fn transmitted_levels_tend_to_their_limits() {
             exit: Vector3<f64>,
         ) -> Response<f64>
         where
-            Coh: gmueller::interaction::CoherenceWeights<f64, GaussianPsd<f64, 2>> + Default,
+            Coh: gmueller::interaction::coherence::CoherenceWeights<f64, GaussianPsd<f64, 2>>
+                + Default,
         {
             let g = material.geometry_for_packet(pk, &surface(), exit).unwrap();
             assert_eq!(g.side(), Side::Transmission);

@@ -21,10 +21,9 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use common::{Tol, assert_close};
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
-    Throughput, volume_coherence_term,
-};
+use gmueller::interaction::coherence::volume_coherence_term;
+use gmueller::interaction::polarization::{PolarizationModel, Throughput};
+use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave};
 use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, Scatterer, VolumeCoherence};
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussianPsd, KCorrelation};

@@ -12,10 +12,8 @@ use common::medium::{gaussian, simple, turned, widened};
 use common::{Tol, assert_close, log_uniform, proptest_config};
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
-    Throughput,
-};
+use gmueller::interaction::polarization::{PolarizationModel, Throughput};
+use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave};
 use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{GaussianPsd, KCorrelation};

@@ -14,10 +14,8 @@ use common::quadrature::integrate;
 use common::{SplitMix64, Tol, log_uniform, proptest_config};
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
-    Throughput,
-};
+use gmueller::interaction::polarization::{PolarizationModel, Throughput};
+use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave};
 use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, Scatterer, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, Form, GaussHermite, GaussianPsd, KCorrelation, Psd, Shape};

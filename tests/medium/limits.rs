@@ -8,10 +8,8 @@ use common::medium::{gaussian, simple, turned};
 use common::{Tol, assert_close};
 use gmueller::Real;
 use gmueller::frame::{Frame, stokes_to_frame};
-use gmueller::interaction::{
-    Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
-    Throughput,
-};
+use gmueller::interaction::polarization::{PolarizationModel, Throughput};
+use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave};
 use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, Scalar, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;

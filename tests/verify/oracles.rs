@@ -385,7 +385,7 @@ fn the_energy_assertion_on_a_conductor() {
 #[test]
 fn the_section_integral_psd_and_tau_oracles() {
     use gmueller::frame::tau;
-    use gmueller::interaction::surface_inverse_coherence;
+    use gmueller::interaction::coherence::surface_inverse_coherence;
     use gmueller::packet::Channel;
     use nalgebra::Matrix3;
 

@@ -28,10 +28,11 @@
 #![allow(dead_code)]
 
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    ConstantMueller, FirstOrder, Geometry, Intensity, Kernel, KirchhoffQuadrature, KirchhoffSeries,
-    Partial, PhaseScreen, RoughSurface, RoughnessWeights, Side,
+use gmueller::interaction::pbsdf::{ConstantMueller, PhaseScreen};
+use gmueller::interaction::roughness::{
+    FirstOrder, KirchhoffQuadrature, KirchhoffSeries, RoughnessWeights,
 };
+use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, RoughSurface, Side};
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{

@@ -7,7 +7,7 @@
 //!
 //! [`predict_from_primitives`] assembles the same prediction independently of
 //! `gmueller::medium`, from the derivation below and the crate's lower-level primitives —
-//! `gmueller::interaction::volume_coherence_term` (the 3-D coherence term `K³_α`),
+//! `gmueller::interaction::coherence::volume_coherence_term` (the 3-D coherence term `K³_α`),
 //! `WavePacket::with_longitudinal_coherence` (`σ_zz`), `GaussianPsd::<_, 3>` (or the 3-D
 //! K-correlation's mixture fit), and the Rayleigh dipole's Mueller matrix from its Jones matrix
 //! with `Mueller::from_jones` and the crate's frame changes; a unit test holds the medium to it
@@ -50,7 +50,8 @@
 //! (2-D, on a slab: `γ = 2`), blurred through its Gaussian-mixture fit to 1e-7 of `p(0)`.
 
 use gmueller::frame::{Frame, mueller_to_frames, stokes_to_frame};
-use gmueller::interaction::{Full, Kernel, Partial, surface_coherence_term, volume_coherence_term};
+use gmueller::interaction::coherence::{surface_coherence_term, volume_coherence_term};
+use gmueller::interaction::{Full, Kernel, Partial};
 use gmueller::jones::JonesMatrix;
 use gmueller::medium::{Dipole, RandomMedium};
 use gmueller::mueller::Mueller;

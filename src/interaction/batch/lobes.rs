@@ -15,10 +15,10 @@ use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
 use crate::interaction::polarization::KernelOutput;
-use crate::interaction::{
-    CoherenceModel, CoherenceWeights, Geometry, Kernel, PolarizationModel, Surface,
-};
+use crate::interaction::polarization::PolarizationModel;
+use crate::interaction::{Geometry, Kernel, Surface};
 use crate::packet::WavePacket;
 use crate::real::Real;
 use nalgebra::Vector3;

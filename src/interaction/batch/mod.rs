@@ -23,7 +23,8 @@ use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
 
 use super::geometry::Geometry;
-use super::{ConstantMueller, Full, Kernel, PlaneWave, RayleighRice, RoughSurface};
+use super::pbsdf::{ConstantMueller, RayleighRice};
+use super::{Full, Kernel, PlaneWave, RoughSurface};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::mueller::Mueller;
@@ -202,8 +203,8 @@ impl<'a, T> StokesSoa<'a, T> {
 /// ```
 /// use gmueller::frame::Frame;
 /// use gmueller::interaction::batch::{DirectionsSoa, StokesSoa, plane_wave_rayleigh_rice};
-/// use gmueller::interaction::{FresnelReflection, Full, Geometry, Kernel, PlaneWave,
-///     RayleighRice, RoughSurface};
+/// use gmueller::interaction::{Full, Geometry, Kernel, PlaneWave, RoughSurface};
+/// use gmueller::interaction::pbsdf::{FresnelReflection, RayleighRice};
 /// use gmueller::packet::{CoherenceShape, WavePacket};
 /// use gmueller::psd::{ClosedForm, GaussianPsd};
 /// use gmueller::stokes::Stokes;

@@ -29,9 +29,9 @@
 //! [`Partial`]: crate::interaction::Partial
 //! [`ClosedForm`]: crate::psd::ClosedForm
 //! [`Incoherent`]: crate::interaction::Incoherent
-//! [`FresnelReflection`]: crate::interaction::FresnelReflection
-//! [`FresnelInterface`]: crate::interaction::FresnelInterface
-//! [`RayleighRice`]: crate::interaction::RayleighRice
+//! [`FresnelReflection`]: crate::interaction::pbsdf::FresnelReflection
+//! [`FresnelInterface`]: crate::interaction::pbsdf::FresnelInterface
+//! [`RayleighRice`]: crate::interaction::pbsdf::RayleighRice
 //! [`Full`]: crate::interaction::Full
 //! [`OneShape`]: crate::interaction::OneShape
 //! [`Intensity`]: crate::interaction::Intensity
@@ -46,12 +46,12 @@ use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::interaction::coherence::{CoherenceLevel, CoherenceWeights};
+use crate::interaction::pbsdf::{FresnelInterface, RayleighRice};
 use crate::interaction::pbsdf::{Pbsdf, PbsdfForm};
+use crate::interaction::polarization::PolarizationModel;
 use crate::interaction::polarization::{KernelOutput, PolarizationLevel};
-use crate::interaction::{
-    CoherenceLevel, CoherenceWeights, FresnelInterface, Geometry, Kernel, PolarizationModel,
-    PreparedPacket, RayleighRice, Surface,
-};
+use crate::interaction::{Geometry, Kernel, PreparedPacket, Surface};
 use crate::packet::WavePacket;
 use crate::psd::{GaussianPsd, Psd};
 use crate::real::Real;
@@ -686,9 +686,8 @@ mod tests {
     /// `try_evaluate` takes the lane path for exactly the documented kernels and materials.
     #[test]
     fn the_lane_path_is_taken_where_documented() {
-        use crate::interaction::{
-            FresnelInterface, Intensity, OneShape, PlaneWave, RayleighRice, RoughDielectric,
-        };
+        use crate::interaction::pbsdf::{FresnelInterface, RayleighRice};
+        use crate::interaction::{Intensity, OneShape, PlaneWave, RoughDielectric};
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
         let travel = Vector3::new(0.4, 0.1, -0.91).normalize();
         let packet = WavePacket::new(

@@ -437,7 +437,7 @@ impl<T: Real> LobePrep<T> {
         mut self,
         eta: T,
         surface: &Frame<T>,
-        specular: &crate::interaction::FresnelInterface<T>,
+        specular: &crate::interaction::pbsdf::FresnelInterface<T>,
     ) -> Option<Self> {
         let consts = TransmissionConsts::new(&self.inc)?;
         let inc = &self.inc;

@@ -16,7 +16,9 @@ use super::partial::{PartialLobes, lane_prep, scalar_exit};
 use super::prep::LobePrep;
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::{CoherenceModel, CoherenceWeights, Kernel, PolarizationModel, Surface};
+use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
+use crate::interaction::polarization::PolarizationModel;
+use crate::interaction::{Kernel, Surface};
 use crate::packet::WavePacket;
 use crate::real::Real;
 
@@ -233,9 +235,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
 mod tests {
     use super::*;
     use crate::interaction::batch::StokesSoa;
+    use crate::interaction::pbsdf::Pbsdf;
     use crate::interaction::{
-        Full, Incoherent, Intensity, OneShape, Partial, Pbsdf, PlaneWave, RoughConductor,
-        RoughDielectric, RoughSurface,
+        Full, Incoherent, Intensity, OneShape, Partial, PlaneWave, RoughConductor, RoughDielectric,
+        RoughSurface,
     };
     use crate::packet::CoherenceShape;
     use crate::psd::{GaussianPsd, Psd};

@@ -5,7 +5,7 @@ use nalgebra::Vector2;
 use num_complex::Complex;
 
 use super::*;
-use crate::interaction::Pbsdf;
+use crate::interaction::pbsdf::Pbsdf;
 use crate::psd::Psd;
 use crate::simd::exp::vexp;
 

@@ -8,6 +8,13 @@
 //! and transmission (and, at an interface, light from either side); [`FresnelReflection`] is an
 //! opaque reflector (0 in a transmission geometry); [`ConstantMueller`] and [`IdealDiffuse`] are
 //! the same on both sides.
+//!
+//! Here: the [`Pbsdf`] trait and the built-in forms the kernel's SIMD lanes recognize
+//! ([`PbsdfForm`]); the Fresnel pBSDFs of the coherent lobes ([`FresnelReflection`],
+//! [`FresnelInterface`]); the scatterers ([`RayleighRice`], [`PhaseScreen`], [`TangentPlane`]);
+//! and the simple ones ([`ConstantMueller`], the ideal depolarizer [`IdealDiffuse`]). The complete materials that pair
+//! them with a PSD ([`super::RoughDielectric`], [`super::RoughConductor`], …) are at the top of
+//! [`super`].
 
 mod constant;
 mod fresnel_interface;

@@ -20,7 +20,7 @@ use crate::real::Real;
 /// mean plane equals the incident field times `e^{−i v z}`, `t = 1`) has `τ = η`.
 /// This is the model of the reference wave-optics tracer (`wave_tracer`); with the kernel's roughness attenuation it
 /// is the first term of the Beckmann–Kirchhoff series, and with the roughness level
-/// [`crate::interaction::KirchhoffSeries`] the whole series.
+/// [`crate::interaction::roughness::KirchhoffSeries`] the whole series.
 ///
 /// # Energy: not conserved near grazing incidence (a limit of the model)
 /// On a lossless screen (`|r|² = 1`, mirror specular part) the plane-wave reflected fraction is

@@ -27,9 +27,9 @@ use crate::real::Real;
 /// 1991, ch. 4; Tsang, Kong & Ding 2000, §6) the polarization amplitude is that of the facet
 /// at the stationary point `m ∝ h`, and what remains is the scalar phase-screen integral
 /// `∫ ⟨e^{iv(z₁ − z₂)}⟩ e^{−i h_t·ξ} d²ξ` — the Kirchhoff series of
-/// [`super::super::KirchhoffSeries`], with the phase screen's `v²` replaced by this matrix. The
-/// factor `(r̂·h)²/cos²θ_o` is fixed by the series' geometric-optics limit: there the scalar
-/// integral becomes `(2π)² P(−h_t/v)/v²`, `P` the slope density, and the kernel's
+/// [`super::super::roughness::KirchhoffSeries`], with the phase screen's `v²` replaced by this
+/// matrix. The factor `(r̂·h)²/cos²θ_o` is fixed by the series' geometric-optics limit: there the
+/// scalar integral becomes `(2π)² P(−h_t/v)/v²`, `P` the slope density, and the kernel's
 /// `(cos θ_o/λ_t²)(M/v²)(2π)² P/v²` equals the microfacet BSDF (Walter et al., EGSR 2007, with
 /// the shadowing term G = 1) times `cos θ_i`,
 /// ```text

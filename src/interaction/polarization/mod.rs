@@ -10,6 +10,13 @@
 //! `Full` on a packet with one shape (`Θ_x = Θ_y`, e.g. every packet from
 //! `WavePacket::from_stokes` and `exitant_packet`) has three equal weights and takes the
 //! one-weight path of `OneShape`: same result, same cost.
+//!
+//! Here: the level markers [`Intensity`], [`OneShape`] and [`Full`] (also re-exported at the top
+//! of [`super`], for `Kernel::<Pol, Coh>`), their trait ([`PolarizationModel`], with the
+//! per-packet work it plans, [`PreparationPlan`]) and values ([`PolarizationLevel`]); the
+//! kernel's outputs in Stokes form ([`Response`], [`IntensityResponse`], [`LevelResponse`], all
+//! [`KernelOutput`]) and in BSDF form ([`MuellerResponse`], whose lobes are [`Throughput`]s: the
+//! trait whose `m00`, `scaled`, `then` … a renderer generic over the level calls).
 
 mod matrix;
 mod response;

@@ -490,8 +490,8 @@ impl<T: Real> Throughput<T> for T {
 /// medium: `M` includes the rotation `T` from the packet frame to the incident s/p frame. It is
 /// the kernel's response, divided by nothing: `apply(packet.stokes())` equals the kernel's
 /// Stokes output (`tests/bsdf/eval.rs`). For one coherence shape (`Θ_x = Θ_y`, every packet of
-/// the source helpers and of [`crate::interaction::exitant_packet`]) `Σ_α K_α P_α = K I`: the
-/// matrix is `K` times the pBSDF's Mueller matrix. With distinct shapes the block
+/// the source helpers and of [`crate::interaction::exitant::exitant_packet`]) `Σ_α K_α P_α = K I`:
+/// the matrix is `K` times the pBSDF's Mueller matrix. With distinct shapes the block
 /// `[[K_x+K_y, K_x−K_y],[K_x−K_y, K_x+K_y]]/2 ⊕ K_½ I₂` is valid on the Stokes vectors those
 /// shapes admit (`|μ|² ≤ √(|Θ_x||Θ_y|)/|Θ_½|`, [`crate::packet`]): `K_½` is capped at
 /// `√(K_x K_y)/|μ|_max`, the Cauchy–Schwarz bound that the exact weights satisfy.

@@ -15,7 +15,7 @@
 //! (`ρ = R/σ²`; [`CorrelationPowers`]). Why: for Gaussian heights the phase screen's two-point
 //! average is `⟨e^{iv(z₁ − z₂)}⟩ = e^{−g} e^{g ρ(ξ)} = e^{−g} + Σ_{n≥1} w_n ρⁿ(ξ)`, so its spectrum
 //! is the coherent `e^{−g}` (the specular part, unchanged at every level) plus
-//! `Σ w_n F{ρⁿ} = (v²/g) Σ w_n p_n`; the `v²` is the pBSDF's ([`super::PhaseScreen`]:
+//! `Σ w_n F{ρⁿ} = (v²/g) Σ w_n p_n`; the `v²` is the pBSDF's ([`super::pbsdf::PhaseScreen`]:
 //! `M = |r|² v² I₄`). The `n = 1` term is `α v² p`: **the first-order kernel is exactly the
 //! series' first term**, so the series is a strict extension (`w_1/g = α`). Where `g → ∞` the
 //! weights concentrate at `n ≈ g ± √g` and the sum tends to its single term `n = g`, the
@@ -27,6 +27,12 @@
 //! coherence level's weight of the term's PSD, for every channel of the polarization level),
 //! and the series is summed in log space, so `e^{−g}` far below the range of `T` and `gⁿ/n!`
 //! far above it never meet.
+//!
+//! Here: the level markers [`FirstOrder`] (the kernel's default), [`KirchhoffSeries`],
+//! [`Geometric`] and [`KirchhoffQuadrature`], their traits ([`RoughnessModel`], the weights
+//! [`RoughnessWeights`]) and values ([`RoughnessLevel`]; the run-time selector with parameters is
+//! [`super::Roughness`]), what the series returns (its sum and the orders summed, [`SeriesSum`]), and the Debye–Waller
+//! attenuation `α` of the specular part ([`roughness_attenuation`]).
 //!
 //! # Truncation (the tolerance of [`KirchhoffSeries`])
 //! The terms `t_n = (w_n/g) K[p_n]` of a Gaussian PSD are log-concave in `n` for the plane-wave
@@ -55,6 +61,7 @@
 
 mod quadrature;
 
+pub use super::attenuation::roughness_attenuation;
 pub use quadrature::KirchhoffQuadrature;
 
 use core::fmt::Debug;
@@ -130,8 +137,9 @@ pub trait RoughnessWeights<T: Real, P: Psd<T, 2>, Coh: CoherenceWeights<T, P>>:
 }
 
 /// First order in the heights (the crate's kernel before the series; the default):
-/// `L_scat = C α M T K[p]`. With [`super::RayleighRice`] the Rayleigh–Rice (Born) level, with
-/// [`super::PhaseScreen`] the first term of the Kirchhoff series. Valid while `vσ ≲ 0.3`.
+/// `L_scat = C α M T K[p]`. With [`super::pbsdf::RayleighRice`] the Rayleigh–Rice (Born) level,
+/// with [`super::pbsdf::PhaseScreen`] the first term of the Kirchhoff series. Valid while
+/// `vσ ≲ 0.3`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FirstOrder;
 
@@ -142,8 +150,9 @@ pub struct FirstOrder;
 /// # Examples
 /// ```
 /// use gmueller::frame::Frame;
-/// use gmueller::interaction::{FirstOrder, Geometry, Intensity, Kernel, KirchhoffSeries, Partial,
-///     PhaseScreen, RoughSurface};
+/// use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, RoughSurface};
+/// use gmueller::interaction::pbsdf::PhaseScreen;
+/// use gmueller::interaction::roughness::{FirstOrder, KirchhoffSeries};
 /// use gmueller::packet::{CoherenceShape, WavePacket};
 /// use gmueller::psd::GaussianPsd;
 /// use gmueller::stokes::Stokes;

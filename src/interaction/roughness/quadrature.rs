@@ -48,8 +48,9 @@ use crate::real::Real;
 ///
 /// # Examples
 /// ```
-/// use gmueller::interaction::{Geometry, Intensity, Kernel, KirchhoffQuadrature,
-///     KirchhoffSeries, Partial, PhaseScreen, RoughSurface};
+/// use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, RoughSurface};
+/// use gmueller::interaction::pbsdf::PhaseScreen;
+/// use gmueller::interaction::roughness::{KirchhoffQuadrature, KirchhoffSeries};
 /// # use gmueller::frame::Frame;
 /// # use gmueller::packet::{CoherenceShape, WavePacket};
 /// # use gmueller::stokes::Stokes;

@@ -25,9 +25,12 @@ use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa, Wavelength};
+use gmueller::interaction::coherence::{CoherenceModel, CoherenceWeights};
+use gmueller::interaction::pbsdf::Pbsdf;
+use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
 use gmueller::interaction::{
-    CoherenceModel, CoherenceWeights, Full, Geometry, Incoherent, Intensity, Kernel, KernelOutput,
-    OneShape, Partial, Pbsdf, PolarizationModel, RoughConductor, RoughDielectric, RoughSurface,
+    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, RoughConductor,
+    RoughDielectric, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
@@ -535,13 +538,13 @@ mod by_level {
     use gmueller::error::Error;
     use gmueller::frame::Frame;
     use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
-    use gmueller::interaction::{
-        CoherenceModel, CoherenceWeights, Geometry, Kernel, KernelOutput, Pbsdf, PolarizationModel,
-        RoughSurface,
-    };
+    use gmueller::interaction::coherence::{CoherenceModel, CoherenceWeights};
+    use gmueller::interaction::pbsdf::Pbsdf;
+    use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
     use gmueller::interaction::{
         Full, Incoherent, Intensity, OneShape, Partial, PlaneWave, RoughConductor, RoughDielectric,
     };
+    use gmueller::interaction::{Geometry, Kernel, RoughSurface};
     use gmueller::packet::CoherenceShape;
     use gmueller::packet::WavePacket;
     use gmueller::psd::Psd;
@@ -704,7 +707,7 @@ mod by_level {
         Sp: 'static,
         Sc: 'static,
     {
-        use gmueller::interaction::PolarizationLevel as L;
+        use gmueller::interaction::polarization::PolarizationLevel as L;
         let any: &dyn core::any::Any = material;
         let coh: &dyn core::any::Any = kernel.coherence();
         let conductor = any.is::<RoughConductor<T, GaussianPsd<T, 2>>>()
@@ -882,13 +885,14 @@ mod lanes {
     use gmueller::Real;
     use gmueller::frame::Frame;
     use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
+    use gmueller::interaction::coherence::CoherenceWeights;
+    use gmueller::interaction::pbsdf::Pbsdf;
+    use gmueller::interaction::pbsdf::{FresnelInterface, FresnelReflection, RayleighRice};
+    use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
     use gmueller::interaction::{
-        CoherenceWeights, Geometry, Kernel, KernelOutput, Pbsdf, PolarizationModel, RoughSurface,
+        Full, Incoherent, Intensity, OneShape, Partial, RoughConductor, RoughDielectric,
     };
-    use gmueller::interaction::{
-        FresnelInterface, FresnelReflection, Full, Incoherent, Intensity, OneShape, Partial,
-        RayleighRice, RoughConductor, RoughDielectric,
-    };
+    use gmueller::interaction::{Geometry, Kernel, RoughSurface};
     use gmueller::packet::CoherenceShape;
     use gmueller::packet::WavePacket;
     use gmueller::psd::GaussianPsd;

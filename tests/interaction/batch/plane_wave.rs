@@ -27,10 +27,8 @@ use gmueller::error::Error;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::batch::{DirectionsSoa, StokesSoa, plane_wave_rayleigh_rice};
-use gmueller::interaction::{
-    FresnelReflection, Full, Geometry, Kernel, OneShape, Pbsdf, PlaneWave, RayleighRice,
-    RoughSurface,
-};
+use gmueller::interaction::pbsdf::{FresnelReflection, Pbsdf, RayleighRice};
+use gmueller::interaction::{Full, Geometry, Kernel, OneShape, PlaneWave, RoughSurface};
 use gmueller::mueller::batch::padded_stride;
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{GaussianPsd, Psd};

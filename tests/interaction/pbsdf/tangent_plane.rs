@@ -13,10 +13,11 @@ use std::f64::consts::TAU;
 
 use common::{Tol, assert_close};
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    FresnelInterface, FresnelReflection, Full, Geometric, Geometry, Intensity, Kernel, Partial,
-    Pbsdf, PlaneWave, RayleighRice, RoughSurface, TangentPlane,
+use gmueller::interaction::pbsdf::{
+    FresnelInterface, FresnelReflection, Pbsdf, RayleighRice, TangentPlane,
 };
+use gmueller::interaction::roughness::Geometric;
+use gmueller::interaction::{Full, Geometry, Intensity, Kernel, Partial, PlaneWave, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;

@@ -65,9 +65,11 @@ use common::oracle::{
 use common::{Tol, assert_all_close};
 use gmueller::Real;
 use gmueller::frame::Frame;
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::{ConstantMueller, RayleighRice};
+use gmueller::interaction::polarization::{PolarizationModel, Response};
 use gmueller::interaction::{
-    CoherenceWeights, ConstantMueller, Full, Geometry, Incoherent, Kernel, OneShape, Partial,
-    PlaneWave, PolarizationModel, RayleighRice, Response, RoughSurface,
+    Full, Geometry, Incoherent, Kernel, OneShape, Partial, PlaneWave, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};

@@ -13,10 +13,11 @@ use common::hemisphere::{Hemisphere, hemisphere_integral};
 use common::{Tol, assert_close};
 use gmueller::Real;
 use gmueller::frame::Frame;
+use gmueller::interaction::pbsdf::{ConstantMueller, FresnelReflection, PhaseScreen, TangentPlane};
+use gmueller::interaction::polarization::PolarizationModel;
+use gmueller::interaction::roughness::{FirstOrder, Geometric, KirchhoffSeries, RoughnessWeights};
 use gmueller::interaction::{
-    ConstantMueller, FirstOrder, FresnelReflection, Full, Geometric, Geometry, Incoherent,
-    Intensity, Kernel, KirchhoffSeries, OneShape, Partial, PhaseScreen, PlaneWave,
-    PolarizationModel, RoughSurface, RoughnessWeights, TangentPlane,
+    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
@@ -44,7 +45,7 @@ fn reflected_fraction<Sc, R>(
     rough: R,
 ) -> (f64, f64)
 where
-    Sc: gmueller::interaction::Pbsdf<f64>,
+    Sc: gmueller::interaction::pbsdf::Pbsdf<f64>,
     R: RoughnessWeights<f64, GaussianPsd<f64, 2>, PlaneWave>,
 {
     let lambda = 0.5;
@@ -256,10 +257,10 @@ fn scattered<T, Pol, Coh, R>(
 where
     T: Real,
     Pol: PolarizationModel,
-    Coh: gmueller::interaction::CoherenceWeights<T, GaussianPsd<T, 2>>,
+    Coh: gmueller::interaction::coherence::CoherenceWeights<T, GaussianPsd<T, 2>>,
     R: RoughnessWeights<T, GaussianPsd<T, 2>, Coh>,
 {
-    use gmueller::interaction::KernelOutput;
+    use gmueller::interaction::polarization::KernelOutput;
     let out = Kernel::<Pol, Coh>::new(coherence)
         .with_roughness(rough)
         .evaluate(m, pk, g);

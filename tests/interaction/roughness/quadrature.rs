@@ -14,10 +14,12 @@ use std::f64::consts::TAU;
 
 use common::{Tol, assert_close};
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    CoherenceWeights, FirstOrder, Geometry, Intensity, Kernel, KirchhoffQuadrature,
-    KirchhoffSeries, Partial, PhaseScreen, PlaneWave, RoughSurface, RoughnessWeights,
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::PhaseScreen;
+use gmueller::interaction::roughness::{
+    FirstOrder, KirchhoffQuadrature, KirchhoffSeries, RoughnessWeights,
 };
+use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, PlaneWave, RoughSurface};
 use gmueller::packet::{Channel, CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussHermite, GaussianMixturePsd, GaussianPsd, KCorrelation, Psd};
 use gmueller::stokes::Stokes;

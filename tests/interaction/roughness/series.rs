@@ -14,10 +14,10 @@ use std::f64::consts::TAU;
 use common::{Tol, assert_close};
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::{
-    CoherenceWeights, Geometric, Geometry, Intensity, Kernel, KirchhoffSeries, Partial,
-    PhaseScreen, PlaneWave, RoughSurface, RoughnessWeights,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::PhaseScreen;
+use gmueller::interaction::roughness::{Geometric, KirchhoffSeries, RoughnessWeights};
+use gmueller::interaction::{Geometry, Intensity, Kernel, Partial, PlaneWave, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{BlurMethod, ClosedForm, GaussianPsd, Psd};
 use gmueller::stokes::Stokes;
@@ -264,8 +264,13 @@ fn series_equals_the_phase_screen_integral() {
                     let want = e.powi(3) * g.cos_o() / (LAMBDA * LAMBDA)
                         * phase_screen_integral(gg, &c, &xi, h);
                     let got = scattered_at(series, plane_wave, &m, &pk, &g);
-                    let fo =
-                        scattered_at(gmueller::interaction::FirstOrder, plane_wave, &m, &pk, &g);
+                    let fo = scattered_at(
+                        gmueller::interaction::roughness::FirstOrder,
+                        plane_wave,
+                        &m,
+                        &pk,
+                        &g,
+                    );
                     worst_first = worst_first.max((fo / want - 1.0).abs());
                     assert_close(
                         &format!(

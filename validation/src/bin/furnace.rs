@@ -24,8 +24,10 @@ use std::fmt::Write as _;
 
 use gmueller::bsdf::{Bsdf, Interface, SurfaceCoherence};
 use gmueller::frame::Frame;
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::Pbsdf;
 use gmueller::interaction::{
-    CoherenceWeights, Full, Kernel, Partial, Pbsdf, RoughSurface, SmoothConductor, SmoothDielectric,
+    Full, Kernel, Partial, RoughSurface, SmoothConductor, SmoothDielectric,
 };
 use gmueller::psd::Psd;
 use gmueller::stokes::Stokes;

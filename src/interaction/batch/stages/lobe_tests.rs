@@ -26,10 +26,9 @@ use super::channels::{
 use super::fixture::{PerWidth, chunks, every_width, lanes_of, load, same, scenes};
 use super::specular::fresnel_stokes;
 use crate::interaction::batch::prep::{LobePrep, LogGaussian};
-use crate::interaction::{
-    CoherenceModel, CoherenceWeights, FresnelReflection, Full, Geometry, Kernel, Partial, Pbsdf,
-    PreparedPacket,
-};
+use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
+use crate::interaction::pbsdf::{FresnelReflection, Pbsdf};
+use crate::interaction::{Full, Geometry, Kernel, Partial, PreparedPacket};
 use crate::numerics::principal_sqrt;
 use crate::packet::{CoherenceShape, WavePacket};
 use crate::psd::{ClosedForm, GaussianMixturePsd, GaussianPsd, Psd};

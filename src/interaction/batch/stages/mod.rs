@@ -73,7 +73,8 @@ pub(crate) mod fixture {
 
     use super::super::prep::PlaneWavePrep;
     use crate::frame::Frame;
-    use crate::interaction::{Geometry, RayleighRice};
+    use crate::interaction::Geometry;
+    use crate::interaction::pbsdf::RayleighRice;
     use crate::packet::{CoherenceShape, WavePacket};
     use crate::psd::GaussianPsd;
     use crate::real::Real;

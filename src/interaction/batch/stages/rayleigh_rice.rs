@@ -151,7 +151,8 @@ mod tests {
     };
     use super::*;
     use crate::frame::Frame;
-    use crate::interaction::{Geometry, RayleighRice, Side};
+    use crate::interaction::pbsdf::RayleighRice;
+    use crate::interaction::{Geometry, Side};
     use crate::packet::{CoherenceShape, WavePacket};
     use crate::stokes::Stokes;
 

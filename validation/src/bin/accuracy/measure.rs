@@ -8,10 +8,12 @@ use std::time::{Duration, Instant};
 use gmueller::Real;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa, plane_wave_rayleigh_rice};
+use gmueller::interaction::coherence::{CoherenceLevel, CoherenceModel, CoherenceWeights};
+use gmueller::interaction::level::LevelVisitor;
+use gmueller::interaction::pbsdf::{Pbsdf, RayleighRice};
+use gmueller::interaction::polarization::{KernelOutput, PolarizationLevel, PolarizationModel};
 use gmueller::interaction::{
-    CoherenceLevel, CoherenceModel, CoherenceWeights, Full, Geometry, Intensity, Kernel,
-    KernelOutput, Level, LevelVisitor, OneShape, Partial, Pbsdf, PolarizationLevel,
-    PolarizationModel, RayleighRice, RoughSurface,
+    Full, Geometry, Intensity, Kernel, Level, OneShape, Partial, RoughSurface,
 };
 use gmueller::psd::{Adaptive, BlurMethod, ClosedForm, GaussHermite, GaussianPsd, Psd};
 use nalgebra::{Matrix2, Vector2};

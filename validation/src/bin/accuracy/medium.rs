@@ -34,10 +34,8 @@ use std::time::Instant;
 
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, PolarizationModel,
-    Throughput,
-};
+use gmueller::interaction::polarization::{PolarizationModel, Throughput};
+use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave};
 use gmueller::medium::{Dipole, PhaseFunction, RandomMedium, VolumeCoherence};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{

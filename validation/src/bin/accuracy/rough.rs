@@ -27,10 +27,10 @@ use std::time::{Duration, Instant};
 
 use gmueller::Real;
 use gmueller::frame::Frame;
-use gmueller::interaction::{
-    CoherenceWeights, FirstOrder, FresnelReflection, Full, Geometric, Geometry, Kernel,
-    KirchhoffSeries, Partial, Pbsdf, RayleighRice, RoughSurface, RoughnessWeights, TangentPlane,
-};
+use gmueller::interaction::coherence::CoherenceWeights;
+use gmueller::interaction::pbsdf::{FresnelReflection, Pbsdf, RayleighRice, TangentPlane};
+use gmueller::interaction::roughness::{FirstOrder, Geometric, KirchhoffSeries, RoughnessWeights};
+use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{ClosedForm, GaussianPsd};
 use gmueller::stokes::Stokes;

@@ -4,9 +4,8 @@
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::{
-    FresnelReflection, Geometry, RayleighRice, RoughDielectric, RoughSurface,
-};
+use gmueller::interaction::pbsdf::{FresnelReflection, RayleighRice};
+use gmueller::interaction::{Geometry, RoughDielectric, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::{
     BlurMethod, ClosedForm, ClosedFormBlur, Form, GaussianMixturePsd, GaussianPsd, Grating,
