@@ -63,22 +63,21 @@ use core::fmt::Debug;
 use nalgebra::Vector3;
 
 use super::{
-    Bsdf, BsdfSample, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler, Part,
-    SampledLobe, SurfaceCoherence,
+    Bsdf, BsdfSample, BsdfSurface, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler,
+    Part, SampledLobe, SurfaceCoherence,
 };
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::coherence::{CoherenceLevel, CoherenceWeights};
-use crate::interaction::pbsdf::Pbsdf;
 use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
 use crate::interaction::roughness::{FirstOrder, Geometric, RoughnessWeights};
 use crate::interaction::{
-    Full, Geometry, Incoherent, Intensity, Kernel, Level, OneShape, Partial, PlaneWave,
-    RoughSurface, Roughness, Side,
+    Full, Geometry, Incoherent, Intensity, Kernel, Level, OneShape, Partial, PlaneWave, Roughness,
+    Side,
 };
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
-use crate::psd::{BlurMethod, ClosedForm, CorrelationPowers, Psd};
+use crate::psd::{BlurMethod, ClosedForm, CorrelationPowers};
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -145,12 +144,10 @@ impl<T: Real> Material<T> {
     /// [`ClosedForm`]: Gaussian PSDs and their mixtures, gratings, smooth surfaces; other PSDs
     /// take [`Material::with_blur`]).
     #[must_use]
-    pub fn new<P, Sp, Sc>(surface: RoughSurface<P, Sp, Sc>, level: Level) -> Self
+    pub fn new<S>(surface: S, level: Level) -> Self
     where
-        P: Psd<T, 2> + Debug + Send + Sync + 'static,
-        Sp: Interface<T> + Debug + Send + Sync + 'static,
-        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
-        ClosedForm: BlurMethod<T, 2, P>,
+        S: BsdfSurface<T> + Debug + Send + Sync + 'static,
+        ClosedForm: BlurMethod<T, 2, S::Psd>,
     {
         Self::with_blur(surface, level, ClosedForm)
     }
@@ -158,14 +155,12 @@ impl<T: Real> Material<T> {
     /// `surface` at the first-order `level`, Partial coherence blurring by `blur` (e.g.
     /// [`crate::psd::GaussHermite`] for a K-correlation PSD).
     #[must_use]
-    pub fn with_blur<P, Sp, Sc, B>(surface: RoughSurface<P, Sp, Sc>, level: Level, blur: B) -> Self
+    pub fn with_blur<S, B>(surface: S, level: Level, blur: B) -> Self
     where
-        P: Psd<T, 2> + Debug + Send + Sync + 'static,
-        Sp: Interface<T> + Debug + Send + Sync + 'static,
-        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
-        B: BlurMethod<T, 2, P> + Clone + Debug + Send + Sync + 'static,
+        S: BsdfSurface<T> + Debug + Send + Sync + 'static,
+        B: BlurMethod<T, 2, S::Psd> + Clone + Debug + Send + Sync + 'static,
     {
-        let opaque = surface.specular.transmission_index().is_none();
+        let opaque = surface.parts().specular.transmission_index().is_none();
         Self {
             model: build(surface, level, blur, FirstOrder),
             level,
@@ -178,18 +173,13 @@ impl<T: Real> Material<T> {
     /// whose autocorrelation powers are known, [`CorrelationPowers`]), Partial coherence
     /// blurring in closed form.
     #[must_use]
-    pub fn with_roughness<P, Sp, Sc>(
-        surface: RoughSurface<P, Sp, Sc>,
-        level: Level,
-        roughness: Roughness,
-    ) -> Self
+    pub fn with_roughness<S>(surface: S, level: Level, roughness: Roughness) -> Self
     where
-        P: Psd<T, 2> + CorrelationPowers<T> + Debug + Send + Sync + 'static,
-        Sp: Interface<T> + Debug + Send + Sync + 'static,
-        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
-        ClosedForm: BlurMethod<T, 2, P> + BlurMethod<T, 2, P::Power>,
+        S: BsdfSurface<T, Psd: CorrelationPowers<T>> + Debug + Send + Sync + 'static,
+        ClosedForm:
+            BlurMethod<T, 2, S::Psd> + BlurMethod<T, 2, <S::Psd as CorrelationPowers<T>>::Power>,
     {
-        let opaque = surface.specular.transmission_index().is_none();
+        let opaque = surface.parts().specular.transmission_index().is_none();
         let model = match roughness {
             Roughness::FirstOrder => build(surface, level, ClosedForm, FirstOrder),
             Roughness::Series(series) => build(surface, level, ClosedForm, series),
@@ -205,19 +195,14 @@ impl<T: Real> Material<T> {
 
     /// `surface` evaluated by a kernel chosen by type (any blur method or roughness level).
     #[must_use]
-    pub fn from_kernel<P, Sp, Sc, Pol, Coh, Rough>(
-        surface: RoughSurface<P, Sp, Sc>,
-        kernel: Kernel<Pol, Coh, Rough>,
-    ) -> Self
+    pub fn from_kernel<S, Pol, Coh, Rough>(surface: S, kernel: Kernel<Pol, Coh, Rough>) -> Self
     where
-        P: Psd<T, 2> + Debug + Send + Sync + 'static,
-        Sp: Interface<T> + Debug + Send + Sync + 'static,
-        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+        S: BsdfSurface<T> + Debug + Send + Sync + 'static,
         Pol: PolarizationModel + Send + Sync + 'static,
-        Coh: CoherenceWeights<T, P> + Send + Sync + 'static,
-        Rough: RoughnessWeights<T, P, Coh> + Send + Sync + 'static,
+        Coh: CoherenceWeights<T, S::Psd> + Send + Sync + 'static,
+        Rough: RoughnessWeights<T, S::Psd, Coh> + Send + Sync + 'static,
     {
-        let opaque = surface.specular.transmission_index().is_none();
+        let opaque = surface.parts().specular.transmission_index().is_none();
         Self {
             model: Box::new(Model { surface, kernel }),
             level: Level::new(Pol::LEVEL, Coh::LEVEL),
@@ -559,8 +544,8 @@ trait Shade<T: Real>: Send + Sync + Debug {
 
 /// A surface with its kernel.
 #[derive(Debug)]
-struct Model<P, Sp, Sc, Pol, Coh, Rough> {
-    surface: RoughSurface<P, Sp, Sc>,
+struct Model<S, Pol, Coh, Rough> {
+    surface: S,
     kernel: Kernel<Pol, Coh, Rough>,
 }
 
@@ -587,15 +572,13 @@ fn sample_to_mueller<T: Real, M: Throughput<T>>(s: BsdfSample<T, M>) -> BsdfSamp
     }
 }
 
-impl<T, P, Sp, Sc, Pol, Coh, Rough> Shade<T> for Model<P, Sp, Sc, Pol, Coh, Rough>
+impl<T, S, Pol, Coh, Rough> Shade<T> for Model<S, Pol, Coh, Rough>
 where
     T: Real,
-    P: Psd<T, 2> + Debug + Send + Sync,
-    Sp: Interface<T> + Debug + Send + Sync,
-    Sc: Pbsdf<T> + Debug + Send + Sync,
+    S: BsdfSurface<T> + Debug + Send + Sync,
     Pol: PolarizationModel + Send + Sync,
-    Coh: CoherenceWeights<T, P> + Send + Sync,
-    Rough: RoughnessWeights<T, P, Coh> + Send + Sync,
+    Coh: CoherenceWeights<T, S::Psd> + Send + Sync,
+    Rough: RoughnessWeights<T, S::Psd, Coh> + Send + Sync,
 {
     fn flags(&self) -> LobeFlags {
         // The flags do not depend on the frame or the wavelength.
@@ -730,39 +713,27 @@ where
 
 /// The boxed model of `surface` at `level` with the blur method `blur` (Partial coherence) and
 /// the roughness level `rough`: one monomorphised [`Model`] per arm.
-fn build<T, P, Sp, Sc, B, R>(
-    surface: RoughSurface<P, Sp, Sc>,
-    level: Level,
-    blur: B,
-    rough: R,
-) -> Box<dyn Shade<T>>
+fn build<T, S, B, R>(surface: S, level: Level, blur: B, rough: R) -> Box<dyn Shade<T>>
 where
     T: Real,
-    P: Psd<T, 2> + Debug + Send + Sync + 'static,
-    Sp: Interface<T> + Debug + Send + Sync + 'static,
-    Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
-    B: BlurMethod<T, 2, P> + Clone + Debug + Send + Sync + 'static,
-    R: RoughnessWeights<T, P, PlaneWave>
-        + RoughnessWeights<T, P, Partial<B>>
-        + RoughnessWeights<T, P, Incoherent>
+    S: BsdfSurface<T> + Debug + Send + Sync + 'static,
+    B: BlurMethod<T, 2, S::Psd> + Clone + Debug + Send + Sync + 'static,
+    R: RoughnessWeights<T, S::Psd, PlaneWave>
+        + RoughnessWeights<T, S::Psd, Partial<B>>
+        + RoughnessWeights<T, S::Psd, Incoherent>
         + Send
         + Sync
         + 'static,
 {
     use CoherenceLevel as C;
     use PolarizationLevel as Pl;
-    fn boxed<T, P, Sp, Sc, Pol, Coh, R>(
-        surface: RoughSurface<P, Sp, Sc>,
-        kernel: Kernel<Pol, Coh, R>,
-    ) -> Box<dyn Shade<T>>
+    fn boxed<T, S, Pol, Coh, R>(surface: S, kernel: Kernel<Pol, Coh, R>) -> Box<dyn Shade<T>>
     where
         T: Real,
-        P: Psd<T, 2> + Debug + Send + Sync + 'static,
-        Sp: Interface<T> + Debug + Send + Sync + 'static,
-        Sc: Pbsdf<T> + Debug + Send + Sync + 'static,
+        S: BsdfSurface<T> + Debug + Send + Sync + 'static,
         Pol: PolarizationModel + Send + Sync + 'static,
-        Coh: CoherenceWeights<T, P> + Send + Sync + 'static,
-        R: RoughnessWeights<T, P, Coh> + Send + Sync + 'static,
+        Coh: CoherenceWeights<T, S::Psd> + Send + Sync + 'static,
+        R: RoughnessWeights<T, S::Psd, Coh> + Send + Sync + 'static,
     {
         Box::new(Model { surface, kernel })
     }

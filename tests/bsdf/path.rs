@@ -12,6 +12,7 @@
 //!   positive wavelength whose wavenumber overflows (a subnormal `f32`) is refused by the
 //!   material's calls with an error, not a panic.
 
+use crate::common;
 use gmueller::bsdf::{Material, PathThroughput, ShadingPoint, SurfaceCoherence};
 use gmueller::frame::{Frame, frame_change_mueller};
 use gmueller::interaction::{Level, RoughConductor, RoughDielectric};
@@ -330,29 +331,11 @@ fn uniform_incident_sampling_is_the_unweighted_twin_of_sample_incident() {
                 sq_i += w.component_mul(&w);
             }
         }
-        let stats = |sum: Matrix4<f64>, sq: Matrix4<f64>, n: usize| {
-            let mean = sum / n as f64;
-            let var = (sq / n as f64 - mean.component_mul(&mean)) / (n as f64 - 1.0);
-            (mean, var)
-        };
-        let (mu, vu) = stats(sum_u, sq_u, n);
-        let (mi, vi) = stats(sum_i, sq_i, ni);
-        for k in 0..16 {
-            let se = (vu[k] + vi[k]).sqrt();
-            let z = (mu[k] - mi[k]) / se.max(1e-12);
-            assert!(
-                z.abs() < 4.5,
-                "{name}: entry {k}: uniform {} vs sampler {} (z {z})",
-                mu[k],
-                mi[k]
-            );
-        }
+        let [(mu, su), (mi, si)] =
+            common::assert_same_mean(name, (sum_u, sq_u, n), (sum_i, sq_i, ni), 4.5);
         println!(
             "{name}: albedo (M00) uniform {:.4} ± {:.4}, sampler {:.4} ± {:.4}",
-            mu[0],
-            vu[0].sqrt(),
-            mi[0],
-            vi[0].sqrt()
+            mu[0], su[0], mi[0], si[0]
         );
     }
 }

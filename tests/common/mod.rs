@@ -14,6 +14,34 @@ pub use gmueller::verify::tol::{
     F32, F64, Tol, assert_all_close, assert_close, assert_complex_close,
 };
 
+/// Two Monte Carlo estimates of one Mueller matrix, each from the sums of its draws and of their
+/// squares over `n` draws (refused draws count as zeros): their means agree within `z_max`
+/// standard errors in every entry. Returns the two means and their standard errors.
+pub fn assert_same_mean(
+    what: &str,
+    a: (Matrix4<f64>, Matrix4<f64>, usize),
+    b: (Matrix4<f64>, Matrix4<f64>, usize),
+    z_max: f64,
+) -> [(Matrix4<f64>, Matrix4<f64>); 2] {
+    let stats = |(sum, sq, n): (Matrix4<f64>, Matrix4<f64>, usize)| {
+        let mean = sum / n as f64;
+        let var = (sq / n as f64 - mean.component_mul(&mean)) / (n as f64 - 1.0);
+        (mean, var.map(f64::sqrt))
+    };
+    let ((ma, sa), (mb, sb)) = (stats(a), stats(b));
+    for k in 0..16 {
+        let se = sa[k].hypot(sb[k]);
+        let z = (ma[k] - mb[k]) / se.max(1e-12);
+        assert!(
+            z.abs() < z_max,
+            "{what}: entry {k}: {} vs {} (z {z})",
+            ma[k],
+            mb[k]
+        );
+    }
+    [(ma, sa), (mb, sb)]
+}
+
 /// `Matrix4<f64>` entries, row-major, for comparisons.
 pub fn entries4(m: &Matrix4<f64>) -> Vec<f64> {
     (0..4)

@@ -21,7 +21,7 @@ use nalgebra::{Matrix2, Matrix4, Vector2, Vector3};
 use num_complex::Complex;
 use proptest::prelude::*;
 
-use crate::common::{SplitMix64, Tol, assert_close, proptest_config};
+use crate::common::{self, SplitMix64, Tol, assert_close, proptest_config};
 
 /// `∫ p d²ζ = 2π σ²` by a midpoint lattice sum over `[−ζ_max, ζ_max]²` (no polar
 /// coordinates, no use of the closed form of `c`): the band's two circular edges cost the
@@ -323,31 +323,13 @@ fn bsdf_sampler_is_unbiased_through_the_named_form() {
                 sq_i += w.component_mul(&w);
             }
         }
-        let stats = |sum: Matrix4<f64>, sq: Matrix4<f64>, n: usize| {
-            let mean = sum / n as f64;
-            let var = (sq / n as f64 - mean.component_mul(&mean)) / (n as f64 - 1.0);
-            (mean, var)
-        };
-        let (mu, vu) = stats(sum_u, sq_u, batches);
-        let (mi, vi) = stats(sum_i, sq_i, ni);
-        for k in 0..16 {
-            let se = (vu[k] + vi[k]).sqrt();
-            let z = (mu[k] - mi[k]) / se.max(1e-12);
-            assert!(
-                z.abs() < 4.5,
-                "{name}: entry {k}: uniform {} vs sampler {} (z {z})",
-                mu[k],
-                mi[k]
-            );
-        }
-        assert!(mu[0] > 10.0 * vu[0].sqrt(), "{name}: nothing scattered");
+        let [(mu, su), (mi, si)] =
+            common::assert_same_mean(name, (sum_u, sq_u, batches), (sum_i, sq_i, ni), 4.5);
+        assert!(mu[0] > 10.0 * su[0], "{name}: nothing scattered");
         println!(
             "{name}: scattered M00 uniform {:.4} ± {:.4}, sampler {:.4} ± {:.4} \
              ({scattered} scattered draws, {outside} of them outside the band)",
-            mu[0],
-            vu[0].sqrt(),
-            mi[0],
-            vi[0].sqrt()
+            mu[0], su[0], mi[0], si[0]
         );
     }
 }
