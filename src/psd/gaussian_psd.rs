@@ -82,7 +82,7 @@ fn require(ok: bool, what: &'static str, value: f64, expected: &'static str) -> 
 }
 
 /// `σ²` from `σ`: finite, and positive unless `σ = 0`.
-fn variance_of<T: Real>(what: &'static str, rms_height: T) -> Result<T, Error> {
+pub(super) fn variance_of<T: Real>(what: &'static str, rms_height: T) -> Result<T, Error> {
     check_nonnegative(what, rms_height)?;
     let v = rms_height * rms_height;
     require(

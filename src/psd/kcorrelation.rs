@@ -44,7 +44,7 @@ pub struct KCorrelation<T: Real, const N: usize> {
 }
 
 /// `NonFinite` for NaN/∞, `OutOfRange` otherwise.
-fn bad<T: Real>(what: &'static str, v: T, expected: &'static str) -> Error {
+pub(super) fn bad<T: Real>(what: &'static str, v: T, expected: &'static str) -> Error {
     if v.is_finite() {
         Error::OutOfRange {
             what,

@@ -2,6 +2,8 @@
 
 use nalgebra::SVector;
 
+use super::gaussian_psd::variance_of;
+use super::kcorrelation::bad;
 use super::special::ln_gamma;
 use super::{Form, Psd, Shape};
 use crate::error::Error;
@@ -68,19 +70,6 @@ pub struct PowerLaw<T: Real, const N: usize> {
     ln_c: T,
 }
 
-/// `NonFinite` for NaN/∞, `OutOfRange` otherwise.
-fn bad<T: Real>(what: &'static str, v: T, expected: &'static str) -> Error {
-    if v.is_finite() {
-        Error::OutOfRange {
-            what,
-            value: v.to_f64(),
-            expected,
-        }
-    } else {
-        Error::NonFinite { what }
-    }
-}
-
 impl<T: Real, const N: usize> PowerLaw<T, N> {
     /// From the rms `σ` (`σ² = R(0)`, the squared rms height for a surface), the exponent
     /// `α > n` and the band `ζ_min < ζ_max` in rad/length.
@@ -100,17 +89,7 @@ impl<T: Real, const N: usize> PowerLaw<T, N> {
     /// assert!(PowerLaw::<f64, 2>::new(1e-3, 3.0, 10.0, 0.1).is_err()); // ζ_min ≥ ζ_max
     /// ```
     pub fn new(rms: T, exponent: T, zeta_min: T, zeta_max: T) -> Result<Self, Error> {
-        if !(rms.is_finite() && rms >= T::zero()) {
-            return Err(bad("power-law rms σ", rms, "[0, ∞)"));
-        }
-        let variance = rms * rms;
-        if !(variance.is_finite() && (variance > T::zero() || rms == T::zero())) {
-            return Err(bad(
-                "power-law rms σ",
-                rms,
-                "σ² a finite number, > 0 unless σ = 0",
-            ));
-        }
+        let variance = variance_of("power-law rms σ", rms)?;
         let n = N as f64;
         if !(exponent.is_finite() && exponent.to_f64() > n) {
             return Err(bad("power-law exponent α", exponent, "(n, ∞)"));
