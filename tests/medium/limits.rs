@@ -399,3 +399,26 @@ fn silent_medium_and_dark_packet() {
     );
     assert!((fa - fb).amax() <= 1e-14 * fb.amax());
 }
+
+/// A medium's permittivity has a continuous PSD: one whose form is zero or Dirac (`Smooth` of
+/// zero or positive weight) is refused by `prepare` with `Error::Unrealizable`, in both
+/// precisions, not prepared into a phase function of NaN.
+#[test]
+fn zero_or_dirac_psd_is_refused() {
+    fn run<T: Real>() {
+        let p = simple::<T>([1.0, 0.2, 0.0, 0.1], Matrix2::identity() * 9.0, None, 0.6);
+        for weight in [0.0, 1e-6] {
+            let m = RandomMedium::new(
+                gmueller::psd::Smooth::<T>::new(T::lit(weight)).unwrap(),
+                Dipole,
+            );
+            let got = PhaseFunction::new(&m, Kernel::<Full, PlaneWave>::default()).prepare(&p);
+            assert!(
+                matches!(got, Err(gmueller::Error::Unrealizable { .. })),
+                "weight {weight}: {got:?}"
+            );
+        }
+    }
+    run::<f32>();
+    run::<f64>();
+}
