@@ -35,11 +35,11 @@
 use nalgebra::{Matrix2, Vector3};
 use num_complex::Complex;
 
-use crate::error::{Error, ensure_finite};
+use crate::error::Error;
 use crate::frame::{Frame, tau};
 use crate::jones::JonesMatrix;
 use crate::mueller::Mueller;
-use crate::numerics::unit_by_largest;
+use crate::numerics::unit_direction;
 use crate::real::Real;
 use crate::stokes::GeneralizedStokes;
 
@@ -79,13 +79,6 @@ fn positive<T: Real>(what: &'static str, v: T) -> Result<T, Error> {
     }
 }
 
-fn unit<T: Real>(what: &'static str, v: &Vector3<T>) -> Result<Vector3<T>, Error> {
-    ensure_finite(what, v.iter().copied())?;
-    unit_by_largest(v).ok_or(Error::InvalidBasis {
-        reason: "zero vector",
-    })
-}
-
 /// `e^{iθ}`.
 fn cis<T: Real>(theta: T) -> Complex<T> {
     let (s, c) = theta.sin_cos();
@@ -112,8 +105,8 @@ pub fn smythe_amplitude<T: Real>(
     aperture: &[ApertureSample<T>],
 ) -> Result<Vector3<Complex<T>>, Error> {
     let k = T::two_pi() / positive("wavelength", wavelength)?;
-    let n = unit("aperture normal", normal)?.map(|x| Complex::new(x, T::zero()));
-    let r = unit("far-field direction", direction)?;
+    let n = unit_direction(normal, "aperture normal")?.map(|x| Complex::new(x, T::zero()));
+    let r = unit_direction(direction, "far-field direction")?;
     let mut sum = Vector3::<Complex<T>>::zeros();
     for s in aperture {
         let phase = cis(-k * r.dot(&s.position)) * s.weight;
@@ -264,12 +257,12 @@ impl<T: Real> FarFieldPair<T> {
     /// [`Error::NonFinite`] for non-finite points; [`Error::InvalidBasis`] for a point at the
     /// origin or two opposite directions (no mean direction).
     pub fn new(r1: Vector3<T>, r2: Vector3<T>) -> Result<Self, Error> {
-        unit("far-field point", &r1)?;
-        unit("far-field point", &r2)?;
+        unit_direction(&r1, "far-field point")?;
+        unit_direction(&r2, "far-field point")?;
         let pair = Self { r1, r2 };
-        unit(
-            "mean far-field direction",
+        unit_direction(
             &(pair.direction(0) + pair.direction(1)),
+            "mean far-field direction",
         )?;
         Ok(pair)
     }
@@ -281,8 +274,8 @@ impl<T: Real> FarFieldPair<T> {
     pub fn at_distance(distance: T, d1: &Vector3<T>, d2: &Vector3<T>) -> Result<Self, Error> {
         let r = positive("distance", distance)?;
         Self::new(
-            unit("far-field direction", d1)? * r,
-            unit("far-field direction", d2)? * r,
+            unit_direction(d1, "far-field direction")?.into_inner() * r,
+            unit_direction(d2, "far-field direction")?.into_inner() * r,
         )
     }
 

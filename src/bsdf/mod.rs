@@ -138,7 +138,7 @@ pub use path::PathThroughput;
 pub use sampler::{DirectionSample, LobeSampler, Part, SampledLobe};
 pub use sources::{HORIZON_RULE_Q, SurfaceCoherence, area_light, distant_disk};
 
-use nalgebra::{Matrix2, Vector3};
+use nalgebra::{Matrix2, Unit, Vector3};
 
 use crate::error::Error;
 use crate::frame::Frame;
@@ -150,6 +150,7 @@ use crate::interaction::polarization::{
 use crate::interaction::roughness::{RoughnessLevel, RoughnessModel};
 use crate::interaction::{Geometry, PreparedPacket, Side, flush_to_normal, throughput_scaled};
 use crate::mueller::Mueller;
+use crate::numerics::unit_direction;
 use crate::packet::WavePacket;
 use crate::psd::{Psd, Shape};
 use crate::real::Real;
@@ -307,14 +308,6 @@ pub type SampleResult<T, Pol> =
 pub type WeightResult<T, Pol> =
     Result<(<Pol as PolarizationModel>::Throughput<T>, Geometry<T>), Error>;
 
-/// `v/|v|`, rejecting zero and non-finite directions.
-fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
-    crate::error::ensure_finite(what, v.iter().copied())?;
-    crate::numerics::unit_by_largest(&v).ok_or(Error::InvalidBasis {
-        reason: "zero direction vector",
-    })
-}
-
 impl<'m, T, S, K> Bsdf<'m, T, S, K>
 where
     T: Real,
@@ -440,10 +433,32 @@ where
     /// As those constructors, and as [`Bsdf::wavenumber`] for ŝ.
     pub fn geometry(&self, to_source: Vector3<T>, exit: Vector3<T>) -> Result<Geometry<T>, Error> {
         let k = self.wavenumber(&to_source)?;
+        let s = unit_direction(&to_source, "direction to the source")?;
+        let r = unit_direction(&exit, "exit direction")?;
+        self.geometry_at(k, &s, &r)
+    }
+
+    /// [`Bsdf::geometry`] of unit directions, `k` the wavenumber of ŝ's medium.
+    fn geometry_at(
+        &self,
+        k: T,
+        s: &Unit<Vector3<T>>,
+        r: &Unit<Vector3<T>>,
+    ) -> Result<Geometry<T>, Error> {
         match self.eta {
-            Some(eta) => Geometry::at_interface(k, &self.surface, eta, to_source, exit),
-            None => Geometry::new(k, &self.surface, to_source, exit),
+            Some(eta) => Geometry::interface_units(k, &self.surface, eta, s, r),
+            None => Geometry::opaque_units(k, &self.surface, s, r),
         }
+    }
+
+    /// [`Bsdf::geometry`] from a prepared incident light (its ŝ is unit) to the unit exit `r`.
+    fn geometry_from(
+        &self,
+        incident: &Incident<T, K::Pol, K::Coh>,
+        r: &Unit<Vector3<T>>,
+    ) -> Result<Geometry<T>, Error> {
+        let s = Unit::new_unchecked(incident.to_source);
+        self.geometry_at(self.wavenumber(&incident.to_source)?, &s, r)
     }
 
     /// The surface coherence width of light arriving from `to_source` under `coherence`
@@ -458,7 +473,7 @@ where
         to_source: &Vector3<T>,
         coherence: &SurfaceCoherence<T>,
     ) -> Result<T, Error> {
-        let s = unit(*to_source, "direction to the source")?;
+        let s = unit_direction(to_source, "direction to the source")?;
         Ok(self.width_of(&s, self.wavenumber(&s)?, coherence))
     }
 
@@ -530,7 +545,8 @@ where
     /// arrives from ([`Bsdf::wavelength`] of `−k̂`, within 16 ulps): a packet built for another
     /// wavelength, or for the vacuum wavelength inside glass; as [`crate::interaction::Kernel::prepare`].
     pub fn prepare(&self, packet: &WavePacket<T>) -> Result<Incident<T, K::Pol, K::Coh>, Error> {
-        let s = -packet.direction();
+        // ŝ as the kernel's preparation normalises it (its incident frame is built from it).
+        let s = unit_direction(&-packet.direction(), "direction to the source")?.into_inner();
         let k = self.wavenumber(&s)?;
         if !crate::packet::same_wavenumber(k, packet.wavenumber()) {
             return Err(Error::OutOfRange {
@@ -590,7 +606,18 @@ where
         coherence: &SurfaceCoherence<T>,
         sides: [bool; 2],
     ) -> Result<Incident<T, K::Pol, K::Coh>, Error> {
-        let s = unit(to_source, "direction to the source")?;
+        let s = unit_direction(&to_source, "direction to the source")?;
+        self.surface_incident_at(&s, coherence, sides)
+    }
+
+    /// [`Bsdf::surface_incident`] of a unit direction.
+    fn surface_incident_at(
+        &self,
+        s: &Unit<Vector3<T>>,
+        coherence: &SurfaceCoherence<T>,
+        sides: [bool; 2],
+    ) -> Result<Incident<T, K::Pol, K::Coh>, Error> {
+        let s = s.into_inner();
         let k = self.wavenumber(&s)?;
         let width = self.width_of(&s, k, coherence);
         let facing = self.surface.facing(&s);
@@ -667,7 +694,16 @@ where
         incident: &Incident<T, K::Pol, K::Coh>,
         exit: Vector3<T>,
     ) -> Result<BsdfValue<T, <K::Pol as PolarizationModel>::Throughput<T>>, Error> {
-        let g = self.geometry(incident.to_source, exit)?;
+        self.eval_at(incident, &unit_direction(&exit, "exit direction")?)
+    }
+
+    /// [`Bsdf::eval`] toward the unit exit `r`.
+    fn eval_at(
+        &self,
+        incident: &Incident<T, K::Pol, K::Coh>,
+        r: &Unit<Vector3<T>>,
+    ) -> Result<BsdfValue<T, <K::Pol as PolarizationModel>::Throughput<T>>, Error> {
+        let g = self.geometry_from(incident, r)?;
         Ok(BsdfValue {
             response: incident.normalise(self.kernel.kernel().evaluate_mueller_prepared(
                 self.material.parts(),
@@ -688,7 +724,7 @@ where
         incident: &Incident<T, K::Pol, K::Coh>,
         exit: Vector3<T>,
     ) -> Result<<K::Pol as PolarizationModel>::Output<T>, Error> {
-        let g = self.geometry(incident.to_source, exit)?;
+        let g = self.geometry_from(incident, &unit_direction(&exit, "exit direction")?)?;
         let out =
             self.kernel
                 .kernel()
@@ -781,7 +817,16 @@ where
         exit: Vector3<T>,
         coherence: &SurfaceCoherence<T>,
     ) -> Result<LobeSampler<'m, T>, Error> {
-        let r = unit(exit, "exit direction")?;
+        self.incident_sampler_at(&unit_direction(&exit, "exit direction")?, coherence)
+    }
+
+    /// [`Bsdf::incident_sampler`] for the unit exit `r`.
+    fn incident_sampler_at(
+        &self,
+        r: &Unit<Vector3<T>>,
+        coherence: &SurfaceCoherence<T>,
+    ) -> Result<LobeSampler<'m, T>, Error> {
+        let r = r.into_inner();
         let k = self.wavenumber(&r)?;
         let below = r.dot(&self.surface.k()) < T::zero();
         let k_across = self.eta.map(|_| if below { self.k[0] } else { self.k[1] });
@@ -874,7 +919,18 @@ where
         incident: &Incident<T, K::Pol, K::Coh>,
         s: &DirectionSample<T>,
     ) -> WeightResult<T, K::Pol> {
-        let g = self.geometry(incident.to_source, s.direction)?;
+        let d = unit_direction(&s.direction, "sampled direction")?;
+        self.exit_weight_at(incident, s, &d)
+    }
+
+    /// [`Bsdf::exit_weight`] with the sample's direction `d` unit.
+    fn exit_weight_at(
+        &self,
+        incident: &Incident<T, K::Pol, K::Coh>,
+        s: &DirectionSample<T>,
+        d: &Unit<Vector3<T>>,
+    ) -> WeightResult<T, K::Pol> {
+        let g = self.geometry_from(incident, d)?;
         let flux = g.cos_o() / g.cos_i();
         let weight = if s.lobe.delta {
             let t = Mueller(incident.prepared.t);
@@ -906,8 +962,22 @@ where
         coherence: &SurfaceCoherence<T>,
         s: &DirectionSample<T>,
     ) -> WeightResult<T, K::Pol> {
+        let r = unit_direction(&exit, "exit direction")?;
+        let d = unit_direction(&s.direction, "sampled direction")?;
+        self.incident_weight_at(&r, coherence, s, &d)
+    }
+
+    /// [`Bsdf::incident_weight`] for the unit exit `exit`, the sample's direction `to_source`
+    /// unit.
+    fn incident_weight_at(
+        &self,
+        exit: &Unit<Vector3<T>>,
+        coherence: &SurfaceCoherence<T>,
+        s: &DirectionSample<T>,
+        to_source: &Unit<Vector3<T>>,
+    ) -> WeightResult<T, K::Pol> {
         if s.lobe.delta {
-            let g = self.geometry(s.direction, exit)?;
+            let g = self.geometry_at(self.wavenumber(to_source)?, to_source, exit)?;
             // The delta's integral over ŝ: (k_o² cos θ_o)/(k_i² cos θ_i) times its integral over r̂.
             let ratio = g.relative_index();
             let jac = ratio * ratio * g.cos_o() / g.cos_i();
@@ -926,8 +996,8 @@ where
         // Only the exit's side of the coherent lobe is evaluated: its mass alone.
         let reflected =
             s.direction.dot(&self.surface.k()) * exit.dot(&self.surface.k()) > T::zero();
-        let light = self.surface_incident(s.direction, coherence, [reflected, !reflected])?;
-        let v = self.eval(&light, exit)?;
+        let light = self.surface_incident_at(to_source, coherence, [reflected, !reflected])?;
+        let v = self.eval_at(&light, exit)?;
         Ok((
             v.response.total().scaled(T::one() / s.pdf).flushed(),
             v.geometry,
@@ -949,7 +1019,8 @@ where
         let Some(s) = self.exit_sampler(incident)?.sample(u_lobe, u) else {
             return Ok(None);
         };
-        let (weight, geometry) = self.exit_weight(incident, &s)?;
+        let d = unit_direction(&s.direction, "sampled direction")?;
+        let (weight, geometry) = self.exit_weight_at(incident, &s, &d)?;
         Ok(Some(BsdfSample {
             sample: s,
             weight,
@@ -970,10 +1041,12 @@ where
         u_lobe: T,
         u: [T; 2],
     ) -> SampleResult<T, K::Pol> {
-        let Some(s) = self.incident_sampler(exit, coherence)?.sample(u_lobe, u) else {
+        let r = unit_direction(&exit, "exit direction")?;
+        let Some(s) = self.incident_sampler_at(&r, coherence)?.sample(u_lobe, u) else {
             return Ok(None);
         };
-        let (weight, geometry) = self.incident_weight(exit, coherence, &s)?;
+        let d = unit_direction(&s.direction, "sampled direction")?;
+        let (weight, geometry) = self.incident_weight_at(&r, coherence, &s, &d)?;
         Ok(Some(BsdfSample {
             sample: s,
             weight,

@@ -1,10 +1,11 @@
 //! The geometry of one interaction: directions, angles, the side of the interface the light
 //! leaves on, `h`, the phase factor, and the s/p frames.
 
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{Unit, Vector2, Vector3};
 
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::numerics::unit_direction;
 use crate::packet::WavePacket;
 use crate::real::Real;
 
@@ -104,8 +105,24 @@ impl<T: Real> Geometry<T> {
         exit: Vector3<T>,
     ) -> Result<Self, Error> {
         check_wavenumber(k)?;
-        let s = unit(to_source, "direction to the source")?;
-        let r = unit(exit, "exit direction")?;
+        let s = unit_direction(&to_source, "direction to the source")?;
+        let r = unit_direction(&exit, "exit direction")?;
+        Self::opaque_units(k, surface, &s, &r)
+    }
+
+    /// [`Geometry::new`] of unit directions (the crate's internal paths, which have
+    /// normalised them already).
+    ///
+    /// # Errors
+    /// As [`Geometry::new`] for `k` and the signs of `cos θ`.
+    pub(crate) fn opaque_units(
+        k: T,
+        surface: &Frame<T>,
+        s: &Unit<Vector3<T>>,
+        r: &Unit<Vector3<T>>,
+    ) -> Result<Self, Error> {
+        check_wavenumber(k)?;
+        let (s, r) = (s.into_inner(), r.into_inner());
         let n = surface.k();
         let (cos_i, incident_sp) = incidence(&s, surface)?;
         let cos_o = r.dot(&n);
@@ -172,17 +189,27 @@ impl<T: Real> Geometry<T> {
         to_source: Vector3<T>,
         exit: Vector3<T>,
     ) -> Result<Self, Error> {
-        check_wavenumber(k)?;
-        let normal = |x: T| x.is_finite() && x >= T::MIN_POSITIVE;
-        if !(normal(eta) && normal(eta * k) && normal(k / eta)) {
-            return Err(Error::OutOfRange {
-                what: "relative index η = n_below/n_above",
-                value: eta.to_f64(),
-                expected: "finite and > 0, with η k and k/η normal numbers",
-            });
-        }
-        let s = unit(to_source, "direction to the source")?;
-        let r = unit(exit, "exit direction")?;
+        // The wavenumber and the index first (the errors' order), then the directions.
+        check_interface(k, eta)?;
+        let s = unit_direction(&to_source, "direction to the source")?;
+        let r = unit_direction(&exit, "exit direction")?;
+        Self::interface_units(k, surface, eta, &s, &r)
+    }
+
+    /// [`Geometry::at_interface`] of unit directions (the crate's internal paths, which have
+    /// normalised them already).
+    ///
+    /// # Errors
+    /// As [`Geometry::at_interface`] for `k`, `η` and directions in the plane of the surface.
+    pub(crate) fn interface_units(
+        k: T,
+        surface: &Frame<T>,
+        eta: T,
+        s: &Unit<Vector3<T>>,
+        r: &Unit<Vector3<T>>,
+    ) -> Result<Self, Error> {
+        check_interface(k, eta)?;
+        let (s, r) = (s.into_inner(), r.into_inner());
         let sn = s.dot(&surface.k());
         if sn == T::zero() {
             return Err(Error::OutOfRange {
@@ -578,6 +605,22 @@ fn check_wavenumber<T: Real>(k: T) -> Result<(), Error> {
     }
 }
 
+/// [`check_wavenumber`] and the relative index of an interface: finite and positive, with
+/// `η k` and `k/η` normal numbers.
+fn check_interface<T: Real>(k: T, eta: T) -> Result<(), Error> {
+    check_wavenumber(k)?;
+    let normal = |x: T| x.is_finite() && x >= T::MIN_POSITIVE;
+    if normal(eta) && normal(eta * k) && normal(k / eta) {
+        Ok(())
+    } else {
+        Err(Error::OutOfRange {
+            what: "relative index η = n_below/n_above",
+            value: eta.to_f64(),
+            expected: "finite and > 0, with η k and k/η normal numbers",
+        })
+    }
+}
+
 /// The incident side of every geometry for a unit ŝ: `cos θ_i = ŝ·n̂` and the incident beam's
 /// s/p frame ([`Frame::sp`] of −ŝ); the kernel's per-packet work and the batch path build it
 /// here too, so all of them agree bit for bit.
@@ -599,13 +642,4 @@ pub(crate) fn incidence<T: Real>(
     }
     // ŝ is a unit vector, and so is n̂ (of a validated frame).
     Ok((cos_i, Frame::sp_unit(-*s, n)))
-}
-
-/// `v/|v|` by [`crate::numerics::unit_by_largest`] (`|v|` itself over- or underflows for
-/// components beyond ~1e±154 (f64) or ~1e±19 (f32), which rejected valid directions as zero).
-pub(crate) fn unit<T: Real>(v: Vector3<T>, what: &'static str) -> Result<Vector3<T>, Error> {
-    crate::error::ensure_finite(what, v.iter().copied())?;
-    crate::numerics::unit_by_largest(&v).ok_or(Error::InvalidBasis {
-        reason: "zero direction vector",
-    })
 }

@@ -10,6 +10,7 @@ use super::prepared::PreparedPacket;
 use super::roughness::{FirstOrder, RoughnessModel, RoughnessWeights};
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::numerics::unit_direction;
 use crate::packet::{WavePacket, same_wavenumber};
 use crate::real::Real;
 
@@ -268,7 +269,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
         packet: &WavePacket<T>,
         surface: &Frame<T>,
     ) -> Result<PreparedPacket<T, Pol, Coh>, Error> {
-        let to_source = geometry::unit(-packet.direction(), "direction to the source")?;
+        let to_source =
+            unit_direction(&-packet.direction(), "direction to the source")?.into_inner();
         let (_, incident_sp) = geometry::incidence(&to_source, surface)?;
         Ok(self.prepare_unchecked(packet, surface, &incident_sp))
     }

@@ -465,7 +465,7 @@ pub(crate) fn subnormal_onto_cone<T: Real>(v: Vector4<T>) -> Vector4<T> {
 pub(crate) fn flush_subnormal<T: Real, const R: usize, const C: usize>(
     m: nalgebra::SMatrix<T, R, C>,
 ) -> nalgebra::SMatrix<T, R, C> {
-    if m.amax() >= T::MIN_POSITIVE {
+    if crate::numerics::amax(&m) >= T::MIN_POSITIVE {
         m
     } else {
         nalgebra::SMatrix::zeros()
@@ -498,7 +498,7 @@ pub(crate) fn beyond_scale<T: Real>(x: T, ln_e: T) -> T {
 pub(crate) fn flush_to_normal<T: Real, const R: usize, const C: usize>(
     m: nalgebra::SMatrix<T, R, C>,
 ) -> nalgebra::SMatrix<T, R, C> {
-    let largest = m.amax();
+    let largest = crate::numerics::amax(&m);
     if largest >= T::MIN_POSITIVE / T::EPSILON {
         m.map(|x| {
             if x.abs() < T::MIN_POSITIVE {

@@ -9,6 +9,7 @@ use crate::error::Error;
 use crate::frame::{Frame, frame_change_mueller};
 use crate::interaction::geometry::{self, Geometry};
 use crate::interaction::pbsdf::Scale;
+use crate::numerics::unit_direction;
 use crate::numerics::{HYPOT_PLAIN, principal_sqrt};
 use crate::packet::WavePacket;
 use crate::psd::{GaussianPsd, Psd};
@@ -98,7 +99,7 @@ impl<T: Real> Incidence<T> {
         packet: &WavePacket<T>,
         surface: &Frame<T>,
     ) -> Result<Self, Error> {
-        let s = geometry::unit(-packet.direction(), "direction to the source")?;
+        let s = unit_direction(&-packet.direction(), "direction to the source")?.into_inner();
         let n = surface.k();
         let (cos_i, incident_sp) = geometry::incidence(&s, surface)?;
         let u_az = n.cross(&incident_sp.x());

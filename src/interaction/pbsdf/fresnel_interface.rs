@@ -5,7 +5,7 @@ use num_complex::Complex;
 
 use super::{Geometry, Pbsdf, PbsdfForm, Side};
 use crate::error::Error;
-use crate::frame::frame_change_mueller;
+use crate::frame::frame_change_times;
 use crate::fresnel;
 use crate::jones::JonesMatrix;
 use crate::mueller::Mueller;
@@ -75,7 +75,7 @@ impl<T: Real> Pbsdf<T> for FresnelInterface<T> {
     #[inline]
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
         match self.jones(g) {
-            Some(j) => frame_change_mueller(&g.specular_sp(), &g.exit_sp) * Mueller::from_jones(&j),
+            Some(j) => frame_change_times(&g.specular_sp(), &g.exit_sp, &Mueller::from_jones(&j)),
             None => Mueller(nalgebra::Matrix4::zeros()),
         }
     }

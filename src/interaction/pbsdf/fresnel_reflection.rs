@@ -4,7 +4,7 @@ use num_complex::Complex;
 
 use super::{Geometry, Pbsdf, PbsdfForm, Side, validate_eta};
 use crate::error::Error;
-use crate::frame::frame_change_mueller;
+use crate::frame::frame_change_times;
 use crate::fresnel;
 use crate::mueller::Mueller;
 use crate::real::Real;
@@ -59,7 +59,7 @@ impl<T: Real> Pbsdf<T> for FresnelReflection<T> {
             return Mueller(nalgebra::Matrix4::zeros());
         }
         let m = Mueller::from_jones(&fresnel::reflection(g.cos_i, self.eta));
-        frame_change_mueller(&g.specular_sp(), &g.exit_sp) * m
+        frame_change_times(&g.specular_sp(), &g.exit_sp, &m)
     }
     /// `M₀₀` (the frame transport leaves it unchanged).
     #[inline]
