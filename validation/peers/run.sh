@@ -2,12 +2,19 @@
 # Peer-calibration harness: measures py-pol, pySCATMECH, Mitsuba 3 and a plain C++ closed form on
 # this machine, single thread, and prints one table (see validation/peers/README.md).
 #
-#   bash validation/peers/run.sh
+#   bash validation/peers/run.sh            # everything
+#   bash validation/peers/run.sh mitsuba    # only the Mitsuba scripts (mitsuba_*.py)
 #
 # Needs PyPI (and Debian's apt repository only if no libLLVM >= 17 is installed). Writes only under
 # the workspace's target/ (venv target/peers-venv, wheels target/peers-wheels, binaries and results
 # target/peers/). Not part of CI.
 set -uo pipefail
+
+MODE="${1:-all}"
+case "$MODE" in
+    all | mitsuba) ;;
+    *) echo "usage: bash validation/peers/run.sh [mitsuba]" >&2; exit 2 ;;
+esac
 
 # The workspace root (this script is validation/peers/run.sh).
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -16,7 +23,9 @@ OUT="target/peers"
 VENV="target/peers-venv"
 WHEELS="target/peers-wheels"
 mkdir -p "$OUT" "$WHEELS"
-ROWS="$OUT/rows.txt"
+# A Mitsuba-only run writes its own rows and table, so that it leaves the full table alone.
+if [ "$MODE" = mitsuba ]; then SUFFIX="-mitsuba"; else SUFFIX=""; fi
+ROWS="$OUT/rows$SUFFIX.txt"
 : > "$ROWS"
 
 # Pinned versions.
@@ -72,7 +81,9 @@ PY="$VENV/bin/python"
 # pySCATMECH ships only an sdist: the first run compiles SCATMECH (~80 C++ files, one at a time,
 # about 6 minutes here); the wheel is kept in target/peers-wheels for later runs.
 SCATMECH_OK=1
-if ! "$PY" -c 'import SCATPY' 2>/dev/null; then
+if [ "$MODE" = mitsuba ]; then
+    SCATMECH_OK=0  # not needed: neither built nor timed
+elif ! "$PY" -c 'import SCATPY' 2>/dev/null; then
     WHL="$(ls "$WHEELS"/pyscatmech-"$SCATMECH_VER"-*.whl 2>/dev/null | head -1)"
     if [ -z "$WHL" ]; then
         echo "== building pySCATMECH $SCATMECH_VER from source (first run only, several minutes)"
@@ -112,13 +123,16 @@ run_py() {
     (cd validation/peers && env -u OPENBLAS_CORETYPE -u OPENBLAS_L2_SIZE "../../$PY" "$1") | tee -a "$ROWS" \
         || echo "ROW|$1|-|-|-|-|-|-|FAILED: see the output above" >> "$ROWS"
 }
-run_py pypol_jones_mueller.py
+if [ "$MODE" = all ]; then run_py pypol_jones_mueller.py; fi
 if [ "$SCATMECH_OK" = 1 ]; then run_py pyscatmech_rayleigh_rice.py; fi
 run_py mitsuba_fresnel.py
 run_py mitsuba_rough_conductor.py
+run_py mitsuba_sample.py
+run_py mitsuba_path.py
 
 # --- C++ closed form --------------------------------------------------------------------------
-for flavour in default native; do
+if [ "$MODE" = all ]; then FLAVOURS="default native"; else FLAVOURS=""; fi
+for flavour in $FLAVOURS; do
     if [ "$flavour" = native ]; then FLAGS="-O3 -march=native"; else FLAGS="-O3"; fi
     BIN="$OUT/jones_mueller_soa_$flavour"
     echo "== C++ g++ $FLAGS"
@@ -139,7 +153,7 @@ done
 # --- table ------------------------------------------------------------------------------------
 echo
 echo "== results (ns per item, single thread; median and min over repeated samples)"
-"$PY" - "$ROWS" <<'EOF' | tee "$OUT/results.md"
+"$PY" - "$ROWS" <<'EOF' | tee "$OUT/results$SUFFIX.md"
 import sys
 print("| peer | operation | precision | batch N | median ns/item | min ns/item | note |")
 print("|---|---|---|---:|---:|---:|---|")
@@ -157,4 +171,4 @@ for line in open(sys.argv[1]):
         print("| " + " | ".join(f[:6] + ["|".join(f[6:])]) + " |")
 EOF
 echo "load average after timing: $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "(table also in $OUT/results.md)"
+echo "(table also in $OUT/results$SUFFIX.md)"
