@@ -28,7 +28,13 @@ pub(crate) fn exit_q<S: Simd, F: Real>(
         F::vsqrt(s, add(s, mul(s, a, a), c(p.eim2)))
     };
     let big = F::vsqrt(s, mul(s, add(s, modulus, abs_a), c(F::lit(0.5))));
-    let small = F::vselect(s, F::vlt(s, zero, big), div(s, c(p.eim_half), big), zero);
+    // `Im ε/2 / big`: with a real ε, `±0/big` is `Im ε/2` itself (`big > 0` where selected).
+    let half_im = if p.real_eps {
+        c(p.eim_half)
+    } else {
+        div(s, c(p.eim_half), big)
+    };
+    let small = F::vselect(s, F::vlt(s, zero, big), half_im, zero);
     let nonneg = F::vle(s, zero, a);
     let qo = C {
         re: F::vselect(s, nonneg, big, small),

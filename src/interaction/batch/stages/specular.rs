@@ -43,10 +43,12 @@ pub(crate) fn fresnel_stokes<S: Simd, F: Real>(
     let flip = F::vlt(s, dot3::<S, F>(s, fk, r), c(-flip_tol));
     let x = F::vselect(s, flip, sub(s, a, d), add(s, a, d));
     let y = F::vselect(s, flip, sub(s, c(F::zero()), add(s, b, cc)), sub(s, cc, b));
-    let rr = F::vsqrt(s, F::vmul_add(s, x, x, mul(s, y, y)));
-    let (cs, sn) = (F::vdiv(s, x, rr), F::vdiv(s, y, rr));
-    let c2 = F::vneg_mul_add(s, sn, sn, mul(s, cs, cs));
-    let s2 = mul(s, add(s, sn, sn), cs);
+    // cos 2φ = (x² − y²)/(x² + y²), sin 2φ = 2xy/(x² + y²): one reciprocal, no root (the
+    // scalar normalises (x, y) by its length first; `x² + y² ≈ 4` away from the lanes the
+    // per-direction kernel redoes).
+    let inv = F::vdiv(s, c(F::one()), F::vmul_add(s, x, x, mul(s, y, y)));
+    let c2 = mul(s, F::vneg_mul_add(s, y, y, mul(s, x, x)), inv);
+    let s2 = mul(s, mul(s, add(s, x, x), y), inv);
     let sign = F::vselect(s, flip, c(-F::one()), c(F::one()));
     let o1 = F::vneg_mul_add(s, s2, w[2], mul(s, c2, w[1]));
     let o2 = F::vmul_add(s, s2, w[1], mul(s, c2, w[2]));

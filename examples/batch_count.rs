@@ -1,0 +1,105 @@
+//! A fixed workload for counting the instructions of the SIMD batch path with callgrind:
+//! `Kernel::<Full, Partial>::evaluate_batch` (both lobes and the exit frames) on 65,536 exits
+//! around the mirror direction — the scene of the `kernel_batch_partial` bench (30° incidence,
+//! `Θ_y = 1.44 Θ_x`, Gaussian PSD, Fresnel + Rayleigh–Rice on glass) — `reps` times, in `f32`
+//! or `f64`. The cost of one pass per direction is the difference of two runs over 65,536:
+//!
+//! ```text
+//! cargo build --release --example batch_count
+//! valgrind --tool=callgrind target/release/examples/batch_count f32 1
+//! valgrind --tool=callgrind target/release/examples/batch_count f32 2
+//! ```
+//!
+//! (valgrind has no AVX-512, so the dispatch takes AVX2 + FMA under it). It prints a checksum
+//! so that the work is not optimised away.
+
+use gmueller::Real;
+use gmueller::frame::Frame;
+use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
+use gmueller::interaction::{Full, Kernel, Partial, RoughSurface};
+use gmueller::packet::{CoherenceShape, WavePacket};
+use gmueller::psd::GaussianPsd;
+use gmueller::stokes::Stokes;
+use gmueller::verify::rng::Lcg;
+use nalgebra::{Matrix2, Vector3};
+use num_complex::Complex;
+
+/// The number of exits of one pass.
+const M: usize = 65_536;
+
+/// `reps` passes of `evaluate_batch` over the `M` exits; the sum of the last pass's scattered
+/// `S0`.
+fn run<T: Real>(reps: usize) -> f64 {
+    let eta = Complex::new(T::lit(1.5), T::zero());
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let material = RoughSurface {
+        psd,
+        specular: gmueller::interaction::pbsdf::FresnelReflection::new(eta).unwrap(),
+        scatter: gmueller::interaction::pbsdf::RayleighRice::new(eta).unwrap(),
+    };
+    let kernel = Kernel::<Full, Partial>::default();
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let theta_i = 30f64.to_radians();
+    let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos()).map(T::lit);
+    let frame = Frame::sp(travel, Vector3::z())
+        .unwrap()
+        .rotated(T::lit(0.7));
+    let shape = |w: f64| CoherenceShape::new(Matrix2::new(w * w, 0.0, 0.0, w * w).map(T::lit));
+    let stokes = Stokes::new(T::lit(1.0), T::lit(0.3), T::lit(0.2), T::lit(-0.3)).unwrap();
+    let packet = WavePacket::new(
+        stokes,
+        shape(5.0).unwrap(),
+        shape(6.0).unwrap(),
+        frame,
+        T::lit(0.5),
+    )
+    .unwrap();
+    let mut rng = Lcg(0xba7c);
+    let (mut x, mut y, mut z) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..M {
+        let to = (theta_i + (rng.uniform() - 0.5) * 0.26).abs();
+        let po = (rng.uniform() - 0.5) * 0.52;
+        x.push(T::lit(to.sin() * po.cos()));
+        y.push(T::lit(to.sin() * po.sin()));
+        z.push(T::lit(to.cos()));
+    }
+    let mut buf = vec![vec![T::zero(); M]; 11];
+    let [a, b, c, d, e, f, g, h, sx, sy, sz] = &mut buf[..] else {
+        unreachable!()
+    };
+    let mut out = LobesSoa {
+        specular: StokesSoa { s: [a, b, c, d] },
+        scattered: StokesSoa { s: [e, f, g, h] },
+    };
+    let mut frames = ExitFramesSoa { s: [sx, sy, sz] };
+    for _ in 0..reps {
+        let dirs = DirectionsSoa {
+            x: &x,
+            y: &y,
+            z: &z,
+        };
+        kernel
+            .evaluate_batch(
+                &material,
+                &packet,
+                &surface,
+                None,
+                dirs,
+                &mut out,
+                Some(&mut frames),
+            )
+            .unwrap();
+    }
+    out.scattered.s[0].iter().map(|v| v.to_f64()).sum::<f64>()
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let precision = args.next().unwrap_or_else(|| "f32".into());
+    let reps = args.next().and_then(|r| r.parse().ok()).unwrap_or(1);
+    let sum = match precision.as_str() {
+        "f64" => run::<f64>(reps),
+        _ => run::<f32>(reps),
+    };
+    println!("{precision}, {reps} passes of {M} exits: sum of scattered S0 = {sum:e}");
+}
