@@ -48,8 +48,8 @@ fn run<K: BsdfKernel<f32, GaussianPsd<f32, 2>>>(
     let cases: Vec<_> = (0..N)
         .map(|i| {
             let side = if i % 4 == 3 { -1.0 } else { 1.0 };
-            let exit = local(rng.unit() * 1.2, rng.unit() * 6.28, side);
-            let source = local(rng.unit() * 1.2, rng.unit() * 6.28, side);
+            let exit = local(rng.unit() * 1.2, rng.unit() * std::f64::consts::TAU, side);
+            let source = local(rng.unit() * 1.2, rng.unit() * std::f64::consts::TAU, side);
             let coherence = SurfaceCoherence::new(3.0 + 27.0 * rng.unit() as f32).unwrap();
             let u = [rng.unit() as f32, rng.unit() as f32, rng.unit() as f32];
             (exit, source, coherence, u)
