@@ -143,7 +143,10 @@ impl Camera {
     }
     /// The unit direction through image point `(x, y)` in `[0, 1)²` (y down).
     fn ray(&self, x: f32, y: f32) -> V3 {
-        let (sx, sy) = ((2.0 * x - 1.0) * self.tan_half, (1.0 - 2.0 * y) * self.tan_half);
+        let (sx, sy) = (
+            (2.0 * x - 1.0) * self.tan_half,
+            (1.0 - 2.0 * y) * self.tan_half,
+        );
         (self.forward + self.right * sx + self.up * sy).normalize()
     }
 }
@@ -250,9 +253,8 @@ fn nee(
         let origin = hit.point + hit.normal * RAY_EPS;
         if intersect(&origin, &to_light).is_none() {
             let w = mis(light_pdf, bsdf_pdf) / light_pdf;
-            let c = p
-                .t
-                .contribution(&v.response.total().scaled(w), &v.geometry, sky);
+            let c =
+                p.t.contribution(&v.response.total().scaled(w), &v.geometry, sky);
             p.t.gather(c);
         }
     }
@@ -365,11 +367,11 @@ fn render(
         }
         // Step 3: the continuation of every shaded path.
         for ((p, h), sp) in paths.iter_mut().zip(hits.iter()).zip(shading.iter()) {
-            if let (Some(h), Some(sp)) = (h, sp) {
-                if continue_path(p, h, sp, mat, coh).is_err() {
-                    stats.errors += 1;
-                    p.alive = false;
-                }
+            if let (Some(h), Some(sp)) = (h, sp)
+                && continue_path(p, h, sp, mat, coh).is_err()
+            {
+                stats.errors += 1;
+                p.alive = false;
             }
         }
         // Compaction: ended paths add S0 to their pixel.
@@ -503,7 +505,10 @@ fn main() {
             assert_eq!(s.bounces, stats.bounces, "the same work every render");
         }
         let mean = wf.image.iter().map(|&v| f64::from(v)).sum::<f64>() / n as f64;
-        let (med, min) = (median(secs.clone()), secs.iter().copied().fold(f64::MAX, f64::min));
+        let (med, min) = (
+            median(secs.clone()),
+            secs.iter().copied().fold(f64::MAX, f64::min),
+        );
         let b = stats.bounces as f64;
         let pgm = std::path::PathBuf::from(format!("target/wavefront/{}.pgm", row.key));
         let wrote = write_pgm(&pgm, res, &wf.image).map_or_else(
