@@ -68,7 +68,9 @@
 //! accumulation) with `std::time::Instant`, after one untimed warm-up render, repeated 5 times
 //! (`--reps`); printed: median and minimum ns per path, ns per path·bounce, and path·bounces
 //! per second on the one core. Each render uses the same random numbers (the work is the same
-//! every repetition). After the timing, the image's `S0` is written to
+//! every repetition). Also printed: the thread's CPU time over the wall time of the timed renders
+//! (Linux's `/proc/thread-self/schedstat`; below 1 when other jobs shared the core, as
+//! `mitsuba_path.py` reports for its process). After the timing, the image's `S0` is written to
 //! `target/wavefront/<row>.pgm` (gamma 2.2, clamped to 1) and its mean printed (a sanity check:
 //! finite and positive; the contributions the path throughput rejected as not finite and the
 //! crate's errors are counted and printed too).
@@ -439,6 +441,13 @@ fn write_pgm(path: &std::path::Path, res: usize, image: &[f32]) -> std::io::Resu
     out.flush()
 }
 
+/// The time this thread has spent on a CPU (ns), from Linux's `/proc/thread-self/schedstat`;
+/// `None` elsewhere. Compared with the wall time, it tells how much other jobs took the core.
+fn cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse().ok()
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
@@ -498,12 +507,18 @@ fn main() {
         let seed = 7;
         let stats = render(&mut wf, res, &cam, &row.material, &coh, seed);
         let mut secs = Vec::with_capacity(reps);
+        let cpu0 = cpu_ns();
         for _ in 0..reps {
             let t0 = Instant::now();
             let s = render(&mut wf, res, &cam, &row.material, &coh, seed);
             secs.push(t0.elapsed().as_secs_f64());
             assert_eq!(s.bounces, stats.bounces, "the same work every render");
         }
+        let cpu = cpu_ns().zip(cpu0).map(|(a, b)| (a - b) as f64 * 1e-9);
+        let cpu_share = cpu.map_or_else(
+            || "process CPU / wall n/a".to_string(),
+            |c| format!("CPU / wall {:.2}", c / secs.iter().sum::<f64>()),
+        );
         let mean = wf.image.iter().map(|&v| f64::from(v)).sum::<f64>() / n as f64;
         let (med, min) = (
             median(secs.clone()),
@@ -518,7 +533,7 @@ fn main() {
         println!(
             "{:<31} {n} paths, {} path·bounces ({:.3}/path): median {:.1} ns/path·bounce \
              (min {:.1}), {:.1} ns/path (min {:.1}), {:.3} M path·bounces/s/core; \
-             mean S0 {mean:.4}; rejected {}, errors {}; image {wrote}",
+             {cpu_share}; mean S0 {mean:.4}; rejected {}, errors {}; image {wrote}",
             row.name,
             stats.bounces,
             b / n as f64,
