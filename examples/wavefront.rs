@@ -46,15 +46,17 @@
 //! 1. intersect every live path's ray (a path whose ray leaves the scene after a bounce picks up
 //!    the environment, weighted by the power heuristic against the light sampler's density,
 //!    1 after a Dirac lobe);
-//! 2. for every hit: next-event estimation of the environment — a cosine-weighted direction
-//!    about the normal, `Material::eval_incident` and `Material::pdf_incident` for it (the
-//!    BSDF's value and its sampler's density, for the power heuristic, as Mitsuba's
-//!    `eval_pdf`), one shadow ray against the sphere and the plane, and the Stokes contribution
-//!    `PathThroughput::contribution` of the unpolarized radiance 1, gathered into the path;
-//! 3. for every hit: `Material::sample_incident` (weight `M/p`, pdf, lobe),
-//!    `PathThroughput::advance`, the continuation ray; then the paths that ended (their ray
-//!    left, the sampler returned `None` or a direction below the surface, the throughput died)
-//!    add their `S0` to their pixel and the rest are compacted in place (`Vec::retain_mut`).
+//! 2. for every hit, from one build of the backward sampler (`Material::incident_vertex`, the
+//!    shape of Mitsuba's `eval_pdf` + `sample`): next-event estimation of the environment — a
+//!    cosine-weighted direction about the normal, the BSDF's value and its sampler's density
+//!    for it (for the power heuristic), one shadow ray against the sphere and the plane, and
+//!    the Stokes contribution `PathThroughput::contribution` of the unpolarized radiance 1,
+//!    gathered into the path — and the continuation: the drawn direction (weight `M/p`, pdf,
+//!    lobe), `PathThroughput::advance`, the continuation ray (the same answers, bit for bit,
+//!    as `eval_incident`, `pdf_incident` and `sample_incident`, which build the sampler twice);
+//! 3. the paths that ended (their ray left, the sampler returned `None` or a direction below
+//!    the surface, the throughput died) add their `S0` to their pixel and the rest are
+//!    compacted in place (`Vec::retain_mut`).
 //!
 //! After the second interaction one more intersection step lets the continuation rays pick up
 //! the environment; then every path adds its `S0` to the image. No Russian roulette (Mitsuba's
@@ -219,7 +221,6 @@ fn mis(a: f32, b: f32) -> f32 {
 struct Wavefront {
     paths: Vec<PathState>,
     hits: Vec<Option<Hit>>,
-    shading: Vec<Option<ShadingPoint<f32>>>,
     image: Vec<f32>,
 }
 
@@ -231,15 +232,17 @@ struct Stats {
     errors: u64,
 }
 
-/// Step 2 at one hit: NEE of the environment, gathered into the path; returns the shading point
-/// for step 3.
-fn nee(
+/// Steps 2 and 3 at one hit, from one build of the backward sampler
+/// (`Material::incident_vertex`): NEE of the environment gathered into the path, then the
+/// direction the light comes from, the throughput and the next ray; ends the path
+/// (`alive = false`) when it cannot continue.
+fn shade(
     p: &mut PathState,
     hit: &Hit,
     mat: &Material<f32>,
     coh: &SurfaceCoherence<f32>,
     sky: &Stokes<f32>,
-) -> Result<ShadingPoint<f32>, Error> {
+) -> Result<(), Error> {
     let sp = ShadingPoint::new(Frame::from_normal(hit.normal)?, LAMBDA)?;
     let exit = -p.dir;
     let f = sp.frame();
@@ -249,31 +252,27 @@ fn nee(
     let (sin_phi, cos_phi) = (std::f32::consts::TAU * u2).sin_cos();
     let to_light = f.x() * (r * cos_phi) + f.y() * (r * sin_phi) + f.k() * cos;
     let light_pdf = cos * std::f32::consts::FRAC_1_PI;
-    if light_pdf > 0.0 {
-        let v = mat.eval_incident(&sp, exit, coh, to_light)?;
-        let bsdf_pdf = mat.pdf_incident(&sp, exit, coh, to_light)?;
+    let u = [p.rng.f(), p.rng.f(), p.rng.f()];
+    let v = mat.incident_vertex(
+        &sp,
+        exit,
+        coh,
+        (light_pdf > 0.0).then_some(to_light),
+        u[0],
+        [u[1], u[2]],
+    )?;
+    if let Some(light) = v.light {
+        let light = light?;
+        let (value, bsdf_pdf) = (light.value, light.pdf);
         let origin = hit.point + hit.normal * RAY_EPS;
         if intersect(&origin, &to_light).is_none() {
             let w = mis(light_pdf, bsdf_pdf) / light_pdf;
             let c =
-                p.t.contribution(&v.response.total().scaled(w), &v.geometry, sky);
+                p.t.contribution(&value.response.total().scaled(w), &value.geometry, sky);
             p.t.gather(c);
         }
     }
-    Ok(sp)
-}
-
-/// Step 3 at one hit: the direction the light comes from, the throughput, the next ray; ends the
-/// path (`alive = false`) when it cannot continue.
-fn continue_path(
-    p: &mut PathState,
-    hit: &Hit,
-    sp: &ShadingPoint<f32>,
-    mat: &Material<f32>,
-    coh: &SurfaceCoherence<f32>,
-) -> Result<(), Error> {
-    let u = [p.rng.f(), p.rng.f(), p.rng.f()];
-    let Some(s) = mat.sample_incident(sp, -p.dir, coh, u[0], [u[1], u[2]])? else {
+    let Some(s) = v.sample else {
         p.alive = false;
         return Ok(());
     };
@@ -303,12 +302,7 @@ fn render(
 ) -> Stats {
     let mut stats = Stats::default();
     let sky = Stokes::unpolarized(1.0).expect("radiance 1");
-    let Wavefront {
-        paths,
-        hits,
-        shading,
-        image,
-    } = wf;
+    let Wavefront { paths, hits, image } = wf;
     image.iter_mut().for_each(|x| *x = 0.0);
     paths.clear();
     let inv = 1.0 / res as f32;
@@ -337,11 +331,11 @@ fn render(
         // Step 1: intersect every live path.
         hits.clear();
         hits.extend(paths.iter().map(|p| intersect(&p.origin, &p.dir)));
-        let shade = depth < MAX_INTERACTIONS;
-        // Step 2: the environment seen by escaping rays; NEE at every hit.
-        shading.clear();
+        let shade_now = depth < MAX_INTERACTIONS;
+        // Steps 2 and 3: the environment seen by escaping rays; at every hit, NEE and the
+        // continuation from one build of the sampler.
         for (p, h) in paths.iter_mut().zip(hits.iter()) {
-            let sp = match h {
+            match h {
                 None => {
                     if depth > 0 {
                         let w = if p.delta {
@@ -352,28 +346,16 @@ fn render(
                         let frame = *p.t.frame();
                         p.t.gather_arriving(&frame, &Stokes::unpolarized(w).expect("w ≥ 0"));
                     }
-                    None
+                    p.alive = false;
                 }
-                Some(h) if shade => {
+                Some(h) if shade_now => {
                     stats.bounces += 1;
-                    let sp = nee(p, h, mat, coh, &sky);
-                    if sp.is_err() {
+                    if shade(p, h, mat, coh, &sky).is_err() {
                         stats.errors += 1;
+                        p.alive = false;
                     }
-                    sp.ok()
                 }
-                Some(_) => None,
-            };
-            p.alive = sp.is_some();
-            shading.push(sp);
-        }
-        // Step 3: the continuation of every shaded path.
-        for ((p, h), sp) in paths.iter_mut().zip(hits.iter()).zip(shading.iter()) {
-            if let (Some(h), Some(sp)) = (h, sp)
-                && continue_path(p, h, sp, mat, coh).is_err()
-            {
-                stats.errors += 1;
-                p.alive = false;
+                Some(_) => p.alive = false,
             }
         }
         // Compaction: ended paths add S0 to their pixel.
@@ -492,7 +474,6 @@ fn main() {
     let mut wf = Wavefront {
         paths: Vec::with_capacity(n),
         hits: Vec::with_capacity(n),
-        shading: Vec::with_capacity(n),
         image: vec![0.0; n],
     };
     println!(

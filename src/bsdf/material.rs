@@ -346,6 +346,75 @@ impl<T: Real> Material<T> {
             .pdf_incident(&self.side(at, &exit), exit, coherence, to_source)
     }
 
+    /// One vertex of a backward path tracer from one build of the backward sampler (what
+    /// Mitsuba's `eval_pdf` and `sample` give in two calls, and [`Material::eval_incident`],
+    /// [`Material::pdf_incident`] and [`Material::sample_incident`] in three, each building the
+    /// sampler): for next-event estimation, the value and the sampler's density of the light's
+    /// direction `to_light` (`None`: no light sample); and the continuation drawn from
+    /// `u_lobe`, `u`. Bit for bit the three calls' answers (`tests/bsdf/material.rs`).
+    ///
+    /// # Errors
+    /// As [`Material::sample_incident`]; the light's value carries [`Material::eval_incident`]'s
+    /// own error (a light direction it refuses), so that the continuation survives it.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::bsdf::{Material, ShadingPoint, SurfaceCoherence};
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::{Level, RoughConductor};
+    /// use gmueller::psd::GaussianPsd;
+    /// use nalgebra::Vector3;
+    /// use num_complex::Complex;
+    ///
+    /// let gold = RoughConductor::new(
+    ///     GaussianPsd::isotropic(0.01, 1.0)?,
+    ///     Complex::new(0.47, 2.4),
+    /// )?;
+    /// let m = Material::new(gold, Level::ALL[7]); // Full · Partial
+    /// let at = ShadingPoint::new(Frame::from_normal(Vector3::z())?, 0.55)?;
+    /// let sky = SurfaceCoherence::new(20.0)?;
+    /// let to_camera = Vector3::new(0.3, 0.0, 1.0);
+    /// let to_light = Vector3::new(-0.3, 0.1, 1.0);
+    /// let v = m.incident_vertex(&at, to_camera, &sky, Some(to_light), 0.3, [0.6, 0.2])?;
+    /// let light = v.light.unwrap()?;
+    /// assert_eq!(light.pdf, m.pdf_incident(&at, to_camera, &sky, to_light)?);
+    /// assert!(light.value.response.total().matrix()[(0, 0)] > 0.0);
+    /// let next = v.sample.expect("a propagating draw");
+    /// assert!(next.sample.pdf > 0.0);
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    pub fn incident_vertex(
+        &self,
+        at: &ShadingPoint<T>,
+        exit: Vector3<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_light: Option<Vector3<T>>,
+        u_lobe: T,
+        u: [T; 2],
+    ) -> Result<IncidentVertex<T>, Error> {
+        let value = to_light.map(|d| self.eval_incident(at, exit, coherence, d));
+        let mut pdf = T::zero();
+        let mut sample = None;
+        self.with_incident(at, exit, coherence, &mut |sampler, weight| {
+            if let Some(d) = &to_light {
+                pdf = sampler.pdf(d);
+            }
+            if let Some(s) = sampler.sample(u_lobe, u) {
+                let (w, g) = weight(&s)?;
+                sample = Some(BsdfSample {
+                    sample: s,
+                    weight: w,
+                    geometry: g,
+                });
+            }
+            Ok(())
+        })?;
+        Ok(IncidentVertex {
+            light: value.map(|v| v.map(|value| LightEval { value, pdf })),
+            sample,
+        })
+    }
+
     /// The brute-force twin of [`Material::sample_incident`]: the direction the light comes
     /// from drawn uniformly over the exit's hemisphere (opaque materials, density `1/2π`) or
     /// the sphere (interfaces, `1/4π`), weighted by [`Material::eval_incident`]`/p`.
@@ -457,6 +526,27 @@ impl<T: Real> Material<T> {
         let from = -light.frame().k();
         self.model.with_exit(&self.side(at, &from), light, visit)
     }
+}
+
+/// What [`Material::incident_vertex`] gives at one vertex of a backward path.
+#[derive(Debug, Clone)]
+pub struct IncidentVertex<T: Real> {
+    /// For the light's direction: its value and density, or `eval_incident`'s error; `None`
+    /// when no light direction was given.
+    pub light: Option<Result<LightEval<T>, Error>>,
+    /// The continuation, as [`Material::sample_incident`] draws and weighs it (`None` for an
+    /// evanescent draw).
+    pub sample: Option<BsdfSample<T, Mueller<T>>>,
+}
+
+/// The light's direction at one vertex of a backward path ([`IncidentVertex::light`]).
+#[derive(Debug, Clone, Copy)]
+pub struct LightEval<T: Real> {
+    /// Its value, [`Material::eval_incident`].
+    pub value: BsdfValue<T, Mueller<T>>,
+    /// The backward sampler's density for it, [`Material::pdf_incident`] (0 for a Dirac
+    /// lobe's direction): the other half of the multiple-importance weight.
+    pub pdf: T,
 }
 
 /// The weight of a drawn direction at one shading point, as a Mueller matrix, with its

@@ -132,7 +132,7 @@ pub mod sources;
 pub use bundle::{Bundle, BundleCoherence, BundlePdf, BundleSample, BundleValues};
 pub use flags::LobeFlags;
 pub use interface::Interface;
-pub use material::{Material, ShadingPoint};
+pub use material::{IncidentVertex, LightEval, Material, ShadingPoint};
 pub use model::{BsdfKernel, BsdfSurface};
 pub use path::PathThroughput;
 pub use sampler::{DirectionSample, LobeSampler, Part, SampledLobe};

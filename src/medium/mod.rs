@@ -114,6 +114,12 @@
 //!   otherwise), rather than hand out an `F` of ~10⁸⁶ (∞ in `f32`). Every lobe a crate PSD names
 //!   peaks forward, where the check looks, so for them `F` and the weights are finite for every
 //!   prepared packet.
+//! - `σ_s = 0` at the `Partial` level from a PSD of positive variance is refused too
+//!   ([`crate::Error::Unrealizable`]): the blurred PSD is positive everywhere, so 0 means that
+//!   the blur's quadrature missed it at every node — seen with a band-limited
+//!   [`crate::psd::PowerLaw`] far narrower than the blur under Gauss–Hermite
+//!   (`tests/medium/f32.rs`, `a_band_the_blur_misses_is_refused`). At the plane-wave level
+//!   `σ_s = 0` is exact where the PSD vanishes on the sphere `|q| ≤ 2k` (a band beyond `2k`).
 //!
 //! # Peers
 //! A polarized Rayleigh phase function is still "not implemented" in Mitsuba 3 (its

@@ -37,6 +37,7 @@ use super::spectrum::VolumeLobes;
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::Kernel;
+use crate::interaction::coherence::CoherenceLevel;
 use crate::interaction::polarization::{PolarizationModel, Throughput};
 use crate::mueller::Mueller;
 use crate::packet::{Channel, WavePacket};
@@ -241,8 +242,10 @@ where
     /// [`Error::NotPositiveDefinite`] when its inverse coherence is not representable;
     /// [`Error::Unrealizable`] when the quadrature of `σ_s` did not resolve the phase
     /// function's lobe (`F` forward beyond what a resolved lobe of the named shape allows: a
-    /// PSD whose [`Psd::form`] names a lobe far wider than its own), where `F` would be ~∞
-    /// ([module docs](super), "When `σ_s` is 0 or not representable").
+    /// PSD whose [`Psd::form`] names a lobe far wider than its own), where `F` would be ~∞,
+    /// and at the `Partial` level when it found `σ_s = 0` for a PSD of positive variance (the
+    /// blur's quadrature missed the PSD at every node) ([module docs](super), "When `σ_s` is 0
+    /// or not representable").
     pub fn prepare<T>(&self, packet: &WavePacket<T>) -> Result<VolumeIncident<T, Pol, Coh>, Error>
     where
         T: Real,
@@ -272,7 +275,22 @@ where
             &self.medium.scatterer,
             &model,
         );
-        if coefficient.ln_sigma > neg_inf::<T>() {
+        // A blurred PSD is positive everywhere (the blur is a Gaussian), so a medium that
+        // scatters (variance > 0) has σ_s > 0 at the partially coherent level: 0 there means
+        // that the blur's quadrature missed the PSD at every node (a band far narrower than the
+        // blur, under Gauss–Hermite), not a medium that does not scatter.
+        let scatters = coefficient.ln_sigma > neg_inf::<T>();
+        if !scatters
+            && Coh::LEVEL == CoherenceLevel::Partial
+            && self.medium.psd.variance() > T::zero()
+        {
+            return Err(Error::Unrealizable {
+                reason: "the σ_s quadrature found no scattering from a medium that scatters (the \
+                         blur's quadrature missed the PSD at every node: a PSD band far narrower \
+                         than the coherence's blur; use Adaptive blur or a higher order)",
+            });
+        }
+        if scatters {
             // F(d̂), the phase matrix's scale forward (where every lobe the model names peaks):
             // beyond the largest a resolved lobe has, σ_s missed the lobe and F would be ~∞.
             let zero = nalgebra::Vector3::zeros();

@@ -219,6 +219,20 @@ fn erased<T: Real>(m: &Material<T>, s: Scene) -> Answers {
             .map(|p| bits([p])),
     );
     out.push(m.eval_incident(&at, exit, &c, source).ok().map(value));
+    // The same three from one build of the sampler: bit for bit the calls above.
+    match m.incident_vertex(&at, exit, &c, Some(source), u0, u) {
+        Ok(v) => {
+            assert_eq!(Some(v.sample.map(sample).unwrap_or_default()), out[0]);
+            match v.light.expect("a light direction was given") {
+                Ok(light) => {
+                    assert_eq!(Some(bits([light.pdf])), out[1]);
+                    assert_eq!(Some(value(light.value)), out[2]);
+                }
+                Err(_) => assert_eq!(out[2], None),
+            }
+        }
+        Err(_) => assert_eq!(out[0], None),
+    }
     // Forward, with a polarized surface packet from `source`.
     let stokes = Stokes::new(T::one(), T::lit(0.3), T::lit(-0.2), T::lit(0.1)).unwrap();
     let packet = m.surface_packet(&at, stokes, source, &c).unwrap();
@@ -321,7 +335,9 @@ where
     c
 }
 
-/// Erased and static answers are bit-identical, every surface kind and level, both precisions.
+/// Erased and static answers are bit-identical, every surface kind and level, both precisions;
+/// and `Material::incident_vertex` gives what `sample_incident`, `pdf_incident` and
+/// `eval_incident` give (`erased`).
 #[test]
 fn erased_material_is_the_static_bsdf_bit_for_bit() {
     let (a, b) = (all_surfaces::<f64>(12), all_surfaces::<f32>(12));
