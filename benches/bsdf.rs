@@ -5,6 +5,9 @@
 //! - `evaluate_prepared`: `Kernel::evaluate_prepared` with the packet prepared and the
 //!   geometry built outside the loop (the baseline);
 //! - `eval`: `Bsdf::eval` (the geometry built inside, the BSDF form);
+//! - `evaluate_prepared_far`, `eval_far`: the same with the exits uniform over the exit
+//!   hemisphere (reflection side for 3 of 4 cases, as near the lobe) instead of near the mirror
+//!   or Snell direction: off the lobe, where the coherent part is dark and skipped;
 //! - `exit_build+sample+pdf`: `Bsdf::exit_sampler` + `LobeSampler::sample` + `LobeSampler::pdf`
 //!   (forward: what a light tracer pays per bounce before evaluating);
 //! - `incident_build+sample+pdf`: `Bsdf::incident_sampler` + `sample` + `pdf` (backward);
@@ -95,11 +98,36 @@ fn cases<T: Real>() -> Vec<Case<T>> {
     out
 }
 
+/// [`cases`] with the exits drawn uniformly (in solid angle) over the hemisphere of the
+/// case's side, `θ_o` up to 87°: mostly far from the mirror and Snell directions.
+fn far_cases<T: Real>() -> Vec<Case<T>> {
+    let f = frame::<T>();
+    let mut rng = SplitMix64(0xfa7);
+    let mut out = cases::<T>();
+    for (i, c) in out.iter_mut().enumerate() {
+        let source_side = if c.to_source.dot(&f.k()) > T::zero() {
+            1.0
+        } else {
+            -1.0
+        };
+        let side = if i % 3 != 2 {
+            source_side
+        } else {
+            -source_side
+        };
+        let cos = 0.05 + 0.95 * rng.unit();
+        let phi = rng.unit() * std::f64::consts::TAU;
+        c.exit = dir(&f, cos.acos(), phi, side);
+    }
+    out
+}
+
 struct Bench<'a, T: Real> {
     c: &'a mut Criterion,
     prec: &'a str,
     glass: &'a RoughDielectric<T, GaussianPsd<T, 2>>,
     cases: &'a [Case<T>],
+    far: &'a [Case<T>],
 }
 
 impl<T: Real> LevelVisitor<T, GaussianPsd<T, 2>> for Bench<'_, T> {
@@ -162,6 +190,29 @@ impl<T: Real> LevelVisitor<T, GaussianPsd<T, 2>> for Bench<'_, T> {
             bench.iter(|| {
                 i = (i + 1) & (N - 1);
                 black_box(b.eval(black_box(&incidents[i]), black_box(self.cases[i].exit)))
+            });
+        });
+        let far_geometries: Vec<Geometry<T>> = self
+            .far
+            .iter()
+            .map(|c| b.geometry(c.to_source, c.exit).unwrap())
+            .collect();
+        g.bench_function(BenchmarkId::new("evaluate_prepared_far", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                black_box(kernel.evaluate_prepared(
+                    black_box(self.glass),
+                    black_box(incidents[i].prepared()),
+                    black_box(&far_geometries[i]),
+                ))
+            });
+        });
+        g.bench_function(BenchmarkId::new("eval_far", &name), |bench| {
+            let mut i = 0;
+            bench.iter(|| {
+                i = (i + 1) & (N - 1);
+                black_box(b.eval(black_box(&incidents[i]), black_box(self.far[i].exit)))
             });
         });
         g.bench_function(BenchmarkId::new("exit_build+sample+pdf", &name), |bench| {
@@ -235,6 +286,7 @@ fn for_precision<T: Real>(c: &mut Criterion, prec: &str) {
     )
     .unwrap();
     let cases = cases::<T>();
+    let far = far_cases::<T>();
     for level in Level::ALL {
         level.dispatch(
             ClosedForm,
@@ -243,6 +295,7 @@ fn for_precision<T: Real>(c: &mut Criterion, prec: &str) {
                 prec,
                 glass: &glass,
                 cases: &cases,
+                far: &far,
             },
         );
     }

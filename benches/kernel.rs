@@ -14,6 +14,8 @@
 //! frames, geometry included) against the per-direction prepared kernel, same 1024 exits.
 //! `kernel_batch_interface/{f64,f32}`: the same at a rough glass interface, exits around
 //! Snell's direction, or alternating with the mirror direction, against the per-direction one.
+//! `kernel_batch_levels/{f64,f32}`: `evaluate_batch` at the Intensity and Full levels at a rough
+//! glass interface, exits near the lobes and over both hemispheres.
 //! `kernel_batch_spectral/{f64,f32}`: `evaluate_batch_spectral` on 4 wavelengths × the same
 //! 1024 exits against 4 `evaluate_batch` calls.
 //!
@@ -33,7 +35,8 @@ use gmueller::interaction::level::LevelVisitor;
 use gmueller::interaction::pbsdf::{FresnelReflection, Pbsdf, RayleighRice};
 use gmueller::interaction::polarization::PolarizationModel;
 use gmueller::interaction::{
-    Full, Geometry, Kernel, Level, OneShape, Partial, PlaneWave, RoughDielectric, RoughSurface,
+    Full, Geometry, Intensity, Kernel, Level, OneShape, Partial, PlaneWave, RoughDielectric,
+    RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::mueller::batch::padded_stride;
@@ -497,16 +500,16 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
     g.finish();
 }
 
-/// One `Kernel::<Full, Partial>::evaluate_batch` scene of the batch benches.
-struct BatchScene<'a, T: Real, P, Sp, Sc> {
-    kernel: &'a Kernel<Full, Partial>,
+/// One `Kernel::<Pol, Partial>::evaluate_batch` scene of the batch benches.
+struct BatchScene<'a, T: Real, P, Sp, Sc, Pol = Full> {
+    kernel: &'a Kernel<Pol, Partial>,
     material: &'a RoughSurface<P, Sp, Sc>,
     packet: &'a WavePacket<T>,
     surface: &'a Frame<T>,
     interface: Option<T>,
 }
 
-impl<T: Real, P, Sp, Sc> BatchScene<'_, T, P, Sp, Sc>
+impl<T: Real, P, Sp, Sc, Pol: PolarizationModel> BatchScene<'_, T, P, Sp, Sc, Pol>
 where
     P: Psd<T, 2> + 'static,
     Partial: CoherenceWeights<T, P>,
@@ -604,6 +607,71 @@ fn batch_interface_for<T: Real>(c: &mut Criterion, prec: &str) {
             });
         },
     );
+    g.finish();
+}
+
+/// `evaluate_batch` at the Intensity level against the Full level (`Kernel::<Pol, Partial>`,
+/// both lobes and the exit frames) at a rough glass interface lit from the air at 30° by the
+/// two-shape packet of [`batch_partial_for`]: 1024 exits alternating around the mirror and Snell
+/// directions (`lobe-1024`, as `mixed-1024` of [`batch_interface_for`]), and 1024 exits uniform
+/// in solid angle over both hemispheres, `θ_o` up to 87° (`hemisphere-1024`: mostly off the
+/// lobes).
+fn batch_levels_for<T: Real>(c: &mut Criterion, prec: &str) {
+    const M: usize = 1024;
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    let eta = T::lit(1.5);
+    let material = RoughDielectric::new(psd, eta).unwrap();
+    let surf = surface::<T>();
+    let theta_i = 30f64.to_radians();
+    let theta_t = (theta_i.sin() / 1.5).asin();
+    let packet = scene::<T>(theta_i, theta_i, 0.0, 0.7, 5.0).packet;
+    let mut rng = Lcg(0xba7d);
+    let mut exit = |centre: f64, side: f64| {
+        let to = (centre + (rng.uniform() - 0.5) * 0.26).abs();
+        let po = (rng.uniform() - 0.5) * 0.52;
+        Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), side * to.cos()).map(T::lit)
+    };
+    let lobe: Vec<Vector3<T>> = (0..M)
+        .map(|i| {
+            if i % 2 == 0 {
+                exit(theta_i, 1.0)
+            } else {
+                exit(theta_t, -1.0)
+            }
+        })
+        .collect();
+    let mut rng = Lcg(0x4e31);
+    let hemisphere: Vec<Vector3<T>> = (0..M)
+        .map(|i| {
+            let cos = 0.05 + 0.95 * rng.uniform();
+            let sin = (1.0 - cos * cos).sqrt();
+            let phi = rng.uniform() * std::f64::consts::TAU;
+            let side = if i % 2 == 0 { 1.0 } else { -1.0 };
+            Vector3::new(sin * phi.cos(), sin * phi.sin(), side * cos).map(T::lit)
+        })
+        .collect();
+    let mut g = c.benchmark_group(format!("kernel_batch_levels/{prec}"));
+    g.throughput(criterion::Throughput::Elements(M as u64));
+    let full = Kernel::<Full, Partial>::default();
+    let intensity = Kernel::<Intensity, Partial>::default();
+    for (case, exits) in [("lobe-1024", &lobe), ("hemisphere-1024", &hemisphere)] {
+        BatchScene {
+            kernel: &full,
+            material: &material,
+            packet: &packet,
+            surface: &surf,
+            interface: Some(eta),
+        }
+        .bench(&mut g, &format!("Full-{case}"), exits);
+        BatchScene {
+            kernel: &intensity,
+            material: &material,
+            packet: &packet,
+            surface: &surf,
+            interface: Some(eta),
+        }
+        .bench(&mut g, &format!("Intensity-{case}"), exits);
+    }
     g.finish();
 }
 
@@ -819,6 +887,8 @@ fn benches(c: &mut Criterion) {
     batch_partial_for::<f32>(c, "f32");
     batch_interface_for::<f64>(c, "f64");
     batch_interface_for::<f32>(c, "f32");
+    batch_levels_for::<f64>(c, "f64");
+    batch_levels_for::<f32>(c, "f32");
     batch_spectral_for::<f64>(c, "f64");
     batch_spectral_for::<f32>(c, "f32");
 }

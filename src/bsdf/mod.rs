@@ -142,6 +142,7 @@ use nalgebra::{Matrix2, Unit, Vector3};
 
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::interaction::Incidence;
 use crate::interaction::coherence::{CoherenceLevel, CoherenceModel};
 use crate::interaction::pbsdf::Pbsdf;
 use crate::interaction::polarization::{
@@ -227,6 +228,10 @@ pub struct Incident<T: Real, Pol, Coh> {
     to_source: Vector3<T>,
     facing: Frame<T>,
     from_below: bool,
+    /// The incident side of every exit's geometry (`cos θ_i`, the incident s/p frame), built
+    /// once here rather than per exit; `None` where ŝ has none (the exits' geometries then
+    /// report the error).
+    incidence: Option<Incidence<T>>,
     /// `E` of the coherent lobe on each side (reflected, transmitted): module docs,
     /// "Near the horizon".
     specular_mass: [T; 2],
@@ -457,8 +462,13 @@ where
         incident: &Incident<T, K::Pol, K::Coh>,
         r: &Unit<Vector3<T>>,
     ) -> Result<Geometry<T>, Error> {
-        let s = Unit::new_unchecked(incident.to_source);
-        self.geometry_at(self.wavenumber(&incident.to_source)?, &s, r)
+        let k = self.wavenumber(&incident.to_source)?;
+        match &incident.incidence {
+            // The geometry_at of ŝ bit for bit (`Geometry::leaving`), without rebuilding the
+            // incident side.
+            Some(inc) => Geometry::leaving(k, inc, self.eta, r),
+            None => self.geometry_at(k, &Unit::new_unchecked(incident.to_source), r),
+        }
     }
 
     /// The surface coherence width of light arriving from `to_source` under `coherence`
@@ -571,11 +581,16 @@ where
     ) -> Incident<T, K::Pol, K::Coh> {
         let from_below = s.dot(&self.surface.k()) < T::zero();
         let specular_mass = self.specular_mass(&prepared, &s, &facing, from_below, sides);
+        // An opaque surface has no incident side below it (its geometries report the error).
+        let incidence = Incidence::of(&s, &self.surface)
+            .ok()
+            .filter(|_| self.eta.is_some() || !from_below);
         Incident {
             prepared,
             to_source: s,
             facing,
             from_below,
+            incidence,
             specular_mass,
         }
     }

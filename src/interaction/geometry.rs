@@ -122,25 +122,72 @@ impl<T: Real> Geometry<T> {
         r: &Unit<Vector3<T>>,
     ) -> Result<Self, Error> {
         check_wavenumber(k)?;
-        let (s, r) = (s.into_inner(), r.into_inner());
-        let n = surface.k();
+        let s = s.into_inner();
         let (cos_i, incident_sp) = incidence(&s, surface)?;
-        let cos_o = r.dot(&n);
-        if cos_o <= T::zero() {
-            return Err(Error::OutOfRange {
-                what: "cos θ_o (exit direction below the surface)",
-                value: cos_o.to_f64(),
-                expected: "> 0",
-            });
-        }
+        let inc = Incidence {
+            to_source: s,
+            surface: *surface,
+            cos_i,
+            incident_sp,
+            from_below: false,
+        };
+        Self::leaving(k, &inc, None, r)
+    }
+
+    /// The geometry of the incident side `inc` (of unit ŝ, validated: [`Incidence::of`])
+    /// leaving along the unit `r`: at an opaque surface (`eta = None`, as
+    /// [`Geometry::opaque_units`]) or at an interface of relative index `eta` (as
+    /// [`Geometry::interface_units`]). Both constructors end here, so a geometry built from an
+    /// [`Incidence`] kept for many exits (the renderer layer's `Incident`) is theirs bit for
+    /// bit.
+    ///
+    /// # Errors
+    /// As [`Geometry::opaque_units`] or [`Geometry::interface_units`] for `k`, `η` and the exit.
+    #[inline]
+    pub(crate) fn leaving(
+        k: T,
+        inc: &Incidence<T>,
+        eta: Option<T>,
+        r: &Unit<Vector3<T>>,
+    ) -> Result<Self, Error> {
+        let r = r.into_inner();
+        let rn = r.dot(&inc.surface.k());
+        let (side, eta_t) = match eta {
+            None => {
+                check_wavenumber(k)?;
+                if rn <= T::zero() {
+                    return Err(Error::OutOfRange {
+                        what: "cos θ_o (exit direction below the surface)",
+                        value: rn.to_f64(),
+                        expected: "> 0",
+                    });
+                }
+                (Side::Reflection, T::one())
+            }
+            Some(eta) => {
+                check_interface(k, eta)?;
+                if rn > T::zero() {
+                    (Side::Reflection, T::one())
+                } else if rn < T::zero() {
+                    let eta_t = if inc.from_below { eta.recip() } else { eta };
+                    (Side::Transmission, eta_t)
+                } else {
+                    return Err(Error::OutOfRange {
+                        what: "cos θ_o (exit direction in the plane of the surface)",
+                        value: 0.0,
+                        expected: "≠ 0",
+                    });
+                }
+            }
+        };
         Ok(Self::build(
             k,
-            surface,
-            (s, r),
-            (cos_i, cos_o),
-            incident_sp,
-            (Side::Reflection, T::one()),
-            false,
+            &inc.surface,
+            (inc.to_source, r),
+            (inc.cos_i, rn.abs()),
+            inc.incident_sp,
+            (side, eta_t),
+            inc.from_below,
         ))
     }
 
@@ -209,44 +256,15 @@ impl<T: Real> Geometry<T> {
         r: &Unit<Vector3<T>>,
     ) -> Result<Self, Error> {
         check_interface(k, eta)?;
-        let (s, r) = (s.into_inner(), r.into_inner());
-        let sn = s.dot(&surface.k());
-        if sn == T::zero() {
+        let s = s.into_inner();
+        if s.dot(&surface.k()) == T::zero() {
             return Err(Error::OutOfRange {
                 what: "cos θ_i (source in the plane of the surface)",
                 value: 0.0,
                 expected: "≠ 0",
             });
         }
-        let from_below = sn < T::zero();
-        let oriented = if from_below {
-            surface.reversed()
-        } else {
-            *surface
-        };
-        let (cos_i, incident_sp) = incidence(&s, &oriented)?;
-        let rn = r.dot(&oriented.k());
-        let (side, eta_t) = if rn > T::zero() {
-            (Side::Reflection, T::one())
-        } else if rn < T::zero() {
-            let eta_t = if from_below { eta.recip() } else { eta };
-            (Side::Transmission, eta_t)
-        } else {
-            return Err(Error::OutOfRange {
-                what: "cos θ_o (exit direction in the plane of the surface)",
-                value: 0.0,
-                expected: "≠ 0",
-            });
-        };
-        Ok(Self::build(
-            k,
-            &oriented,
-            (s, r),
-            (cos_i, rn.abs()),
-            incident_sp,
-            (side, eta_t),
-            from_below,
-        ))
+        Self::leaving(k, &Incidence::of(&s, surface)?, Some(eta), r)
     }
 
     /// The geometry from validated parts (unit directions, `cos θ > 0`, the oriented frame).
@@ -617,6 +635,43 @@ fn check_interface<T: Real>(k: T, eta: T) -> Result<(), Error> {
             what: "relative index η = n_below/n_above",
             value: eta.to_f64(),
             expected: "finite and > 0, with η k and k/η normal numbers",
+        })
+    }
+}
+
+/// The incident side of a geometry, which depends on ŝ and the surface frame alone: the frame
+/// oriented toward the source, `cos θ_i` and the incident s/p frame. The renderer layer keeps
+/// it with a prepared incident light and builds each exit's geometry from it
+/// ([`Geometry::leaving`]) instead of again from ŝ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Incidence<T: Real> {
+    to_source: Vector3<T>,
+    surface: Frame<T>,
+    cos_i: T,
+    incident_sp: Frame<T>,
+    from_below: bool,
+}
+
+impl<T: Real> Incidence<T> {
+    /// The incident side of the unit `s` at the surface frame `surface` (of either side: the
+    /// frame is reversed when `s` is below it, as [`Geometry::at_interface`] has it).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] when `s` lies in the plane of the surface (`cos θ_i = 0`).
+    pub(crate) fn of(s: &Vector3<T>, surface: &Frame<T>) -> Result<Self, Error> {
+        let from_below = s.dot(&surface.k()) < T::zero();
+        let oriented = if from_below {
+            surface.reversed()
+        } else {
+            *surface
+        };
+        let (cos_i, incident_sp) = incidence(s, &oriented)?;
+        Ok(Self {
+            to_source: *s,
+            surface: oriented,
+            cos_i,
+            incident_sp,
+            from_below,
         })
     }
 }

@@ -161,6 +161,7 @@ mod section;
 // sub-modules (`polarization`, `coherence`, `level`) and are re-exported here as well, so that
 // `Kernel::<Full, Partial>` needs one import; rustdoc lists them under "Re-exports".
 pub use coherence::{Incoherent, Partial, PlaneWave};
+pub(crate) use geometry::Incidence;
 pub use geometry::{Geometry, Side};
 pub use kernel::Kernel;
 pub use level::{Level, Roughness};

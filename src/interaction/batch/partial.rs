@@ -175,6 +175,30 @@ fn lobe_lanes<S: Simd, F: Real>(
             (tv, ml(s, &p.scat[2][..nc], h0, h1)),
         )
     };
+    let zero = c(F::zero());
+    let ln_scat = add(s, add(s, ln_alpha, m_scat), c(ln_scat0));
+    let ln_spec = add(s, add(s, ln_alpha, m_spec), c(ln_spec0));
+    if p.intensity {
+        // S0 only, of the effective vector (1, 0, 0, 0): the scattered M₀₀ cos θ_o (the S0 of
+        // `assemble_vector`, bit for bit), the specular M₀₀ cos θ_o (the frame change keeps
+        // row 0 of the Fresnel matrix: the S0 of `fresnel_stokes`, bit for bit), and of
+        // `onto_cone` the S0 alone (u₀ where u₀ > 0, else 0; it never changes u₀).
+        let s0 = |u: F::V<S>| [F::vselect(s, F::vlt(s, zero, u), u, zero), zero, zero, zero];
+        let u_scat = s0(stages::stokes::assemble_s0::<S, F>(s, factors, cos_o));
+        let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
+        let (specular, redo_spec) = match spec {
+            Some((fresnel, _, _)) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
+                let u = s0(mul(s, c(fresnel[(0, 0)]), cos_o));
+                stages::channels::scaled::<S, F>(s, p, u, ln_spec)
+            }
+            _ => ([zero; 4], F::vlt(s, zero, zero)),
+        };
+        return LobeLanes {
+            specular,
+            scattered,
+            redo: or::<S, F>(s, frame.normal, or::<S, F>(s, redo_scat, redo_spec)),
+        };
+    }
     let raw_scat = stages::stokes::assemble_vector::<S, F>(
         s,
         stages::channels::halves::<S, F>(s, v_scat),
@@ -182,10 +206,7 @@ fn lobe_lanes<S: Simd, F: Real>(
         cos_o,
     );
     let u_scat = stages::channels::onto_cone::<S, F>(s, raw_scat);
-    let ln_scat = add(s, add(s, ln_alpha, m_scat), c(ln_scat0));
     let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
-    let ln_spec = add(s, add(s, ln_alpha, m_spec), c(ln_spec0));
-    let zero = c(F::zero());
     let (specular, redo_spec) = match spec {
         Some(consts) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
             let u = stages::specular::fresnel_stokes::<S, F>(

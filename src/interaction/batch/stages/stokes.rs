@@ -82,6 +82,25 @@ pub(crate) fn assemble_vector<S: Simd, F: Real>(
     ]
 }
 
+/// `S0` of [`assemble_vector`] for the effective vector `(1, 0, 0, 0)` (`P = Q = ½`, what the
+/// Intensity level's constants hold): `(|a|² ½ + |b|² ½ + |c|² ½ + |d|² ½) w`, the operations
+/// of [`assemble_vector`]'s `S0` with its terms in `S2`, `S3` left out. Bit for bit its `S0`
+/// wherever the entries are finite: there those terms are `x · 0` (a zero), and
+/// `fma(x, y, ±0)` rounds `x y` once, as `x · y` does.
+#[inline(always)]
+pub(crate) fn assemble_s0<S: Simd, F: Real>(
+    s: S,
+    [ja, jb, jc, jd]: [C<F::V<S>>; 4],
+    w: F::V<S>,
+) -> F::V<S> {
+    let half = F::vsplat(s, F::lit(0.5));
+    let (fma, mul) = (F::vmul_add::<S>, F::vmul::<S>);
+    let re = re_conj::<S, F>;
+    let row_a = fma(s, re(s, ja, ja), half, mul(s, re(s, jb, jb), half));
+    let row_b = fma(s, re(s, jc, jc), half, mul(s, re(s, jd, jd), half));
+    mul(s, F::vadd(s, row_a, row_b), w)
+}
+
 #[cfg(test)]
 mod tests {
     use nalgebra::Vector4;
@@ -143,5 +162,62 @@ mod tests {
     fn lanes_match_mueller_from_jones_at_every_width() {
         every_width(&Check(scenes::<f64>()));
         every_width(&Check(scenes::<f32>()));
+    }
+
+    /// [`assemble_s0`] is the `S0` of [`assemble_vector`] for the Intensity level's effective
+    /// vector `(1, 0, 0, 0)`, bit for bit, on the factors of the fixture's scenes.
+    struct S0<F: Real>(Vec<Scene<F>>);
+
+    impl<F: Real> PerWidth for S0<F> {
+        fn run<S: Simd>(&self, s: S, what: &str) {
+            let c = |v: F| F::vsplat(s, v);
+            let half = F::lit(0.5);
+            for sc in &self.0 {
+                chunks::<S, F>(sc.exits.len(), |i, len| {
+                    let f: Vec<_> = (i..i + len)
+                        .map(|j| sc.scatter.factors(&sc.geometry(j)))
+                        .collect();
+                    let w: Vec<F> = (0..len).map(|j| F::lit(0.25 + 0.7 * j as f64)).collect();
+                    let entry = |k: usize, im: bool| -> Vec<F> {
+                        f.iter()
+                            .map(|m| {
+                                let z = m[(k / 2, k % 2)];
+                                if im { z.im } else { z.re }
+                            })
+                            .collect()
+                    };
+                    let z = |k: usize| C {
+                        re: load::<S, F>(s, &entry(k, false)),
+                        im: load::<S, F>(s, &entry(k, true)),
+                    };
+                    let factors = [z(0), z(1), z(2), z(3)];
+                    let wv = load::<S, F>(s, &w);
+                    let full = assemble_vector::<S, F>(
+                        s,
+                        [c(half), c(half), c(F::zero()), c(F::zero())],
+                        factors,
+                        wv,
+                    );
+                    let (a, b) = (
+                        lanes_of::<S, F>(s, full[0]),
+                        lanes_of::<S, F>(s, assemble_s0::<S, F>(s, factors, wv)),
+                    );
+                    for j in 0..len {
+                        assert_eq!(
+                            a[j].to_f64().to_bits(),
+                            b[j].to_f64().to_bits(),
+                            "{what}: exit {}",
+                            i + j
+                        );
+                    }
+                });
+            }
+        }
+    }
+
+    #[test]
+    fn s0_alone_is_the_s0_of_the_vector_at_every_width() {
+        every_width(&S0(scenes::<f64>()));
+        every_width(&S0(scenes::<f32>()));
     }
 }
