@@ -287,7 +287,7 @@ where
             return Err(Error::Unrealizable {
                 reason: "the σ_s quadrature found no scattering from a medium that scatters (the \
                          blur's quadrature missed the PSD at every node: a PSD band far narrower \
-                         than the coherence's blur; use Adaptive blur or a higher order)",
+                         than the coherence's blur)",
             });
         }
         if scatters {
