@@ -80,6 +80,8 @@
 use std::io::Write;
 use std::time::Instant;
 
+use gmueller::verify::rng::SplitMix64;
+
 use gmueller::prelude::*;
 use nalgebra::Vector3;
 
@@ -99,26 +101,19 @@ const SPHERE_CENTRE: [f32; 3] = [0.0, 0.0, 0.5];
 const SPHERE_RADIUS: f32 = 0.5;
 const PLANE_HALF: f32 = 10.0;
 
-/// `SplitMix64` (Steele, Lea & Flood 2014), one stream per path.
-#[derive(Clone, Copy)]
-struct Rng(u64);
+/// One stream per path of the crate's `SplitMix64` (Steele, Lea & Flood 2014).
+#[derive(Clone)]
+struct Rng(SplitMix64);
 
 impl Rng {
     fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Rng(seed ^ stream.wrapping_mul(0xC2B2_AE3D_27D4_EB4F));
+        let mut r = SplitMix64(seed ^ stream.wrapping_mul(0xC2B2_AE3D_27D4_EB4F));
         r.next_u64();
-        r
+        Rng(r)
     }
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
+    /// Uniform in [0, 1) (24 bits: never rounds up to 1 in `f32`).
     fn f(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        (self.0.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 }
 
@@ -196,7 +191,7 @@ fn intersect(o: &V3, d: &V3) -> Option<Hit> {
 }
 
 /// One live path.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct PathState {
     pixel: u32,
     rng: Rng,

@@ -84,19 +84,23 @@ pub(crate) fn log_sum_exp<T: Real>(terms: impl Iterator<Item = T> + Clone) -> T 
     m + terms.fold(T::zero(), |acc, x| acc + (x - m).exp()).ln()
 }
 
+/// `SplitMix64`'s next 64 bits, for the library's own unit tests (`verify::rng`, which the
+/// integration tests use, is behind the `verify` feature).
+#[cfg(test)]
+pub(crate) fn splitmix64(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::{Matrix4, Vector3};
 
-    /// A small generator for the checks below (`SplitMix64`).
-    fn next(state: &mut u64) -> u64 {
-        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
+    use super::splitmix64 as next;
 
     /// Entries of every magnitude: random bits as a float (any sign, exponent and mantissa:
     /// zeros, subnormals, infinities and NaNs included), or a plain number in [−1, 1).

@@ -111,6 +111,26 @@ mod tests {
     use crate::jones::JonesMatrix;
     use crate::mueller::Mueller;
 
+    /// The four entries `a, b, c, d` of a vector's Rayleigh–Rice factors, in lanes.
+    fn factor_lanes<S: Simd, F: Real>(
+        s: S,
+        f: &[nalgebra::Matrix2<num_complex::Complex<F>>],
+    ) -> [C<F::V<S>>; 4] {
+        let entry = |k: usize, im: bool| -> Vec<F> {
+            f.iter()
+                .map(|m| {
+                    let z = m[(k / 2, k % 2)];
+                    if im { z.im } else { z.re }
+                })
+                .collect()
+        };
+        let z = |k: usize| C {
+            re: load::<S, F>(s, &entry(k, false)),
+            im: load::<S, F>(s, &entry(k, true)),
+        };
+        [z(0), z(1), z(2), z(3)]
+    }
+
     /// `w · M′ (T S)` against `Mueller::from_jones` of the scalar factors applied to the
     /// effective Stokes vector, in `f64`, within `16 ε M′₀₀ (|P| + |Q| + |S2| + |S3|) w`.
     struct Check<F: Real>(Vec<Scene<F>>);
@@ -127,19 +147,8 @@ mod tests {
                         .map(|j| sc.scatter.factors(&sc.geometry(j)))
                         .collect();
                     let w: Vec<F> = (0..len).map(|j| F::lit(0.5 + j as f64)).collect();
-                    let entry = |k: usize, im: bool| -> Vec<F> {
-                        f.iter()
-                            .map(|m| {
-                                let z = m[(k / 2, k % 2)];
-                                if im { z.im } else { z.re }
-                            })
-                            .collect()
-                    };
-                    let z = |k: usize| C {
-                        re: load::<S, F>(s, &entry(k, false)),
-                        im: load::<S, F>(s, &entry(k, true)),
-                    };
-                    let out = assemble::<S, F>(s, p, [z(0), z(1), z(2), z(3)], load::<S, F>(s, &w));
+                    let out =
+                        assemble::<S, F>(s, p, factor_lanes::<S, F>(s, &f), load::<S, F>(s, &w));
                     let out = out.map(|v| lanes_of::<S, F>(s, v));
                     for j in 0..len {
                         let m = Mueller::from_jones(&JonesMatrix(
@@ -178,19 +187,7 @@ mod tests {
                         .map(|j| sc.scatter.factors(&sc.geometry(j)))
                         .collect();
                     let w: Vec<F> = (0..len).map(|j| F::lit(0.25 + 0.7 * j as f64)).collect();
-                    let entry = |k: usize, im: bool| -> Vec<F> {
-                        f.iter()
-                            .map(|m| {
-                                let z = m[(k / 2, k % 2)];
-                                if im { z.im } else { z.re }
-                            })
-                            .collect()
-                    };
-                    let z = |k: usize| C {
-                        re: load::<S, F>(s, &entry(k, false)),
-                        im: load::<S, F>(s, &entry(k, true)),
-                    };
-                    let factors = [z(0), z(1), z(2), z(3)];
+                    let factors = factor_lanes::<S, F>(s, &f);
                     let wv = load::<S, F>(s, &w);
                     let full = assemble_vector::<S, F>(
                         s,
