@@ -35,6 +35,16 @@ pub trait Lanes: Copy + Send + Sync + 'static + sealed::Sealed {
     const LN2_LO: f64;
     /// Taylor coefficients `1/j!` of the exponential from the highest degree down to `j = 0`.
     const EXP_POLY: &'static [f64];
+    /// The vector logarithm's `Lg₁ … Lg_J` from the highest degree down: `R(z) = z Σⱼ Lgⱼ zʲ⁻¹`
+    /// approximates `ln((1 + s)/(1 − s)) − 2s` as `s R(s²)` for `|s| ≤ 3 − 2√2`.
+    const LOG_POLY: &'static [f64];
+    /// `π/2 = PIO2[0] + PIO2[1] + PIO2[2]` (Cody–Waite): the first two parts with enough trailing
+    /// zeros that `n · PIO2[0]`, `n · PIO2[1]` are exact for `|n| < 2²⁰` (f64) or `2⁸` (f32).
+    const PIO2: [f64; 3];
+    /// `S₁ … S_J` of `sin r ≈ r + r³ Σⱼ Sⱼ r²⁽ʲ⁻¹⁾` on `[−π/4, π/4]`, highest degree first.
+    const SIN_POLY: &'static [f64];
+    /// `C₁ … C_J` of `cos r ≈ 1 − r²/2 + r⁴ Σⱼ Cⱼ r²⁽ʲ⁻¹⁾` on `[−π/4, π/4]`, highest degree first.
+    const COS_POLY: &'static [f64];
 
     /// The number of lanes of `V<S>`.
     fn width<S: Simd>() -> usize;
@@ -78,6 +88,10 @@ pub trait Lanes: Copy + Send + Sync + 'static + sealed::Sealed {
     fn vselect<S: Simd>(s: S, m: Self::M<S>, a: Self::V<S>, b: Self::V<S>) -> Self::V<S>;
     /// `2ⁿ` for integral `n` with `n + bias` a valid biased exponent (normal result).
     fn vpow2<S: Simd>(s: S, n: Self::V<S>) -> Self::V<S>;
+    /// `(k, m)` with `x = 2ᵏ m`, `k` integral and `m ∈ [√½, √2)` (the threshold `√2` taken on
+    /// the leading 20 (f64) or 23 (f32) bits of the mantissa), for positive normal finite `x`;
+    /// unspecified (finite, no panic) for other `x`. Bit operations only: `m` is exact.
+    fn vfrexp<S: Simd>(s: S, x: Self::V<S>) -> (Self::V<S>, Self::V<S>);
     /// Whole vectors first, then the remainder.
     fn vsplit<S: Simd>(x: &[Self]) -> (&[Self::V<S>], &[Self]);
     /// [`Lanes::vsplit`] for mutable slices.
@@ -254,6 +268,41 @@ impl Lanes for f64 {
         1.0,
         1.0,
     ];
+    // fdlibm 5.3 e_log.c (Sun Microsystems, 1993): Lg1 … Lg7, |error of R| < 2⁻⁵⁸·⁴⁵.
+    const LOG_POLY: &'static [f64] = &[
+        1.479819860511658591e-01,
+        1.531383769920937332e-01,
+        1.818357216161805012e-01,
+        2.222219843214978396e-01,
+        2.857142874366239149e-01,
+        3.999999999940941908e-01,
+        6.666666666666735130e-01,
+    ];
+    // fdlibm 5.3 e_rem_pio2.c: pio2_1 and pio2_2 (33 bits each), pio2_2t; the three sum to
+    // π/2 within 1.1e-37.
+    const PIO2: [f64; 3] = [
+        1.57079632673412561417e+00,
+        6.07710050630396597660e-11,
+        2.02226624879595063154e-21,
+    ];
+    // fdlibm 5.3 k_sin.c: S1 … S6, |sin x / x − (1 + S1 x² + … + S6 x¹²)| ≤ 2⁻⁵⁸ on [−π/4, π/4].
+    const SIN_POLY: &'static [f64] = &[
+        1.58969099521155010221e-10,
+        -2.50507602534068634195e-08,
+        2.75573137070700676789e-06,
+        -1.98412698298579493134e-04,
+        8.33333333332248946124e-03,
+        -1.66666666666666324348e-01,
+    ];
+    // fdlibm 5.3 k_cos.c: C1 … C6, |cos x − (1 − x²/2 + C1 x⁴ + … + C6 x¹⁴)| ≤ 2⁻⁵⁸ on [−π/4, π/4].
+    const COS_POLY: &'static [f64] = &[
+        -1.13596475577881948265e-11,
+        2.08757232129817482790e-09,
+        -2.75573143513906633035e-07,
+        2.48015872894767294178e-05,
+        -1.38888888888741095749e-03,
+        4.16666666666666019037e-02,
+    ];
     #[inline(always)]
     fn vpow2<S: Simd>(s: S, n: Self::V<S>) -> Self::V<S> {
         // t = (n + 1023) · 2³² + 1.5 · 2⁵² holds the biased exponent in the upper 32 bits of
@@ -277,6 +326,42 @@ impl Lanes for f64 {
             let u = s.mul_u64s(u, s.splat_u64s(1 << 52));
             pulp::bytemuck::cast(u)
         }
+    }
+    #[inline(always)]
+    fn vfrexp<S: Simd>(s: S, x: Self::V<S>) -> (Self::V<S>, Self::V<S>) {
+        // Adding 0x3ff00000 − 0x3fe6a09e to the upper word carries into the exponent field
+        // exactly when the mantissa's upper 20 bits are ≥ those of √2 (0x6a09e); the field then
+        // holds k + 1023, and the mantissa bits plus 0x3fe6a09e in the upper word rebuild
+        // m = x 2⁻ᵏ ∈ [√½, √2) (musl's reduction in log.c).
+        let u: S::u64s = pulp::bytemuck::cast(x);
+        let u = s.add_u64s(u, s.splat_u64s((0x3ff00000 - 0x3fe6a09e) << 32));
+        let m = s.add_u64s(
+            s.and_u64s(u, s.splat_u64s(0x000f_ffff_ffff_ffff)),
+            s.splat_u64s(0x3fe6a09e << 32),
+        );
+        // The upper word shifted right by 20 (the exponent field, below the sign) into the
+        // mantissa of 2²⁰, where its bit 0 weighs 1: the double 2²⁰ + k + 1023.
+        let e = shr_u32_halves(s, u, 20);
+        let e = s.or_u64s(
+            s.and_u64s(e, s.splat_u64s(0x0000_0fff_0000_0000)),
+            s.splat_u64s(1048576.0_f64.to_bits()),
+        );
+        let k = s.sub_f64s(pulp::bytemuck::cast(e), s.splat_f64s(1048576.0 + 1023.0));
+        (k, pulp::bytemuck::cast(m))
+    }
+}
+
+/// Each 32-bit half of every 64-bit lane of `u` shifted right by `n` (pulp has no 64-bit shifts).
+#[inline(always)]
+fn shr_u32_halves<S: Simd>(s: S, u: S::u64s, n: u32) -> S::u64s {
+    if core::mem::size_of::<S::u32s>() == core::mem::size_of::<S::u64s>() {
+        let h: S::u32s = pulp::bytemuck::cast(u);
+        pulp::bytemuck::cast(s.wrapping_dyn_shr_u32s(h, s.splat_u32s(n)))
+    } else {
+        // One-lane back-end (u32 narrower than f64): the two halves as two u32 vectors.
+        let [a, b]: [S::u32s; 2] = pulp::bytemuck::cast(u);
+        let n = s.splat_u32s(n);
+        pulp::bytemuck::cast([s.wrapping_dyn_shr_u32s(a, n), s.wrapping_dyn_shr_u32s(b, n)])
     }
 }
 
@@ -326,6 +411,30 @@ impl Lanes for f32 {
         1.0,
         1.0,
     ];
+    // FreeBSD msun e_logf.c / k_logf.h: Lg1 … Lg4 = 0xaaaaaa.0p-24, 0xccce13.0p-25,
+    // 0x91e9ee.0p-25, 0xf89e26.0p-26 (exact in f32), |error of R| < 2⁻³⁴·²⁴.
+    const LOG_POLY: &'static [f64] = &[
+        0.24279078841209412,
+        0.2849878668785095,
+        0.40000972151756287,
+        0.6666666269302368,
+    ];
+    // π/2 rounded to 16 significant bits (the last four happen to be zero), the remainder to 16
+    // (n · PIO2[0], n · PIO2[1] exact for |n| < 2⁸) and the rest to f32 (computed with mpmath);
+    // the three sum to π/2 within 1.3e-18.
+    const PIO2: [f64; 3] = [
+        1.57080078125,
+        -4.454399459064007e-06,
+        -5.564431554416771e-11,
+    ];
+    // Cephes 2.8 sinf.c (S. L. Moshier): sincof, on [−π/4, π/4].
+    const SIN_POLY: &'static [f64] = &[-1.9515295891e-4, 8.3321608736e-3, -1.6666654611e-1];
+    // Cephes 2.8 sinf.c: coscof, on [−π/4, π/4].
+    const COS_POLY: &'static [f64] = &[
+        2.443315711809948e-5,
+        -1.388731625493765e-3,
+        4.166664568298827e-2,
+    ];
     #[inline(always)]
     fn vpow2<S: Simd>(s: S, n: Self::V<S>) -> Self::V<S> {
         // t = n + 127 + 1.5 · 2²³ has bits 0x4B400000 + n + 127; shifting left by 23 moves
@@ -337,5 +446,21 @@ impl Lanes for f32 {
         let u: S::u32s = pulp::bytemuck::cast(t);
         let u = s.wrapping_dyn_shl_u32s(u, s.splat_u32s(23));
         pulp::bytemuck::cast(u)
+    }
+    #[inline(always)]
+    fn vfrexp<S: Simd>(s: S, x: Self::V<S>) -> (Self::V<S>, Self::V<S>) {
+        // As for f64 on the whole word: adding 0x3f800000 − 0x3f3504f3 carries into the
+        // exponent field exactly when the mantissa is ≥ that of √2 (0x3504f3) (musl's logf.c).
+        let u: S::u32s = pulp::bytemuck::cast(x);
+        let u = s.add_u32s(u, s.splat_u32s(0x3f800000 - 0x3f3504f3));
+        let m = s.add_u32s(
+            s.and_u32s(u, s.splat_u32s(0x007f_ffff)),
+            s.splat_u32s(0x3f3504f3),
+        );
+        // The exponent field (and sign) into the mantissa of 2²³: the float 2²³ + k + 127.
+        let e = s.wrapping_dyn_shr_u32s(u, s.splat_u32s(23));
+        let e = s.or_u32s(e, s.splat_u32s(8388608.0_f32.to_bits()));
+        let k = s.sub_f32s(pulp::bytemuck::cast(e), s.splat_f32s(8388608.0 + 127.0));
+        (k, pulp::bytemuck::cast(m))
     }
 }
