@@ -135,7 +135,9 @@ pub use interface::Interface;
 pub use material::{IncidentVertex, LightEval, Material, ShadingPoint};
 pub use model::{BsdfKernel, BsdfSurface};
 pub use path::PathThroughput;
-pub use sampler::{DirectionSample, LobeSampler, Part, SampledLobe};
+pub use sampler::{
+    DirectionSample, LobeSampler, NO_LOBE, Part, SampledLobe, SamplesSoa, UniformsSoa,
+};
 pub use sources::{HORIZON_RULE_Q, SurfaceCoherence, area_light, distant_disk};
 
 use nalgebra::{Matrix2, Unit, Vector3};

@@ -22,10 +22,6 @@ use super::Lanes;
 /// [`Lanes::LOG_POLY`]. `x = 1` gives exactly 0. Zero, negative, subnormal, infinite and NaN
 /// inputs give unspecified values (finite: the bit operations read them as some normal
 /// number; NaN is not propagated), never a panic.
-#[cfg_attr(
-    not(test),
-    expect(dead_code, reason = "used by the batched sampler (next commit)")
-)]
 #[inline(always)]
 pub(crate) fn vln<S: Simd, F: Lanes>(s: S, x: F::V<S>) -> F::V<S> {
     let c = |v: f64| F::vlit(s, v);

@@ -30,10 +30,6 @@ use super::Lanes;
 /// reduction's products are exact up to `|n| < 2²⁰` (f64) or `2⁸` (f32, `|x| ≲ 400`), beyond
 /// which the values are unspecified (NaN for huge `|x|`). ±∞ and NaN give NaN; `sin(−0)` is
 /// `+0`. No panic.
-#[cfg_attr(
-    not(test),
-    expect(dead_code, reason = "used by the batched sampler (next commit)")
-)]
 #[inline(always)]
 pub(crate) fn vsin_cos<S: Simd, F: Lanes>(s: S, x: F::V<S>) -> (F::V<S>, F::V<S>) {
     let c = |v: f64| F::vlit(s, v);

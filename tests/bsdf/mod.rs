@@ -10,4 +10,5 @@ mod material;
 mod path;
 mod reciprocity;
 mod rough;
+mod sample_batch;
 mod sampling;

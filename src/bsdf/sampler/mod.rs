@@ -63,6 +63,10 @@ use crate::interaction::coherence::CoherenceLevel;
 use crate::psd::{GaussianPsd, Shape};
 use crate::real::Real;
 
+mod batch;
+
+pub use batch::{NO_LOBE, SamplesSoa, UniformsSoa};
+
 /// The narrowest Gaussian lobe a sampler accepts, in machine epsilons of the scalar type
 /// (standard deviation in the projected disk).
 const MIN_WIDTH_ULPS: f64 = 8.0;
