@@ -22,7 +22,9 @@
 //! Full · Partial `f32`, 2.5 × at the intensity levels. Each group also has one degenerate case (normal incidence).
 //!
 //! - `bsdf_batch/*`: `LobeSampler::sample_batch` against `LobeSampler::sample` one draw at a
-//!   time, 4096 draws of one sampler per iteration (throughput in draws).
+//!   time, and the forward bounce `Bsdf::sample_exit_batch` against `Bsdf::sample_exit` (its
+//!   weight applied to the packet's Stokes vector), 4096 draws per iteration (throughput in
+//!   draws).
 //!
 //! Run: `cargo bench --bench bsdf -- --warm-up-time 0.5 --measurement-time 1.5`.
 use std::hint::black_box;
@@ -329,13 +331,19 @@ fn batch_sampling<T: Real>(c: &mut Criterion, prec: &str) {
     let samplers = [
         (
             "glass_backward",
-            bg.incident_sampler(dir::<T>(&f, 40.0, -50.0, 1.0), &sky)
-                .unwrap(),
+            bg.incident_sampler(
+                dir::<T>(&f, 40f64.to_radians(), -50f64.to_radians(), 1.0),
+                &sky,
+            )
+            .unwrap(),
         ),
         (
             "gold_backward",
-            bc.incident_sampler(dir::<T>(&f, 50.0, 10.0, 1.0), &sky)
-                .unwrap(),
+            bc.incident_sampler(
+                dir::<T>(&f, 50f64.to_radians(), 10f64.to_radians(), 1.0),
+                &sky,
+            )
+            .unwrap(),
         ),
     ];
     let mut rng = SplitMix64(0x5a3b);
@@ -379,7 +387,79 @@ fn batch_sampling<T: Real>(c: &mut Criterion, prec: &str) {
             });
         });
     }
+    // The forward bounce (draw + weight applied to the packet's Stokes vector), the light
+    // from 35° above.
+    bounce(&mut g, "glass_forward", &bg, &sky, &u);
+    bounce(&mut g, "gold_forward", &bc, &sky, &u);
     g.finish();
+}
+
+/// `exit_bounce_batch` (`Bsdf::sample_exit_batch`) against `exit_bounce_loop` (`prepare` once,
+/// then `Bsdf::sample_exit` per draw, its weight applied to the packet's Stokes vector).
+fn bounce<T: Real, S>(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    b: &Bsdf<'_, T, S, Kernel<gmueller::interaction::Full, gmueller::interaction::Partial>>,
+    sky: &SurfaceCoherence<T>,
+    u: &[Vec<T>; 3],
+) where
+    S: gmueller::bsdf::BsdfSurface<T>,
+    gmueller::interaction::Partial: CoherenceWeights<T, S::Psd>,
+{
+    use gmueller::bsdf::{SamplesSoa, UniformsSoa};
+    use gmueller::interaction::batch::StokesSoa;
+    let m = u[0].len();
+    let f = frame::<T>();
+    let packet = b
+        .surface_packet(
+            Stokes::unpolarized(T::one()).unwrap(),
+            dir::<T>(&f, 35f64.to_radians(), 30f64.to_radians(), 1.0),
+            sky,
+        )
+        .unwrap();
+    let mut out: [Vec<T>; 5] = core::array::from_fn(|_| vec![T::zero(); m]);
+    let mut code = vec![0u8; m];
+    let mut w: [Vec<T>; 4] = core::array::from_fn(|_| vec![T::zero(); m]);
+    g.bench_function(BenchmarkId::new("exit_bounce_batch", name), |bench| {
+        bench.iter(|| {
+            let [x, y, z, pdf, dw] = &mut out;
+            let [w0, w1, w2, w3] = &mut w;
+            b.sample_exit_batch(
+                &packet,
+                UniformsSoa {
+                    lobe: &u[0],
+                    u0: &u[1],
+                    u1: &u[2],
+                },
+                SamplesSoa {
+                    x,
+                    y,
+                    z,
+                    pdf,
+                    delta_weight: dw,
+                    lobe: &mut code,
+                },
+                StokesSoa {
+                    s: [w0, w1, w2, w3],
+                },
+            )
+            .unwrap();
+            black_box(&w[0]);
+        });
+    });
+    g.bench_function(BenchmarkId::new("exit_bounce_loop", name), |bench| {
+        bench.iter(|| {
+            let inc = b.prepare(&packet).unwrap();
+            let light = packet.stokes();
+            let mut acc = T::zero();
+            for ((&l, &a), &c) in u[0].iter().zip(&u[1]).zip(&u[2]) {
+                if let Some(s) = b.sample_exit(&inc, black_box(l), [a, c]).unwrap() {
+                    acc += s.weight.apply(&light).s0();
+                }
+            }
+            black_box(acc)
+        });
+    });
 }
 
 fn benches(c: &mut Criterion) {

@@ -117,6 +117,7 @@
 //! per exit direction; a sampler is built per shading point (a 2×2 Cholesky factor per lobe,
 //! one Fresnel evaluation) and draws in closed form. Measured in `benches/bsdf.rs`.
 
+mod batch;
 mod bundle;
 mod flags;
 mod horizon;

@@ -1,0 +1,217 @@
+//! A forward bounce over a batch of draws: [`Bsdf::sample_exit_batch`] draws exit directions
+//! for one light packet ([`LobeSampler::sample_batch`]) and weighs them with the kernel's batch
+//! path ([`Kernel::evaluate_batch`]), both in SIMD lanes where they have them.
+//!
+//! # Formula
+//! The weight of draw `i` is what [`Bsdf::sample_exit`] gives for the same uniforms, applied
+//! to the packet's Stokes vector `S` (in the packet's frame; the result in the exit s/p frame of
+//! `r̂ᵢ`, [`crate::interaction::Geometry::exit_sp`]):
+//! ```text
+//! Wᵢ = (M_spec(r̂ᵢ) S / E_side + M_scat(r̂ᵢ) S) · cos θ_o / (cos θ_i · pᵢ)
+//! ```
+//! `E_side` the coherent lobe's mass on the draw's side ([`super::Incident::specular_mass`]); a
+//! Dirac lobe's weight is its integral ([`Bsdf::exit_weight`]) applied to `S`, per draw. At the
+//! intensity levels only `S0` is written (the other three are set to 0).
+//!
+//! # Agreement
+//! The lanes' weights equal `exit_weight(..).to_mueller() · S` of the scalar path to the batch
+//! evaluation's bound and the lanes' pdf (`f64`: 10⁻¹⁰ relative of `W₀` is asserted; `f32`:
+//! 2⁻¹⁰, `tests/bsdf/sample_batch.rs`).
+
+use nalgebra::Vector3;
+
+use super::model::BsdfSurface;
+use super::sampler::{NO_LOBE, SampledLobe, SamplesSoa, UniformsSoa};
+use super::{Bsdf, LobeSampler};
+use crate::error::Error;
+use crate::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
+use crate::interaction::coherence::CoherenceWeights;
+use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
+use crate::interaction::{Kernel, Side};
+use crate::numerics::unit_direction;
+use crate::packet::WavePacket;
+use crate::real::Real;
+
+/// Exits per call of the batch evaluation (its buffers live on the stack).
+const CHUNK: usize = 128;
+
+impl<'m, T, S, Pol, Coh> Bsdf<'m, T, S, Kernel<Pol, Coh>>
+where
+    T: Real,
+    S: BsdfSurface<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, S::Psd>,
+    Kernel<Pol, Coh>: super::BsdfKernel<T, S::Psd, Pol = Pol, Coh = Coh>,
+{
+    /// A forward bounce for every element of `u`: the exit direction drawn for the light
+    /// `packet` ([`Bsdf::exit_sampler`] of its [`Bsdf::prepare`], [`LobeSampler::sample_batch`])
+    /// into `samples`, and its weight `W` applied to the packet's Stokes vector (module docs of
+    /// `bsdf::batch`) into `weights`, in the exit s/p frame of each draw: the Stokes power
+    /// fraction the draw carries, whose mean over draws is the packet's albedo. An element with
+    /// no direction has weight 0. Allocates nothing (its buffers are on the stack).
+    ///
+    /// # Errors
+    /// As [`Bsdf::prepare`], [`Bsdf::exit_sampler`] and [`LobeSampler::sample_batch`];
+    /// [`Error::OutOfRange`] when a slice of `weights` is shorter than `u`.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::bsdf::{Bsdf, SamplesSoa, SurfaceCoherence, UniformsSoa};
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::batch::StokesSoa;
+    /// use gmueller::interaction::{Full, Kernel, Partial, RoughConductor};
+    /// use gmueller::psd::GaussianPsd;
+    /// use gmueller::spectral::Metal;
+    /// use gmueller::stokes::Stokes;
+    /// use nalgebra::Vector3;
+    ///
+    /// let gold = RoughConductor::new(GaussianPsd::isotropic(0.02, 1.0)?, Metal::Au.index(0.55_f64))?;
+    /// let bsdf = Bsdf::new(&gold, Kernel::<Full, Partial>::default(), Frame::from_normal(Vector3::z())?, 0.55)?;
+    /// let sky = SurfaceCoherence::new(5.0)?;
+    /// let packet = bsdf.surface_packet(Stokes::unpolarized(1.0)?, Vector3::new(0.4, 0.0, 0.9), &sky)?;
+    /// let (lobe, u0, u1) = ([0.1, 0.7], [0.2, 0.5], [0.3, 0.6]);
+    /// let [mut x, mut y, mut z, mut pdf, mut dw] = [[0.0_f64; 2]; 5];
+    /// let mut code = [0_u8; 2];
+    /// let [mut s0, mut s1, mut s2, mut s3] = [[0.0_f64; 2]; 4];
+    /// bsdf.sample_exit_batch(
+    ///     &packet,
+    ///     UniformsSoa { lobe: &lobe, u0: &u0, u1: &u1 },
+    ///     SamplesSoa { x: &mut x, y: &mut y, z: &mut z, pdf: &mut pdf,
+    ///                  delta_weight: &mut dw, lobe: &mut code },
+    ///     StokesSoa { s: [&mut s0, &mut s1, &mut s2, &mut s3] },
+    /// )?;
+    /// let inc = bsdf.prepare(&packet)?;
+    /// let one = bsdf.sample_exit(&inc, lobe[0], [u0[0], u1[0]])?.unwrap();
+    /// let w = one.weight.apply(&packet.stokes());
+    /// assert!((s0[0] - w.s0()).abs() <= 1e-10 * w.s0());
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    #[expect(
+        clippy::needless_range_loop,
+        reason = "element i of a chunk in six sample slices, 3 + 8 buffers and four weights"
+    )]
+    pub fn sample_exit_batch(
+        &self,
+        packet: &WavePacket<T>,
+        u: UniformsSoa<'_, T>,
+        samples: SamplesSoa<'_, T>,
+        weights: StokesSoa<'_, T>,
+    ) -> Result<(), Error> {
+        let n = u.lobe.len();
+        if weights.s.iter().any(|w| w.len() < n) {
+            return Err(Error::OutOfRange {
+                what: "batch slice length",
+                value: n as f64,
+                expected: "weight slices at least as long as the uniforms",
+            });
+        }
+        let incident = self.prepare(packet)?;
+        let sampler: LobeSampler<'_, T> = self.exit_sampler(&incident)?;
+        let SamplesSoa {
+            x,
+            y,
+            z,
+            pdf,
+            delta_weight,
+            lobe,
+        } = samples;
+        sampler.sample_batch(
+            u,
+            SamplesSoa {
+                x: &mut *x,
+                y: &mut *y,
+                z: &mut *z,
+                pdf: &mut *pdf,
+                delta_weight: &mut *delta_weight,
+                lobe: &mut *lobe,
+            },
+        )?;
+        let StokesSoa {
+            s: [w0, w1, w2, w3],
+        } = weights;
+        let normal = self.surface.k();
+        let cos_i = incident.to_source.dot(&normal).abs();
+        let mass = [
+            incident.specular_mass(Side::Reflection),
+            incident.specular_mass(Side::Transmission),
+        ];
+        let light = packet.stokes();
+        let intensity = Pol::LEVEL == PolarizationLevel::Intensity;
+        // A direction the evaluation accepts, for the elements it must skip.
+        let stand_in = incident.to_source;
+        let mut start = 0;
+        while start < n {
+            let m = CHUNK.min(n - start);
+            let mut dirs = [[T::zero(); CHUNK]; 3];
+            let mut lobes = [[T::zero(); CHUNK]; 8];
+            for i in 0..m {
+                let j = start + i;
+                let drawn = lobe[j] != NO_LOBE && delta_weight[j] == T::zero();
+                let d = if drawn {
+                    Vector3::new(x[j], y[j], z[j])
+                } else {
+                    stand_in
+                };
+                (dirs[0][i], dirs[1][i], dirs[2][i]) = (d.x, d.y, d.z);
+            }
+            {
+                let [dx, dy, dz] = &dirs;
+                let [a0, a1, a2, a3, b0, b1, b2, b3] = &mut lobes;
+                let mut out = LobesSoa {
+                    specular: StokesSoa {
+                        s: [&mut a0[..m], &mut a1[..m], &mut a2[..m], &mut a3[..m]],
+                    },
+                    scattered: StokesSoa {
+                        s: [&mut b0[..m], &mut b1[..m], &mut b2[..m], &mut b3[..m]],
+                    },
+                };
+                let exits = DirectionsSoa {
+                    x: &dx[..m],
+                    y: &dy[..m],
+                    z: &dz[..m],
+                };
+                self.kernel.evaluate_batch(
+                    self.material,
+                    packet,
+                    &self.surface,
+                    self.eta,
+                    exits,
+                    &mut out,
+                    None,
+                )?;
+            }
+            for i in 0..m {
+                let j = start + i;
+                let w = match SampledLobe::from_code(lobe[j]) {
+                    None => [T::zero(); 4],
+                    Some(l) if l.delta => {
+                        let s = super::DirectionSample {
+                            direction: Vector3::new(x[j], y[j], z[j]),
+                            pdf: pdf[j],
+                            lobe: l,
+                            delta_weight: delta_weight[j],
+                        };
+                        let d = unit_direction(&s.direction, "sampled direction")?;
+                        let (t, _) = self.exit_weight_at(&incident, &s, &d)?;
+                        let v = t.to_mueller().apply(&light);
+                        [v.s0(), v.s1(), v.s2(), v.s3()]
+                    }
+                    Some(l) => {
+                        let e = mass[usize::from(l.side == Side::Transmission)];
+                        let d = Vector3::new(x[j], y[j], z[j]);
+                        let f = d.dot(&normal).abs() / (cos_i * pdf[j]);
+                        core::array::from_fn(|c| (lobes[c][i] / e + lobes[4 + c][i]) * f)
+                    }
+                };
+                w0[j] = w[0];
+                (w1[j], w2[j], w3[j]) = if intensity {
+                    (T::zero(), T::zero(), T::zero())
+                } else {
+                    (w[1], w[2], w[3])
+                };
+            }
+            start += m;
+        }
+        Ok(())
+    }
+}
