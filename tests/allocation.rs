@@ -4,7 +4,9 @@
 //! and with a K-correlation PSD + Gauss–Hermite blur, on an opaque surface and at a glass
 //! interface in reflection and transmission, plus `Mueller::from_jones`, frame changes and
 //! `Geometry::for_packet`; and the renderer layer (`gmueller::bsdf`: light helpers, `prepare`,
-//! `eval` in both forms, both samplers with their draws, densities and weights) at every level
+//! `eval` in both forms, both samplers with their draws, densities and weights, the batched
+//! draws `LobeSampler::sample_batch` and the batched forward bounce `Bsdf::sample_exit_batch`)
+//! at every level
 //! on rough glass and a grating, and beyond first order (`Level::dispatch_rough`: every level ×
 //! first order, the Kirchhoff series, the geometric limit) on tangent-plane glass; and `Kernel::evaluate_batch` at every level (lanes and one
 //! exit at a time) and `plane_wave_rayleigh_rice`; and the spectral data (`gmueller::spectral`);
@@ -291,7 +293,8 @@ fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
     Coh: CoherenceWeights<T, P>,
     Rough: RoughnessWeights<T, P, Coh>,
 {
-    use gmueller::bsdf::{Bsdf, SurfaceCoherence};
+    use gmueller::bsdf::{Bsdf, SamplesSoa, SurfaceCoherence, UniformsSoa};
+    use gmueller::interaction::batch::StokesSoa;
     use gmueller::interaction::polarization::Throughput;
     let frame = Frame::from_normal(Vector3::new(0.1, 0.2, 1.0).map(T::lit)).unwrap();
     let coherence = SurfaceCoherence::new(T::lit(8.0)).unwrap();
@@ -313,11 +316,55 @@ fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
             } else {
                 b.surface_packet(stokes, *s, &coherence)
             };
-            let inc = b.prepare(&p.unwrap()).unwrap();
+            let p_packet = p.unwrap();
+            let inc = b.prepare(&p_packet).unwrap();
             ok &= b.eval(black_box(&inc), exit).is_ok();
             ok &= b.eval_stokes(&inc, exit).is_ok();
             let fwd = b.exit_sampler(&inc).unwrap();
             let bwd = b.incident_sampler(exit, &coherence).unwrap();
+            // The batch forms (37 draws: whole vectors and a remainder), buffers on the stack.
+            let uni: [[T; 37]; 3] = core::array::from_fn(|k| {
+                core::array::from_fn(|j| T::lit(((j * 7 + k * 3) % 37) as f64 / 37.0))
+            });
+            let [mut x, mut y, mut z, mut pdf, mut dw] = [[T::zero(); 37]; 5];
+            let mut code = [0u8; 37];
+            let [mut w0, mut w1, mut w2, mut w3] = [[T::zero(); 37]; 4];
+            let us = UniformsSoa {
+                lobe: &uni[0],
+                u0: &uni[1],
+                u1: &uni[2],
+            };
+            ok &= bwd
+                .sample_batch(
+                    us,
+                    SamplesSoa {
+                        x: &mut x,
+                        y: &mut y,
+                        z: &mut z,
+                        pdf: &mut pdf,
+                        delta_weight: &mut dw,
+                        lobe: &mut code,
+                    },
+                )
+                .is_ok();
+            ok &= b
+                .sample_exit_batch(
+                    &p_packet,
+                    us,
+                    SamplesSoa {
+                        x: &mut x,
+                        y: &mut y,
+                        z: &mut z,
+                        pdf: &mut pdf,
+                        delta_weight: &mut dw,
+                        lobe: &mut code,
+                    },
+                    StokesSoa {
+                        s: [&mut w0, &mut w1, &mut w2, &mut w3],
+                    },
+                )
+                .is_ok();
+            ok &= w0.iter().all(|w| w.is_finite());
             for u in [0.1, 0.5, 0.97] {
                 let u = T::lit(u);
                 if let Some(d) = fwd.sample(u, [u, T::lit(0.3)]) {

@@ -11,7 +11,9 @@
 //! ```
 //! `E_side` the coherent lobe's mass on the draw's side ([`super::Incident::specular_mass`]); a
 //! Dirac lobe's weight is its integral ([`Bsdf::exit_weight`]) applied to `S`, per draw. At the
-//! intensity levels only `S0` is written (the other three are set to 0).
+//! intensity levels only `S0` is written (the other three are set to 0). The batch evaluation
+//! is the first-order kernel's; at the roughness levels beyond first order every draw is
+//! weighed by [`Bsdf::exit_weight`] (the draws are still batched).
 //!
 //! # Agreement
 //! The lanes' weights equal `exit_weight(..).to_mueller() · S` of the scalar path to the batch
@@ -22,11 +24,11 @@ use nalgebra::Vector3;
 
 use super::model::BsdfSurface;
 use super::sampler::{NO_LOBE, SampledLobe, SamplesSoa, UniformsSoa};
-use super::{Bsdf, LobeSampler};
+use super::{Bsdf, BsdfKernel, LobeSampler};
 use crate::error::Error;
 use crate::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
-use crate::interaction::coherence::CoherenceWeights;
 use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
+use crate::interaction::roughness::{RoughnessLevel, RoughnessModel};
 use crate::interaction::{Kernel, Side};
 use crate::numerics::unit_direction;
 use crate::packet::WavePacket;
@@ -35,13 +37,12 @@ use crate::real::Real;
 /// Exits per call of the batch evaluation (its buffers live on the stack).
 const CHUNK: usize = 128;
 
-impl<'m, T, S, Pol, Coh> Bsdf<'m, T, S, Kernel<Pol, Coh>>
+impl<'m, T, S, K> Bsdf<'m, T, S, K>
 where
     T: Real,
     S: BsdfSurface<T>,
-    Pol: PolarizationModel,
-    Coh: CoherenceWeights<T, S::Psd>,
-    Kernel<Pol, Coh>: super::BsdfKernel<T, S::Psd, Pol = Pol, Coh = Coh>,
+    K: BsdfKernel<T, S::Psd>,
+    K::Coh: Clone,
 {
     /// A forward bounce for every element of `u`: the exit direction drawn for the light
     /// `packet` ([`Bsdf::exit_sampler`] of its [`Bsdf::prepare`], [`LobeSampler::sample_batch`])
@@ -136,7 +137,11 @@ where
             incident.specular_mass(Side::Transmission),
         ];
         let light = packet.stokes();
-        let intensity = Pol::LEVEL == PolarizationLevel::Intensity;
+        let intensity = K::Pol::LEVEL == PolarizationLevel::Intensity;
+        // The batch evaluation is the first-order kernel's; beyond first order every draw is
+        // weighed by `exit_weight`.
+        let first = (<K::Rough as RoughnessModel>::LEVEL == RoughnessLevel::FirstOrder)
+            .then(|| Kernel::<K::Pol, K::Coh>::new(self.kernel.kernel().coherence().clone()));
         // A direction the evaluation accepts, for the elements it must skip.
         let stand_in = incident.to_source;
         let mut start = 0;
@@ -146,7 +151,7 @@ where
             let mut lobes = [[T::zero(); CHUNK]; 8];
             for i in 0..m {
                 let j = start + i;
-                let drawn = lobe[j] != NO_LOBE && delta_weight[j] == T::zero();
+                let drawn = first.is_some() && lobe[j] != NO_LOBE && delta_weight[j] == T::zero();
                 let d = if drawn {
                     Vector3::new(x[j], y[j], z[j])
                 } else {
@@ -154,7 +159,7 @@ where
                 };
                 (dirs[0][i], dirs[1][i], dirs[2][i]) = (d.x, d.y, d.z);
             }
-            {
+            if let Some(kernel) = &first {
                 let [dx, dy, dz] = &dirs;
                 let [a0, a1, a2, a3, b0, b1, b2, b3] = &mut lobes;
                 let mut out = LobesSoa {
@@ -170,7 +175,7 @@ where
                     y: &dy[..m],
                     z: &dz[..m],
                 };
-                self.kernel.evaluate_batch(
+                kernel.evaluate_batch(
                     self.material,
                     packet,
                     &self.surface,
@@ -184,7 +189,7 @@ where
                 let j = start + i;
                 let w = match SampledLobe::from_code(lobe[j]) {
                     None => [T::zero(); 4],
-                    Some(l) if l.delta => {
+                    Some(l) if l.delta || first.is_none() => {
                         let s = super::DirectionSample {
                             direction: Vector3::new(x[j], y[j], z[j]),
                             pdf: pdf[j],

@@ -62,12 +62,14 @@ use core::fmt::Debug;
 
 use nalgebra::Vector3;
 
+use super::sampler::{SamplesSoa, UniformsSoa};
 use super::{
     Bsdf, BsdfSample, BsdfSurface, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler,
     Part, SampledLobe, SurfaceCoherence,
 };
 use crate::error::Error;
 use crate::frame::Frame;
+use crate::interaction::batch::StokesSoa;
 use crate::interaction::coherence::{CoherenceLevel, CoherenceWeights};
 use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
 use crate::interaction::roughness::{FirstOrder, Geometric, RoughnessWeights};
@@ -501,6 +503,26 @@ impl<T: Real> Material<T> {
         self.model.pdf_exit(&self.side(at, &from), light, exit)
     }
 
+    /// Draws an exit direction for `light` for every element of `u`, with each draw's weight
+    /// applied to the light's Stokes vector: [`super::Bsdf::sample_exit_batch`] (the draws in
+    /// SIMD lanes for Gaussian lobes, the weights by the kernel's batch evaluation at first
+    /// order; no allocation).
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::sample_exit_batch`].
+    pub fn sample_exit_batch(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        u: UniformsSoa<'_, T>,
+        samples: SamplesSoa<'_, T>,
+        weights: StokesSoa<'_, T>,
+    ) -> Result<(), Error> {
+        let from = -light.frame().k();
+        self.model
+            .sample_exit_batch(&self.side(at, &from), light, u, samples, weights)
+    }
+
     /// Runs `visit` with the backward sampler of this shading point and the weight of a
     /// direction it draws ([`super::Bsdf::incident_sampler`], [`super::Bsdf::incident_weight`]
     /// of one `Bsdf`): what a wavelength bundle ([`super::Bundle`]) needs of each wavelength.
@@ -617,6 +639,14 @@ trait Shade<T: Real>: Send + Sync + Debug {
         light: &WavePacket<T>,
         exit: Vector3<T>,
     ) -> Result<T, Error>;
+    fn sample_exit_batch(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        u: UniformsSoa<'_, T>,
+        samples: SamplesSoa<'_, T>,
+        weights: StokesSoa<'_, T>,
+    ) -> Result<(), Error>;
     fn with_incident(
         &self,
         at: &ShadingPoint<T>,
@@ -768,6 +798,18 @@ where
     ) -> Result<T, Error> {
         let b = Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?;
         Ok(b.exit_sampler(&b.prepare(light)?)?.pdf(&exit))
+    }
+
+    fn sample_exit_batch(
+        &self,
+        at: &ShadingPoint<T>,
+        light: &WavePacket<T>,
+        u: UniformsSoa<'_, T>,
+        samples: SamplesSoa<'_, T>,
+        weights: StokesSoa<'_, T>,
+    ) -> Result<(), Error> {
+        Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?
+            .sample_exit_batch(light, u, samples, weights)
     }
 
     fn with_incident(
