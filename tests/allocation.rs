@@ -5,7 +5,8 @@
 //! interface in reflection and transmission, plus `Mueller::from_jones`, frame changes and
 //! `Geometry::for_packet`; and the renderer layer (`gmueller::bsdf`: light helpers, `prepare`,
 //! `eval` in both forms, both samplers with their draws, densities and weights, the batched
-//! draws `LobeSampler::sample_batch` and the batched forward bounce `Bsdf::sample_exit_batch`)
+//! draws `LobeSampler::sample_batch` and `pdf_batch`, and the batched forward bounce
+//! `Bsdf::sample_exit_batch`)
 //! at every level
 //! on rough glass and a grating, and beyond first order (`Level::dispatch_rough`: every level ×
 //! first order, the Kirchhoff series, the geometric limit) on tangent-plane glass; and `Kernel::evaluate_batch` at every level (lanes and one
@@ -365,6 +366,14 @@ fn exercise_bsdf<T, P, Sp, Sc, Pol, Coh, Rough>(
                 )
                 .is_ok();
             ok &= w0.iter().all(|w| w.is_finite());
+            let mut p = [T::zero(); 37];
+            let dirs = gmueller::interaction::batch::DirectionsSoa {
+                x: &x,
+                y: &y,
+                z: &z,
+            };
+            ok &= fwd.pdf_batch(dirs, &mut p).is_ok();
+            ok &= p.iter().all(|p| p.is_finite());
             for u in [0.1, 0.5, 0.97] {
                 let u = T::lit(u);
                 if let Some(d) = fwd.sample(u, [u, T::lit(0.3)]) {

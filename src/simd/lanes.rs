@@ -78,6 +78,11 @@ pub trait Lanes: Copy + Send + Sync + 'static + sealed::Sealed {
     fn vle<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::M<S>;
     /// `a = b`.
     fn veq<S: Simd>(s: S, a: Self::V<S>, b: Self::V<S>) -> Self::M<S>;
+    /// `a ∨ b` of two masks (De Morgan, from [`Lanes::vand`] and [`Lanes::vnot`]).
+    #[inline(always)]
+    fn vor<S: Simd>(s: S, a: Self::M<S>, b: Self::M<S>) -> Self::M<S> {
+        Self::vnot(s, Self::vand(s, Self::vnot(s, a), Self::vnot(s, b)))
+    }
     /// `a ∧ b`.
     fn vand<S: Simd>(s: S, a: Self::M<S>, b: Self::M<S>) -> Self::M<S>;
     /// `¬a`.

@@ -15,6 +15,7 @@ use common::shading::{dir, tilted_frame as frame};
 use gmueller::bsdf::UniformsSoa;
 use gmueller::bsdf::{Bsdf, LobeSampler, NO_LOBE, SampledLobe, SamplesSoa, SurfaceCoherence};
 use gmueller::frame::Frame;
+use gmueller::interaction::batch::StokesSoa;
 use gmueller::interaction::roughness::KirchhoffSeries;
 use gmueller::interaction::{
     Full, Incoherent, Intensity, Kernel, OneShape, Partial, PlaneWave, RoughConductor,
@@ -73,19 +74,27 @@ fn uniforms<T: Real>(n: usize, seed: u64) -> [Vec<T>; 3] {
     u
 }
 
+/// `u` as the sampler's uniforms.
+fn soa_of<T>(u: &[Vec<T>; 3]) -> UniformsSoa<'_, T> {
+    UniformsSoa {
+        lobe: &u[0],
+        u0: &u[1],
+        u1: &u[2],
+    }
+}
+
+/// Four weight slices as a `StokesSoa`.
+fn stokes_of<T>(w: &mut [Vec<T>; 4]) -> StokesSoa<'_, T> {
+    let [w0, w1, w2, w3] = w;
+    StokesSoa {
+        s: [w0, w1, w2, w3],
+    }
+}
+
 /// The batch draws of `u`.
 fn batch<T: Real>(sampler: &LobeSampler<'_, T>, u: &[Vec<T>; 3]) -> Out<T> {
     let mut out = Out::new(u[0].len());
-    sampler
-        .sample_batch(
-            UniformsSoa {
-                lobe: &u[0],
-                u0: &u[1],
-                u1: &u[2],
-            },
-            out.soa(),
-        )
-        .unwrap();
+    sampler.sample_batch(soa_of(u), out.soa()).unwrap();
     out
 }
 
@@ -467,27 +476,12 @@ where
     Coh: gmueller::interaction::coherence::CoherenceWeights<T, S::Psd>,
     Kernel<Pol, Coh>: gmueller::bsdf::BsdfKernel<T, S::Psd, Pol = Pol, Coh = Coh>,
 {
-    use gmueller::interaction::batch::StokesSoa;
     use gmueller::interaction::polarization::{PolarizationLevel, Throughput};
     let u = uniforms::<T>(n, seed);
     let mut out = Out::<T>::new(n);
     let mut w: [Vec<T>; 4] = core::array::from_fn(|_| vec![T::lit(7.0); n]);
-    {
-        let [w0, w1, w2, w3] = &mut w;
-        b.sample_exit_batch(
-            packet,
-            UniformsSoa {
-                lobe: &u[0],
-                u0: &u[1],
-                u1: &u[2],
-            },
-            out.soa(),
-            StokesSoa {
-                s: [w0, w1, w2, w3],
-            },
-        )
+    b.sample_exit_batch(packet, soa_of(&u), out.soa(), stokes_of(&mut w))
         .unwrap();
-    }
     let inc = b.prepare(packet).unwrap();
     let intensity = Pol::LEVEL == PolarizationLevel::Intensity;
     let (mut worst, mut differ) = (0.0f64, 0);
@@ -608,7 +602,6 @@ fn forward_batch_weights_equal_the_scalar_bounce() {
 #[test]
 fn material_forward_batch_equals_its_scalar_bounce() {
     use gmueller::bsdf::{Material, ShadingPoint};
-    use gmueller::interaction::batch::StokesSoa;
     use gmueller::interaction::{KirchhoffConductor, Level, Roughness};
     let fr = frame();
     let at = ShadingPoint::new(fr, 0.5).unwrap();
@@ -647,23 +640,8 @@ fn material_forward_batch_equals_its_scalar_bounce() {
         let u = uniforms::<f64>(n, 0x3a7 + k as u64);
         let mut out = Out::<f64>::new(n);
         let mut w: [Vec<f64>; 4] = core::array::from_fn(|_| vec![0.0; n]);
-        {
-            let [w0, w1, w2, w3] = &mut w;
-            m.sample_exit_batch(
-                &at,
-                &packet,
-                UniformsSoa {
-                    lobe: &u[0],
-                    u0: &u[1],
-                    u1: &u[2],
-                },
-                out.soa(),
-                StokesSoa {
-                    s: [w0, w1, w2, w3],
-                },
-            )
+        m.sample_exit_batch(&at, &packet, soa_of(&u), out.soa(), stokes_of(&mut w))
             .unwrap();
-        }
         let (mut worst, mut some, mut differ) = (0.0f64, 0, 0);
         for i in 0..n {
             let one = m
@@ -752,7 +730,6 @@ where
 {
     use gmueller::bsdf::{Material, ShadingPoint};
     use gmueller::interaction::Level;
-    use gmueller::interaction::batch::StokesSoa;
     let fr = Frame::<T>::from_normal(Vector3::new(0.2, -0.1, 1.0).map(T::lit)).unwrap();
     let psd = GaussianPsd::<T, 2>::isotropic(T::lit(c.sigma), T::lit(c.ell)).unwrap();
     let level = [Level::ALL[7], Level::ALL[1], Level::ALL[6], Level::ALL[8]][c.level];
@@ -779,22 +756,7 @@ where
     let u = uniforms::<T>(n, c.seed);
     let mut out = Out::<T>::new(n);
     let mut w: [Vec<T>; 4] = core::array::from_fn(|_| vec![T::zero(); n]);
-    let batch = {
-        let [w0, w1, w2, w3] = &mut w;
-        m.sample_exit_batch(
-            &at,
-            &packet,
-            UniformsSoa {
-                lobe: &u[0],
-                u0: &u[1],
-                u1: &u[2],
-            },
-            out.soa(),
-            StokesSoa {
-                s: [w0, w1, w2, w3],
-            },
-        )
-    };
+    let batch = m.sample_exit_batch(&at, &packet, soa_of(&u), out.soa(), stokes_of(&mut w));
     let scalar: Vec<_> = (0..n)
         .map(|i| m.sample_exit(&at, &packet, u[0][i], [u[1][i], u[2][i]]))
         .collect();

@@ -475,12 +475,6 @@ fn clamp01<S: Simd, F: Real>(s: S, v: F::V<S>) -> F::V<S> {
     )
 }
 
-/// `a ∨ b` of two masks.
-#[inline(always)]
-fn or<S: Simd, F: Real>(s: S, a: F::M<S>, b: F::M<S>) -> F::M<S> {
-    F::vnot(s, F::vand(s, F::vnot(s, a), F::vnot(s, b)))
-}
-
 /// `a` where `m`, else `b`, for a scalar pair.
 #[inline(always)]
 fn pick<S: Simd, F: Real>(s: S, m: F::M<S>, a: F, b: F) -> F::V<S> {
@@ -555,12 +549,12 @@ fn lanes_of<S: Simd, F: Real>(
                 w,
             );
             part = F::vselect(s, new, F::vlit(s, i as f64), part);
-            chosen = or::<S, F>(s, chosen, new);
+            chosen = F::vor(s, chosen, new);
         }
         acc += p;
     }
     let transmitted = F::vle(s, F::vlit(s, 2.0), part);
-    let scattered = or::<S, F>(
+    let scattered = F::vor(
         s,
         F::veq(s, part, F::vlit(s, 1.0)),
         F::veq(s, part, F::vlit(s, 3.0)),
@@ -704,36 +698,19 @@ fn pdf_lanes<S: Simd, F: Real>(s: S, c: &LaneSampler<F>, d: [F::V<S>; 3]) -> F::
     } else {
         (F::vlt(s, zero, zero), cos0)
     };
-    let inside = or::<S, F>(s, in0, below);
+    let inside = F::vor(s, in0, below);
     let kd = pick::<S, F>(s, below, m1.k, m0.k);
-    let gx = add(
-        s,
-        pick::<S, F>(s, below, m1.known_h[0], m0.known_h[0]),
-        mul(
+    // h_t = k_a u_a + k_b (d·t̂₁, d·t̂₂) on the side holding the direction (`SideMap::h_of`).
+    let tangential = |j: usize, t1: &[F; 3], t0: &[F; 3]| {
+        let d = F::vselect(s, below, dot::<S, F>(s, &dn, t1), dot::<S, F>(s, &dn, t0));
+        add(
             s,
-            F::vselect(
-                s,
-                below,
-                dot::<S, F>(s, &dn, &m1.t1),
-                dot::<S, F>(s, &dn, &m0.t1),
-            ),
-            kd,
-        ),
-    );
-    let gy = add(
-        s,
-        pick::<S, F>(s, below, m1.known_h[1], m0.known_h[1]),
-        mul(
-            s,
-            F::vselect(
-                s,
-                below,
-                dot::<S, F>(s, &dn, &m1.t2),
-                dot::<S, F>(s, &dn, &m0.t2),
-            ),
-            kd,
-        ),
-    );
+            pick::<S, F>(s, below, m1.known_h[j], m0.known_h[j]),
+            mul(s, d, kd),
+        )
+    };
+    let gx = tangential(0, &m1.t1, &m0.t1);
+    let gy = tangential(1, &m1.t2, &m0.t2);
     let p_spec = pick::<S, F>(s, below, c.probs[2], c.probs[0]);
     let p_scat = pick::<S, F>(s, below, c.probs[3], c.probs[1]);
     let spec = match c.spec {

@@ -68,12 +68,6 @@ struct LobeLanes<S: Simd, F: Real> {
     redo: F::M<S>,
 }
 
-/// `a ∨ b` of two masks.
-#[inline(always)]
-fn or<S: Simd, F: Real>(s: S, a: F::M<S>, b: F::M<S>) -> F::M<S> {
-    F::vnot(s, F::vand(s, F::vnot(s, a), F::vnot(s, b)))
-}
-
 /// The wavelength-independent part of one vector of exits: r̂, `cos θ_o` and the exit frame.
 struct ExitLanes<S: Simd, F: Real> {
     r: [F::V<S>; 3],
@@ -196,7 +190,7 @@ fn lobe_lanes<S: Simd, F: Real>(
         return LobeLanes {
             specular,
             scattered,
-            redo: or::<S, F>(s, frame.normal, or::<S, F>(s, redo_scat, redo_spec)),
+            redo: F::vor(s, frame.normal, F::vor(s, redo_scat, redo_spec)),
         };
     }
     let raw_scat = stages::stokes::assemble_vector::<S, F>(
@@ -229,7 +223,7 @@ fn lobe_lanes<S: Simd, F: Real>(
     LobeLanes {
         specular,
         scattered,
-        redo: or::<S, F>(s, frame.normal, or::<S, F>(s, redo_scat, redo_spec)),
+        redo: F::vor(s, frame.normal, F::vor(s, redo_scat, redo_spec)),
     }
 }
 
@@ -260,7 +254,7 @@ fn lobe_lanes_either_side<S: Simd, F: Real>(
     LobeLanes {
         specular: pick::<S, F>(s, below, down.specular, up.specular),
         scattered: pick::<S, F>(s, below, down.scattered, up.scattered),
-        redo: or::<S, F>(
+        redo: F::vor(
             s,
             and(s, below, down.redo),
             and(s, F::vnot(s, below), up.redo),

@@ -287,8 +287,7 @@ pub(crate) fn scaled<S: Simd, F: Real>(
             F::vand(s, small, F::vlt(s, scaled_s0, c(half_normal * two64))),
             F::vand(s, F::vnot(s, small), F::vlt(s, s0, c(half_normal))),
         );
-        // a ∨ b
-        F::vnot(s, F::vand(s, F::vnot(s, a), F::vnot(s, b)))
+        F::vor(s, a, b)
     } else {
         F::vlt(s, s0, c(half_normal))
     };
