@@ -34,6 +34,7 @@ use gmueller::interaction::coherence::CoherenceWeights;
 use gmueller::interaction::level::LevelVisitor;
 use gmueller::interaction::pbsdf::{FresnelReflection, Pbsdf, RayleighRice};
 use gmueller::interaction::polarization::PolarizationModel;
+use gmueller::interaction::roughness::{FirstOrder, KirchhoffSeries, RoughnessWeights};
 use gmueller::interaction::{
     Full, Geometry, Intensity, Kernel, Level, OneShape, Partial, PlaneWave, RoughDielectric,
     RoughSurface,
@@ -500,19 +501,77 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
     g.finish();
 }
 
+/// The Kirchhoff series in lanes against first order (issue 39): `evaluate_batch` of
+/// `Kernel::<Full, Partial, KirchhoffSeries>` (tolerance 10⁻⁶, the default) and of the
+/// first-order kernel on the scene of [`batch_partial_for`] (1024 exits within ±7.5° of the
+/// mirror direction of 30° incidence, two shapes, rough glass, ℓ = 2 µm) at `vσ ≈ 1` and
+/// `3` in the mirror direction (`σ = 0.046, 0.138` µm at λ = 0.5 µm), and the per-direction
+/// series (`evaluate_prepared`) at `vσ ≈ 1`.
+fn batch_series_for<T: Real>(c: &mut Criterion, prec: &str) {
+    const M: usize = 1024;
+    let theta_i = 30f64.to_radians();
+    let packet = scene::<T>(theta_i, theta_i, 0.0, 0.7, 5.0).packet;
+    let surf = surface::<T>();
+    let mut rng = Lcg(0xba7c);
+    let exits: Vec<Vector3<T>> = (0..M)
+        .map(|_| {
+            let to = (theta_i + (rng.uniform() - 0.5) * 0.26).abs();
+            let po = (rng.uniform() - 0.5) * 0.52;
+            Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(T::lit)
+        })
+        .collect();
+    let first = Kernel::<Full, Partial>::default();
+    let series = first.with_roughness(KirchhoffSeries::default());
+    let mut g = c.benchmark_group(format!("kernel_batch_series/{prec}"));
+    g.throughput(criterion::Throughput::Elements(M as u64));
+    for (name, sigma) in [("vs1", 0.046), ("vs3", 0.138)] {
+        let psd = GaussianPsd::<T, 2>::isotropic(T::lit(sigma), T::lit(2.0)).unwrap();
+        let material = glass::<T, _>(psd);
+        BatchScene {
+            kernel: &first,
+            material: &material,
+            packet: &packet,
+            surface: &surf,
+            interface: None,
+        }
+        .bench(&mut g, &format!("first-order-{name}"), &exits);
+        BatchScene {
+            kernel: &series,
+            material: &material,
+            packet: &packet,
+            surface: &surf,
+            interface: None,
+        }
+        .bench(&mut g, &format!("series-{name}"), &exits);
+        if name == "vs1" {
+            g.bench_function(BenchmarkId::new("per-direction-series", name), |bch| {
+                bch.iter(|| {
+                    let prepared = series.prepare(black_box(&packet), &surf).unwrap();
+                    for e in &exits {
+                        let geo = Geometry::for_packet(&packet, &surf, *e).unwrap();
+                        black_box(series.evaluate_prepared(black_box(&material), &prepared, &geo));
+                    }
+                });
+            });
+        }
+    }
+    g.finish();
+}
+
 /// One `Kernel::<Pol, Partial>::evaluate_batch` scene of the batch benches.
-struct BatchScene<'a, T: Real, P, Sp, Sc, Pol = Full> {
-    kernel: &'a Kernel<Pol, Partial>,
+struct BatchScene<'a, T: Real, P, Sp, Sc, Pol = Full, Rough = FirstOrder> {
+    kernel: &'a Kernel<Pol, Partial, Rough>,
     material: &'a RoughSurface<P, Sp, Sc>,
     packet: &'a WavePacket<T>,
     surface: &'a Frame<T>,
     interface: Option<T>,
 }
 
-impl<T: Real, P, Sp, Sc, Pol: PolarizationModel> BatchScene<'_, T, P, Sp, Sc, Pol>
+impl<T: Real, P, Sp, Sc, Pol: PolarizationModel, Rough> BatchScene<'_, T, P, Sp, Sc, Pol, Rough>
 where
     P: Psd<T, 2> + 'static,
     Partial: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Partial>,
     Sp: Pbsdf<T> + 'static,
     Sc: Pbsdf<T> + 'static,
 {
@@ -891,6 +950,8 @@ fn benches(c: &mut Criterion) {
     batch_levels_for::<f32>(c, "f32");
     batch_spectral_for::<f64>(c, "f64");
     batch_spectral_for::<f32>(c, "f32");
+    batch_series_for::<f64>(c, "f64");
+    batch_series_for::<f32>(c, "f32");
 }
 
 criterion_group!(kernel, benches);

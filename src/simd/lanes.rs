@@ -27,6 +27,9 @@ pub trait Lanes: Copy + Send + Sync + 'static + sealed::Sealed {
     const EXP_LO: f64;
     /// `ln(max)` rounded up: the upper clamp of the vector exponential.
     const EXP_HI: f64;
+    /// `ln(MIN_POSITIVE)` rounded up to an integer: the lower clamp of `vexp_nonpositive`
+    /// (`2ⁿ` normal for `n = round(x/ln 2)`).
+    const EXP_NORMAL_LO: f64;
     /// `1.5 · 2^(mantissa bits)`: adding it rounds to an integer.
     const SHIFTER: f64;
     /// `ln 2 = LN2_HI + LN2_LO`, `LN2_HI` with enough trailing zeros that `n · LN2_HI` is exact.
@@ -253,6 +256,8 @@ impl Lanes for f64 {
     // exp(x) rounds to 0 below ln(2⁻¹⁰⁷⁵) ≈ −745.133 and overflows above ≈ 709.783.
     const EXP_LO: f64 = -746.0;
     const EXP_HI: f64 = 710.0;
+    // ln(2⁻¹⁰²²) ≈ −708.396.
+    const EXP_NORMAL_LO: f64 = -708.0;
     const SHIFTER: f64 = 6755399441055744.0; // 1.5 · 2⁵²
     // fdlibm's split: LN2_HI has 21 trailing zero bits.
     const LN2_HI: f64 = 6.93147180369123816490e-01;
@@ -402,6 +407,8 @@ impl Lanes for f32 {
     // exp(x) rounds to 0 below ln(2⁻¹⁵⁰) ≈ −103.972 and overflows above ≈ 88.723.
     const EXP_LO: f64 = -104.0;
     const EXP_HI: f64 = 89.0;
+    // ln(2⁻¹²⁶) ≈ −87.337.
+    const EXP_NORMAL_LO: f64 = -87.0;
     const SHIFTER: f64 = 12582912.0; // 1.5 · 2²³
     // Cephes' split: LN2_HI = 0.693359375 has 15 trailing zero bits.
     const LN2_HI: f64 = 0.693359375;

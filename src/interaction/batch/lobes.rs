@@ -18,12 +18,13 @@ use crate::frame::Frame;
 use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
 use crate::interaction::polarization::KernelOutput;
 use crate::interaction::polarization::PolarizationModel;
+use crate::interaction::roughness::{RoughnessModel, RoughnessWeights};
 use crate::interaction::{Geometry, Kernel, Surface};
 use crate::packet::WavePacket;
 use crate::real::Real;
 use nalgebra::Vector3;
 
-impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
+impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<Pol, Coh, Rough> {
     /// Evaluates S2.20 for `packet` leaving along every direction of `exits`, writing both lobes
     /// into `out` and, when given, the exit s/p frames into `frames`.
     ///
@@ -138,6 +139,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         T: Real,
         S: Surface<T>,
         Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         let n = exits.len();
         check_lengths(&exits, core::slice::from_ref(out), frames.as_deref())?;

@@ -41,7 +41,7 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa};
-use super::prep::{Incidence, LobePrep, TransmissionPrep};
+use super::prep::{Incidence, LobePrep, SeriesPrep, TransmissionPrep};
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
@@ -51,6 +51,7 @@ use crate::interaction::pbsdf::{FresnelInterface, RayleighRice};
 use crate::interaction::pbsdf::{Pbsdf, PbsdfForm};
 use crate::interaction::polarization::PolarizationModel;
 use crate::interaction::polarization::{KernelOutput, PolarizationLevel};
+use crate::interaction::roughness::{RoughnessLevel, RoughnessModel, RoughnessWeights};
 use crate::interaction::{Geometry, Kernel, PreparedPacket, Surface};
 use crate::packet::WavePacket;
 use crate::psd::{GaussianPsd, Psd};
@@ -99,6 +100,7 @@ fn exit_lanes<S: Simd, F: Real>(
 fn lobe_lanes<S: Simd, F: Real>(
     s: S,
     p: &LobePrep<F>,
+    series: Option<&SeriesPrep<F>>,
     e: &ExitLanes<S, F>,
     below: Option<&TransmissionPrep<F>>,
 ) -> LobeLanes<S, F> {
@@ -146,17 +148,38 @@ fn lobe_lanes<S: Simd, F: Real>(
     let ln_alpha = F::vneg_mul_add(s, mul(s, v, v), c(p.variance), c(F::zero()));
     let lg = stages::channels::log_gaussian::<S, F>;
     let (ml, nc) = (stages::channels::mixture_log::<S, F>, p.components);
+    // The scattered channels' log weights: `ln α + ln K_α` at first order (α added below),
+    // the series' `ln Σ (w_n/g) K_α[p_n]`, which carries it.
+    let (scat_logs, redo_series) = match (series, p.three) {
+        (Some(sp), true) => {
+            let w = stages::series::log_weights::<S, F, 3>;
+            w(s, sp, [0, 1, 2], v, (h0, h1), p.variance)
+        }
+        (Some(sp), false) => {
+            let w = stages::series::log_weights::<S, F, 1>;
+            let ([half], redo) = w(s, sp, [2], v, (h0, h1), p.variance);
+            ([half; 3], redo)
+        }
+        (None, true) => (
+            [
+                ml(s, &p.scat[0][..nc], h0, h1),
+                ml(s, &p.scat[1][..nc], h0, h1),
+                ml(s, &p.scat[2][..nc], h0, h1),
+            ],
+            F::vlt(s, c(F::zero()), c(F::zero())),
+        ),
+        (None, false) => {
+            let half = ml(s, &p.scat[2][..nc], h0, h1);
+            ([half; 3], F::vlt(s, c(F::zero()), c(F::zero())))
+        }
+    };
     let ((v_spec, m_spec), (v_scat, m_scat)) = if p.three {
         let (sx, sy, sh) = (
             lg(s, &p.spec[0], h0, h1),
             lg(s, &p.spec[1], h0, h1),
             lg(s, &p.spec[2], h0, h1),
         );
-        let (dx, dy, dh) = (
-            ml(s, &p.scat[0][..nc], h0, h1),
-            ml(s, &p.scat[1][..nc], h0, h1),
-            ml(s, &p.scat[2][..nc], h0, h1),
-        );
+        let [dx, dy, dh] = scat_logs;
         (
             stages::channels::channel_mix::<S, F>(s, p, sx, sy, sh),
             stages::channels::channel_mix::<S, F>(s, p, dx, dy, dh),
@@ -164,13 +187,14 @@ fn lobe_lanes<S: Simd, F: Real>(
     } else {
         let t = p.t_stokes;
         let tv = [c(t[0]), c(t[1]), c(t[2]), c(t[3])];
-        (
-            (tv, lg(s, &p.spec[2], h0, h1)),
-            (tv, ml(s, &p.scat[2][..nc], h0, h1)),
-        )
+        ((tv, lg(s, &p.spec[2], h0, h1)), (tv, scat_logs[2]))
     };
     let zero = c(F::zero());
-    let ln_scat = add(s, add(s, ln_alpha, m_scat), c(ln_scat0));
+    let ln_scat = if series.is_some() {
+        add(s, m_scat, c(ln_scat0))
+    } else {
+        add(s, add(s, ln_alpha, m_scat), c(ln_scat0))
+    };
     let ln_spec = add(s, add(s, ln_alpha, m_spec), c(ln_spec0));
     if p.intensity {
         // S0 only, of the effective vector (1, 0, 0, 0): the scattered M₀₀ cos θ_o (the S0 of
@@ -190,7 +214,11 @@ fn lobe_lanes<S: Simd, F: Real>(
         return LobeLanes {
             specular,
             scattered,
-            redo: F::vor(s, frame.normal, F::vor(s, redo_scat, redo_spec)),
+            redo: F::vor(
+                s,
+                F::vor(s, frame.normal, redo_series),
+                F::vor(s, redo_scat, redo_spec),
+            ),
         };
     }
     let raw_scat = stages::stokes::assemble_vector::<S, F>(
@@ -223,7 +251,11 @@ fn lobe_lanes<S: Simd, F: Real>(
     LobeLanes {
         specular,
         scattered,
-        redo: F::vor(s, frame.normal, F::vor(s, redo_scat, redo_spec)),
+        redo: F::vor(
+            s,
+            F::vor(s, frame.normal, redo_series),
+            F::vor(s, redo_scat, redo_spec),
+        ),
     }
 }
 
@@ -234,21 +266,22 @@ fn lobe_lanes<S: Simd, F: Real>(
 fn lobe_lanes_either_side<S: Simd, F: Real>(
     s: S,
     p: &LobePrep<F>,
+    series: Option<&SeriesPrep<F>>,
     e: &ExitLanes<S, F>,
 ) -> LobeLanes<S, F> {
     let Some(t) = p.transmission.as_ref() else {
-        return lobe_lanes::<S, F>(s, p, e, None);
+        return lobe_lanes::<S, F>(s, p, series, e, None);
     };
     let below = F::vlt(s, e.cos_o, F::vsplat(s, F::zero()));
     if !F::vany(s, below) {
-        return lobe_lanes::<S, F>(s, p, e, None);
+        return lobe_lanes::<S, F>(s, p, series, e, None);
     }
     if !F::vany(s, F::vnot(s, below)) {
-        return lobe_lanes::<S, F>(s, p, e, Some(t));
+        return lobe_lanes::<S, F>(s, p, series, e, Some(t));
     }
     let (up, down) = (
-        lobe_lanes::<S, F>(s, p, e, None),
-        lobe_lanes::<S, F>(s, p, e, Some(t)),
+        lobe_lanes::<S, F>(s, p, series, e, None),
+        lobe_lanes::<S, F>(s, p, series, e, Some(t)),
     );
     let and = F::vand::<S>;
     LobeLanes {
@@ -285,6 +318,8 @@ fn pick<S: Simd, F: Real>(s: S, m: F::M<S>, b: [F::V<S>; 4], a: [F::V<S>; 4]) ->
 /// for the lanes the loop cannot do.
 pub(crate) struct PartialLobes<'r, 'e, 'o, 'f, F: Real> {
     pub(crate) preps: &'r [LobePrep<F>],
+    /// The Kirchhoff series' constants (with one wavelength only), `None` at first order.
+    pub(crate) series: Option<&'r SeriesPrep<F>>,
     pub(crate) exits: DirectionsSoa<'e, F>,
     pub(crate) outs: &'r mut [LobesSoa<'o, F>],
     pub(crate) frames: Option<&'r mut ExitFramesSoa<'f, F>>,
@@ -330,9 +365,10 @@ impl<F: Real> WithSimd for PartialLobes<'_, '_, '_, '_, F> {
     fn with_simd<S: Simd>(self, s: S) -> Result<(), Error> {
         let Self {
             preps,
+            series,
             exits,
             outs,
-            mut frames,
+            frames,
             scalar,
         } = self;
         let Some(prep) = preps.first() else {
@@ -368,69 +404,95 @@ impl<F: Real> WithSimd for PartialLobes<'_, '_, '_, '_, F> {
         if n == 0 {
             return Ok(());
         }
-        // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` exits (overlapping
-        // the vector before it), or, for a batch shorter than one vector, padded with exit 0.
-        let chunks = n.div_ceil(lanes);
-        // The Intensity level writes S0 only.
-        let stokes_len = if prep.intensity { 1 } else { 4 };
-        let mut buf = [[F::zero(); MAX_LANES]; 3];
-        for chunk in 0..chunks {
-            let (start, count) = if n >= lanes {
-                ((chunk * lanes).min(n - lanes), lanes)
-            } else {
-                (0, n)
-            };
-            let [bx, by, bz] = &mut buf;
-            let x = load::<S, F>(xs, bx, start, count);
-            let y = load::<S, F>(ys, by, start, count);
-            let z = load::<S, F>(zs, bz, start, count);
-            let e = exit_lanes::<S, F>(s, prep, x, y, z);
-            if let Some(f) = frames.as_deref_mut() {
-                for k in 0..3 {
-                    store::<S, F>(s, f.s[k], e.frame.s_out[k], start, count);
-                }
+        // Two instantiations of the loop, so that the first-order one holds no series code
+        // (inlined into one loop, the series' registers slowed first order by 1.5×).
+        let xyz = [xs, ys, zs];
+        if series.is_some() {
+            lobe_loop::<S, F, true>(s, preps, series, xyz, outs, frames, scalar)
+        } else {
+            lobe_loop::<S, F, false>(s, preps, None, xyz, outs, frames, scalar)
+        }
+    }
+}
+
+/// The loop of [`PartialLobes`] over the vectors of (validated) exits `xyz`; `SERIES` when
+/// `series` is `Some`.
+#[inline(always)]
+fn lobe_loop<S: Simd, F: Real, const SERIES: bool>(
+    s: S,
+    preps: &[LobePrep<F>],
+    series: Option<&SeriesPrep<F>>,
+    [xs, ys, zs]: [&[F]; 3],
+    outs: &mut [LobesSoa<'_, F>],
+    mut frames: Option<&mut ExitFramesSoa<'_, F>>,
+    scalar: ScalarRedo<'_, F>,
+) -> Result<(), Error> {
+    let series = if SERIES { series } else { None };
+    let prep = &preps[0];
+    let n = xs.len();
+    let lanes = F::width::<S>();
+    // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` exits (overlapping
+    // the vector before it), or, for a batch shorter than one vector, padded with exit 0.
+    let chunks = n.div_ceil(lanes);
+    // The Intensity level writes S0 only.
+    let stokes_len = if prep.intensity { 1 } else { 4 };
+    let mut buf = [[F::zero(); MAX_LANES]; 3];
+    for chunk in 0..chunks {
+        let (start, count) = if n >= lanes {
+            ((chunk * lanes).min(n - lanes), lanes)
+        } else {
+            (0, n)
+        };
+        let [bx, by, bz] = &mut buf;
+        let x = load::<S, F>(xs, bx, start, count);
+        let y = load::<S, F>(ys, by, start, count);
+        let z = load::<S, F>(zs, bz, start, count);
+        let e = exit_lanes::<S, F>(s, prep, x, y, z);
+        if let Some(f) = frames.as_deref_mut() {
+            for k in 0..3 {
+                store::<S, F>(s, f.s[k], e.frame.s_out[k], start, count);
             }
-            for (w, (p, out)) in preps.iter().zip(outs.iter_mut()).enumerate() {
-                let l = lobe_lanes_either_side::<S, F>(s, p, &e);
-                for k in 0..stokes_len {
-                    store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
-                    store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
-                }
-                if F::vany(s, l.redo) {
-                    let mut flags = [F::zero(); MAX_LANES];
-                    let redo =
-                        F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
-                    F::store_partial(s, &mut flags[..lanes], redo);
-                    for (j, flag) in flags[..count].iter().enumerate() {
-                        if *flag != F::zero() {
-                            let i = start + j;
-                            let (sp, sc, so) = scalar(w, i)?;
-                            for k in 0..stokes_len {
-                                out.specular.s[k][i] = sp[k];
-                                out.scattered.s[k][i] = sc[k];
-                            }
-                            if w == 0
-                                && let Some(f) = frames.as_deref_mut()
-                            {
-                                for (col, v) in f.s.iter_mut().zip(so) {
-                                    col[i] = v;
-                                }
+        }
+        for (w, (p, out)) in preps.iter().zip(outs.iter_mut()).enumerate() {
+            let l = lobe_lanes_either_side::<S, F>(s, p, series, &e);
+            for k in 0..stokes_len {
+                store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
+                store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
+            }
+            if F::vany(s, l.redo) {
+                let mut flags = [F::zero(); MAX_LANES];
+                let redo =
+                    F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
+                F::store_partial(s, &mut flags[..lanes], redo);
+                for (j, flag) in flags[..count].iter().enumerate() {
+                    if *flag != F::zero() {
+                        let i = start + j;
+                        let (sp, sc, so) = scalar(w, i)?;
+                        for k in 0..stokes_len {
+                            out.specular.s[k][i] = sp[k];
+                            out.scattered.s[k][i] = sc[k];
+                        }
+                        if w == 0
+                            && let Some(f) = frames.as_deref_mut()
+                        {
+                            for (col, v) in f.s.iter_mut().zip(so) {
+                                col[i] = v;
                             }
                         }
                     }
                 }
             }
         }
-        Ok(())
     }
+    Ok(())
 }
 
 /// The lane constants of one wavelength: `Some` when the kernel and the material are those of
 /// the module docs and the per-packet constants are inside what the lanes reproduce (see
 /// [`LobePrep::new`], and [`LobePrep::at_interface`] with `interface = Some(η)`); `None`
 /// otherwise, and the caller goes exit by exit.
-pub(crate) fn lane_prep<T, S, Pol, Coh>(
-    kernel: &Kernel<Pol, Coh>,
+pub(crate) fn lane_prep<T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
     material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
@@ -442,7 +504,15 @@ where
     S: Surface<T>,
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessModel,
 {
+    // First order, or the Kirchhoff series (its weights from `series_prep`, partially coherent
+    // only: the incoherent series is a closed form the lanes do not have).
+    let series = match (Rough::LEVEL, kernel.roughness().lane_series()) {
+        (RoughnessLevel::FirstOrder, _) => false,
+        (RoughnessLevel::KirchhoffSeries, Some(_)) => true,
+        _ => return None,
+    };
     let (full, intensity) = match Pol::LEVEL {
         PolarizationLevel::Full => (true, false),
         PolarizationLevel::OneShape => (false, false),
@@ -451,7 +521,7 @@ where
     // The lanes' weights are the closed forms: the incoherent level's, and the partially
     // coherent level's where its blur of a Gaussian is exact (`Partial<ClosedForm>`).
     let incoherent = match Coh::LEVEL {
-        CoherenceLevel::Incoherent => true,
+        CoherenceLevel::Incoherent if !series => true,
         CoherenceLevel::Partial if kernel.coherence().closed_form_gaussian() => false,
         _ => return None,
     };
@@ -494,6 +564,40 @@ where
     } else {
         prep
     })
+}
+
+/// The Kirchhoff series' lane constants for the lane constants `prep` of the same call
+/// ([`lane_prep`]): `None` at first order, `Some(None)` where the series cannot run in lanes
+/// (a PSD that is not one exact Gaussian, a constant [`SeriesPrep::new`] refuses).
+pub(crate) fn series_prep<T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
+    material: &S,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    prep: &LobePrep<T>,
+) -> Option<Option<SeriesPrep<T>>>
+where
+    T: Real,
+    S: Surface<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessModel,
+{
+    let params = kernel.roughness().lane_series()?;
+    let parts = material.parts();
+    let crate::psd::Shape::Gaussian(psd) = parts.psd.form().shape() else {
+        return Some(None);
+    };
+    if !parts.psd.form().is_exact() {
+        return Some(None);
+    }
+    let [x, y, h] = &prepared.sections;
+    Some(SeriesPrep::new(
+        [x.as_ref(), y.as_ref(), h.as_ref()],
+        prep.three,
+        psd,
+        prep.mirrored,
+        params,
+    ))
 }
 
 /// What the lanes read of a material: a [`crate::interaction::RoughConductor`] or a
@@ -540,8 +644,8 @@ impl<'a, T: Real> LaneMaterial<'a, T> {
 
 /// Exit `exit` of `packet` by the per-direction kernel (in reflection, or at the interface
 /// `Some(η)`), as the lanes write it.
-pub(crate) fn scalar_exit<T, S, Pol, Coh>(
-    kernel: &Kernel<Pol, Coh>,
+pub(crate) fn scalar_exit<T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
     material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
@@ -553,6 +657,7 @@ where
     S: Surface<T>,
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessWeights<T, S::Psd, Coh>,
 {
     let g = match interface {
         Some(eta) => Geometry::for_packet_at_interface(packet, surface, eta, exit)?,
@@ -576,8 +681,8 @@ where
     clippy::too_many_arguments,
     reason = "evaluate_batch's arguments and its prepared packet"
 )]
-pub(crate) fn try_evaluate<T, S, Pol, Coh>(
-    kernel: &Kernel<Pol, Coh>,
+pub(crate) fn try_evaluate<T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
     material: &S,
     prepared: &PreparedPacket<T, Pol, Coh>,
     packet: &WavePacket<T>,
@@ -591,8 +696,14 @@ where
     S: Surface<T>,
     Pol: PolarizationModel,
     Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessWeights<T, S::Psd, Coh>,
 {
     let prep = lane_prep(kernel, material, prepared, packet, surface, interface)?;
+    let series = match series_prep(kernel, material, prepared, &prep) {
+        None => None,
+        Some(Some(sp)) => Some(sp),
+        Some(None) => return None,
+    };
     let mut scalar = |_: usize, i: usize| {
         let exit = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
         scalar_exit(
@@ -606,6 +717,7 @@ where
     };
     Some(crate::simd::dispatch(PartialLobes {
         preps: core::slice::from_ref(&prep),
+        series: series.as_ref(),
         exits,
         outs: core::slice::from_mut(out),
         frames,
@@ -638,6 +750,7 @@ mod tests {
         let mut calls = 0;
         crate::simd::dispatch(PartialLobes {
             preps: core::slice::from_ref(prep),
+            series: None,
             exits: DirectionsSoa { x, y, z },
             outs: core::slice::from_mut(&mut out),
             frames: None,

@@ -266,6 +266,9 @@ pub(crate) struct LobePrep<T: Real> {
     pub(crate) inc: Incidence<T>,
     /// The `Full` level with two shapes: three channels mixed per exit (else `Ξ_½` only).
     pub(crate) three: bool,
+    /// Built on the caller's frame reversed (light from below an interface): the PSD sees
+    /// each section mirrored ([`LobePrep::new`]).
+    pub(crate) mirrored: bool,
     /// `ln K^spec_α` and `ln K_α` for `α = x, y, ½` (only `½` when not `three`), `ln 2π` in `c`;
     /// `ln K_α` per PSD component (`scat[α][j]`, `j < components`: `K_α = Σⱼ K_αj`).
     pub(crate) spec: [LogGaussian<T>; 3],
@@ -390,6 +393,7 @@ impl<T: Real> LobePrep<T> {
         let r_spec = inc.n * (inc.cos_i + inc.cos_i) - inc.s;
         let out = Self {
             three,
+            mirrored,
             spec: [x.0, y.0, half.0],
             scat: [x.1, y.1, half.1],
             components: psd.len(),
@@ -520,5 +524,109 @@ impl<F: Real> TransmissionConsts<F> {
                 sin_i: p.si2.sqrt(),
             }
         })
+    }
+}
+
+/// The most orders the series lanes sum ([`SeriesPrep`]); a lane whose sum has not met its
+/// bound by then is redone by the per-direction kernel.
+pub(crate) const SERIES_ORDERS: usize = 160;
+
+/// One channel's constants of the series lanes: the section's quadratic form and, per order
+/// `n = 1 ..= SERIES_ORDERS`, the closed form's constants.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SeriesChannel<T: Real> {
+    /// `(a, b, c)` with `h_tᵀ adj(Ξ) h_t = (a h₀ + b h₁)² + (c h₀)²` at the lanes' `h_t` (the
+    /// PSD's `h_t` mirrored where the section is, [`SeriesPrep::new`]).
+    pub(crate) quad: [T; 3],
+    /// `ln 2πσ² − ½ ln|nA + Ξ| − ln n!` at index `n − 1`.
+    pub(crate) k: [T; SERIES_ORDERS],
+    /// `½ / |nA + Ξ|` at index `n − 1`.
+    pub(crate) half_inv_det: [T; SERIES_ORDERS],
+}
+
+/// The per-packet constants of the Kirchhoff series in lanes
+/// (`stages::series`): the closed form of every order's weight of a Gaussian PSD blurred by
+/// each channel's section (`roughness::GaussianTerms`, with `A = Λ⁻¹`):
+/// ```text
+/// ln t_n = −g + (n − 1) ln g − ln n! + ln 2πσ² − ½ ln|nA + Ξ| − ½ (n h_tᵀadj(A)h_t + h_tᵀadj(Ξ)h_t)/|nA + Ξ|
+/// ```
+/// `g = (vσ)²` per lane.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SeriesPrep<T: Real> {
+    /// `(a, b, c)` of `h_tᵀ adj(A) h_t`, as [`SeriesChannel::quad`].
+    pub(crate) psd_quad: [T; 3],
+    /// The channels `x, y, ½` (only `½` is set without three channels).
+    pub(crate) channels: [SeriesChannel<T>; 3],
+    /// `ln(tolerance/2)`: a lane's sum stops where a falling term (ratio at most ½ to the one
+    /// before) is below `tolerance/2` of the largest.
+    pub(crate) ln_half_tol: T,
+    /// Lanes with `g ≥ g_max` are redone (the geometric switch, or the lanes' range).
+    pub(crate) g_max: T,
+}
+
+/// The largest `g` the series lanes sum in `f64` and in `f32`: the terms' parts `g`,
+/// `(n − 1) ln g` and `ln n!` reach `~g ln g` before they cancel, and each is rounded to the
+/// lanes' type (module docs of `stages::series`).
+const SERIES_LANE_G: (f64, f64) = (64.0, 16.0);
+
+impl<T: Real> SeriesPrep<T> {
+    /// The constants for the sections `sections` (`x, y, ½`; only `½` read unless `three`) of
+    /// the prepared packet, the Gaussian PSD `psd` (variance `σ²`, spectral Cholesky factor
+    /// `L_A`), mirrored as [`LobePrep::new`] (`mirrored`: light from below an interface, the
+    /// PSD's `h_t = (h₀, −h₁)` of the lanes' and each section `D Ξ D`, as `psd_xi` and
+    /// `Geometry::psd_h` have them), the series' `tolerance` and its switch to the geometric
+    /// limit `geometric_from`. `None` where a constant is not finite or `|nA + Ξ|` not positive.
+    pub(crate) fn new(
+        sections: [Option<&crate::gaussian::Gaussian<T, 2>>; 3],
+        three: bool,
+        psd: &GaussianPsd<T, 2>,
+        mirrored: bool,
+        (tolerance, geometric_from): (f64, f64),
+    ) -> Option<Self> {
+        use crate::interaction::roughness::{GaussianTerms, SERIES_MAX_G, ln_factorial};
+        use crate::psd::CorrelationPowers;
+        let (sigma2, la) = psd.gaussian_spectrum()?;
+        let sign = if mirrored { T::one() } else { -T::one() };
+        let quad = |l: &nalgebra::Matrix2<T>| [l[(1, 0)], sign * l[(0, 0)], l[(1, 1)]];
+        let zero = Vector2::zeros();
+        let channel = |xi: &crate::gaussian::Gaussian<T, 2>| -> Option<SeriesChannel<T>> {
+            let xi = if mirrored { xi.mirrored_y() } else { *xi };
+            let gt = GaussianTerms::new(sigma2, &la, Some(&xi), &zero)?;
+            let mut out = SeriesChannel {
+                quad: quad(xi.cholesky_factor()),
+                k: [T::zero(); SERIES_ORDERS],
+                half_inv_det: [T::zero(); SERIES_ORDERS],
+            };
+            for i in 0..SERIES_ORDERS {
+                let n = (i + 1) as f64;
+                let det = (n * gt.d2 + gt.d1) * n + gt.d0;
+                if !(det > 0.0 && det.is_finite()) {
+                    return None;
+                }
+                out.k[i] = T::lit(gt.ln_front - 0.5 * det.ln() - ln_factorial(i as u64 + 1));
+                out.half_inv_det[i] = T::lit(0.5 / det);
+            }
+            let finite = out.quad.iter().chain(&out.k).chain(&out.half_inv_det);
+            finite.into_iter().all(|v| v.is_finite()).then_some(out)
+        };
+        let half = channel(sections[2]?)?;
+        let (x, y) = if three {
+            (channel(sections[0]?)?, channel(sections[1]?)?)
+        } else {
+            (half, half)
+        };
+        let lane_g = if T::EPSILON.to_f64() < 1e-10 {
+            SERIES_LANE_G.0
+        } else {
+            SERIES_LANE_G.1
+        };
+        let out = Self {
+            psd_quad: quad(&la),
+            channels: [x, y, half],
+            ln_half_tol: T::lit((0.5 * tolerance).ln()),
+            g_max: T::lit(geometric_from.min(SERIES_MAX_G).min(lane_g)),
+        };
+        let finite = out.psd_quad.iter().all(|v| v.is_finite()) && out.ln_half_tol.is_finite();
+        finite.then_some(out)
     }
 }

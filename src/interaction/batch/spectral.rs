@@ -222,6 +222,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             )
         };
         crate::simd::dispatch(PartialLobes {
+            series: None,
             preps: &gathered[..ws.len()],
             exits,
             outs,

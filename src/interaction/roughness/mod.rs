@@ -76,7 +76,14 @@ use crate::psd::{CorrelationPowers, Psd};
 use crate::real::Real;
 
 pub(crate) mod sealed {
-    pub trait Sealed {}
+    pub trait Sealed {
+        /// The Kirchhoff series' `(tolerance, geometric_from)` for the batch kernel's lanes
+        /// (`interaction::batch::stages::series`); `None` at every other level.
+        #[inline]
+        fn lane_series(&self) -> Option<(f64, f64)> {
+            None
+        }
+    }
 }
 
 /// The roughness levels, as values (for reports).
@@ -192,7 +199,12 @@ pub struct KirchhoffSeries {
 pub struct Geometric;
 
 impl sealed::Sealed for FirstOrder {}
-impl sealed::Sealed for KirchhoffSeries {}
+impl sealed::Sealed for KirchhoffSeries {
+    #[inline]
+    fn lane_series(&self) -> Option<(f64, f64)> {
+        Some((self.tolerance, self.geometric_from))
+    }
+}
 impl sealed::Sealed for Geometric {}
 
 impl RoughnessModel for FirstOrder {
@@ -420,7 +432,7 @@ const FACTORIALS: [f64; 21] = [
 
 /// `ln n!`: one logarithm of the exact factorial for `n ≤ 20`, Stirling's series beyond
 /// (`x = n + 1 ≥ 22`: the first neglected term, `1/(1188 x⁹)`, is below 10⁻¹⁵).
-fn ln_factorial(n: u64) -> f64 {
+pub(crate) fn ln_factorial(n: u64) -> f64 {
     if n <= 20 {
         return FACTORIALS[n as usize].ln();
     }
@@ -442,17 +454,17 @@ fn ln_factorial(n: u64) -> f64 {
 /// `h_tᵀadj(A)h_t = |L_Aᵀ Jᵀ h_t|²` — so nothing cancels, even for the ill-conditioned sections
 /// of grazing incidence. One logarithm per order instead of a blur.
 #[derive(Debug, Clone, Copy)]
-struct GaussianTerms {
-    ln_front: f64,
-    d2: f64,
-    d1: f64,
-    d0: f64,
+pub(crate) struct GaussianTerms {
+    pub(crate) ln_front: f64,
+    pub(crate) d2: f64,
+    pub(crate) d1: f64,
+    pub(crate) d0: f64,
     c1: f64,
     c0: f64,
 }
 
 impl GaussianTerms {
-    fn new<T: Real>(
+    pub(crate) fn new<T: Real>(
         sigma2: T,
         la: &Matrix2<T>,
         xi: Option<&Gaussian<T, 2>>,

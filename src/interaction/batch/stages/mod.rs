@@ -12,6 +12,8 @@
 //!   run yet);
 //! - [`psd`]: the weight `cos θ_o · exp(ln prefactor + ln p(h_t) + ln α)`
 //!   (`GaussianPsd::log_value`, the Debye–Waller factor);
+//! - [`series`]: the Kirchhoff series' channel weights `ln Σ (w_n/g) K[p_n]` (`Terms::sum`),
+//!   for the series kernel in place of `ln α + ln K`;
 //! - [`stokes`]: `w · M′ (T S)` from the factors (`Mueller::from_jones`);
 //! - [`channels`]: the channel weights `ln K`, the `Full` level's channel mix, the projection
 //!   onto the cone and the final scale (`PreparedPacket::channel_mix`, `onto_cone`,
@@ -31,6 +33,7 @@ pub(crate) mod fresnel;
 pub(crate) mod geometry;
 pub(crate) mod psd;
 pub(crate) mod rayleigh_rice;
+pub(crate) mod series;
 pub(crate) mod specular;
 pub(crate) mod stokes;
 pub(crate) mod validity;
