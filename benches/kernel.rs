@@ -505,8 +505,9 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
 /// `Kernel::<Full, Partial, KirchhoffSeries>` (tolerance 10⁻⁶, the default) and of the
 /// first-order kernel on the scene of [`batch_partial_for`] (1024 exits within ±7.5° of the
 /// mirror direction of 30° incidence, two shapes, rough glass, ℓ = 2 µm) at `vσ ≈ 1` and
-/// `3` in the mirror direction (`σ = 0.046, 0.138` µm at λ = 0.5 µm), and the per-direction
-/// series (`evaluate_prepared`) at `vσ ≈ 1`.
+/// `3` in the mirror direction (`σ = 0.046, 0.138` µm at λ = 0.5 µm), the same at the
+/// `Intensity` level (one channel instead of three), and the per-direction series
+/// (`evaluate_prepared`) at `vσ ≈ 1`.
 fn batch_series_for<T: Real>(c: &mut Criterion, prec: &str) {
     const M: usize = 1024;
     let theta_i = 30f64.to_radians();
@@ -522,6 +523,8 @@ fn batch_series_for<T: Real>(c: &mut Criterion, prec: &str) {
         .collect();
     let first = Kernel::<Full, Partial>::default();
     let series = first.with_roughness(KirchhoffSeries::default());
+    let first_i = Kernel::<Intensity, Partial>::default();
+    let series_i = first_i.with_roughness(KirchhoffSeries::default());
     let mut g = c.benchmark_group(format!("kernel_batch_series/{prec}"));
     g.throughput(criterion::Throughput::Elements(M as u64));
     for (name, sigma) in [("vs1", 0.046), ("vs3", 0.138)] {
@@ -543,6 +546,22 @@ fn batch_series_for<T: Real>(c: &mut Criterion, prec: &str) {
             interface: None,
         }
         .bench(&mut g, &format!("series-{name}"), &exits);
+        BatchScene {
+            kernel: &first_i,
+            material: &material,
+            packet: &packet,
+            surface: &surf,
+            interface: None,
+        }
+        .bench(&mut g, &format!("intensity-first-order-{name}"), &exits);
+        BatchScene {
+            kernel: &series_i,
+            material: &material,
+            packet: &packet,
+            surface: &surf,
+            interface: None,
+        }
+        .bench(&mut g, &format!("intensity-series-{name}"), &exits);
         if name == "vs1" {
             g.bench_function(BenchmarkId::new("per-direction-series", name), |bch| {
                 bch.iter(|| {

@@ -103,7 +103,10 @@ mod tests {
                     } else {
                         f64::from(f32::MIN_POSITIVE)
                     };
-                    assert!(gf >= 0.5 * mp && gf <= 2.0 * mp, "{what}: e^{xf:e} = {gf:e}");
+                    assert!(
+                        gf >= 0.5 * mp && gf <= 2.0 * mp,
+                        "{what}: e^{xf:e} = {gf:e}"
+                    );
                 }
             }
         });

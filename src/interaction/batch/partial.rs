@@ -461,8 +461,7 @@ fn lobe_loop<S: Simd, F: Real, const SERIES: bool>(
             }
             if F::vany(s, l.redo) {
                 let mut flags = [F::zero(); MAX_LANES];
-                let redo =
-                    F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
+                let redo = F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
                 F::store_partial(s, &mut flags[..lanes], redo);
                 for (j, flag) in flags[..count].iter().enumerate() {
                     if *flag != F::zero() {

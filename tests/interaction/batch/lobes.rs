@@ -42,31 +42,31 @@ use proptest::prelude::*;
 
 /// One scene, in f64.
 #[derive(Debug, Clone)]
-struct Scene {
-    theta_i: f64,
-    phi_i: f64,
-    normal: Vector3<f64>,
-    psi: f64,
-    stokes: Vector4<f64>,
+pub(super) struct Scene {
+    pub(super) theta_i: f64,
+    pub(super) phi_i: f64,
+    pub(super) normal: Vector3<f64>,
+    pub(super) psi: f64,
+    pub(super) stokes: Vector4<f64>,
     /// Coherence width of the x shape (λ units of length, µm) and the y/x width ratio.
-    width: f64,
-    ratio: f64,
-    eta: Complex<f64>,
+    pub(super) width: f64,
+    pub(super) ratio: f64,
+    pub(super) eta: Complex<f64>,
     /// Per component: rms height and correlation covariance.
-    components: Vec<(f64, Matrix2<f64>)>,
-    wavelength: f64,
-    exits: Vec<Vector3<f64>>,
+    pub(super) components: Vec<(f64, Matrix2<f64>)>,
+    pub(super) wavelength: f64,
+    pub(super) exits: Vec<Vector3<f64>>,
     /// Which of the six lane levels.
-    level: usize,
+    pub(super) level: usize,
     /// A dielectric interface of index `Re η` (exits on both sides, some near Snell's
     /// direction) instead of a conductor in reflection.
-    interface: bool,
+    pub(super) interface: bool,
     /// At the interface, the light comes from below (from inside the medium of index `Re η`).
-    from_below: bool,
+    pub(super) from_below: bool,
 }
 
 /// The scene's packet (at `wavelength × stretch`) and surface in `T`.
-fn build<T: Real>(sc: &Scene, stretch: f64) -> (WavePacket<T>, Frame<T>) {
+pub(super) fn build<T: Real>(sc: &Scene, stretch: f64) -> (WavePacket<T>, Frame<T>) {
     let hint = if sc.normal.x.abs() < 0.9 {
         Vector3::x()
     } else {
@@ -135,7 +135,7 @@ fn dielectric<T: Real>(
 }
 
 /// The geometry of `exit`: in reflection, or at the interface `Some(η)`.
-fn geometry<T: Real>(
+pub(super) fn geometry<T: Real>(
     packet: &WavePacket<T>,
     surface: &Frame<T>,
     interface: Option<T>,
@@ -148,9 +148,9 @@ fn geometry<T: Real>(
     .unwrap()
 }
 
-type Columns<T> = Vec<Vec<T>>;
+pub(super) type Columns<T> = Vec<Vec<T>>;
 
-fn soa<T>(cols: &mut [Vec<T>]) -> LobesSoa<'_, T> {
+pub(super) fn soa<T>(cols: &mut [Vec<T>]) -> LobesSoa<'_, T> {
     let [a, b, c, d, e, f, g, h] = cols else {
         unreachable!()
     };
@@ -160,7 +160,7 @@ fn soa<T>(cols: &mut [Vec<T>]) -> LobesSoa<'_, T> {
     }
 }
 
-fn columns<T: Real>(n: usize) -> Columns<T> {
+pub(super) fn columns<T: Real>(n: usize) -> Columns<T> {
     vec![vec![T::lit(-7.0); n]; 8]
 }
 
@@ -357,7 +357,7 @@ fn check_material<T: Real, Sp, Sc>(
 }
 
 /// A pBSDF without polarization: the wrapped one's Mueller matrix replaced by `M₀₀ I`.
-struct Unpolarizing<P>(P);
+pub(super) struct Unpolarizing<P>(pub(super) P);
 
 impl<T: Real, P: Pbsdf<T>> Pbsdf<T> for Unpolarizing<P> {
     fn mueller(&self, g: &Geometry<T>) -> Mueller<T> {
@@ -367,7 +367,7 @@ impl<T: Real, P: Pbsdf<T>> Pbsdf<T> for Unpolarizing<P> {
 
 /// `n` exits: half within ~10° of the specular direction, half over the hemisphere
 /// (`cos θ_o ≥ 0.002`), each scaled by a factor in [0.1, 10].
-fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
+pub(super) fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
     let hint = if sc.normal.x.abs() < 0.9 {
         Vector3::x()
     } else {
@@ -407,7 +407,7 @@ fn exit_set(sc: &Scene, n: usize, seed: u64) -> Vec<Vector3<f64>> {
 }
 
 prop_compose! {
-    fn scene_strategy()(
+    pub(super) fn scene_strategy()(
         theta_i in 0.0..83f64.to_radians(),
         phi_i in common::angle(),
         normal in common::unit_vector3(),
@@ -465,7 +465,7 @@ proptest! {
 /// [`scene_strategy`]'s scenes as a dielectric interface of index `Re η` (1–3 or 0.05–3),
 /// lit from above or from below (from the medium of index `Re η`: total internal reflection
 /// either way in part of the draws), exits on both sides.
-fn interface_strategy() -> impl Strategy<Value = Scene> {
+pub(super) fn interface_strategy() -> impl Strategy<Value = Scene> {
     (scene_strategy(), 0..4usize, any::<u64>(), any::<bool>()).prop_map(
         |(mut sc, len, seed, below)| {
             sc.interface = true;

@@ -2,3 +2,4 @@
 
 mod lobes;
 mod plane_wave;
+mod series;

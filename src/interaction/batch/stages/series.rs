@@ -180,7 +180,11 @@ mod tests {
         exits: &[Vector3<f64>],
     ) -> (usize, f64) {
         let theta_i = 35f64.to_radians();
-        let up = if matches!(interface, Some((_, true))) { 1.0 } else { -1.0 };
+        let up = if matches!(interface, Some((_, true))) {
+            1.0
+        } else {
+            -1.0
+        };
         let travel = Vector3::new(theta_i.sin(), 0.0, up * theta_i.cos()).map(T::lit);
         let frame = Frame::sp(travel, Vector3::z())
             .unwrap()
@@ -268,9 +272,6 @@ mod tests {
                             let ln_l = if s0 > 0.0 { s0.ln().abs() } else { 0.0 };
                             let unit = eps * (4.0 + ln_l) * s0 + T::MIN_POSITIVE.to_f64();
                             let rel = (got - want[k].to_f64()).abs() / unit;
-                            if rel > worst && std::env::var("SERIES_DEBUG").is_ok() {
-                                println!("  exit {i} {e:?} lobe {lobe} S{k}: got {got:e} want {:e} (S0 {s0:e})", want[k].to_f64());
-                            }
                             worst = worst.max(rel);
                         }
                     }
@@ -306,27 +307,74 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn bench_scene() {
-        let exits = near(0.13, 1024, 1.0);
-        let t = std::time::Instant::now();
-        let (r, w) = run::<f64, Full>(0.046, 1e-6, None, &exits);
-        println!("bench scene: redone {r}, worst {w:e}, {:?}", t.elapsed());
+    /// Exits over the hemisphere of side `z` (`cos θ_o ≥ 0.05`).
+    fn hemisphere(n: usize, z: f64) -> Vec<Vector3<f64>> {
+        (0..n)
+            .map(|i| {
+                let c = 0.05 + 0.95 * ((i * 37 % n) as f64 + 0.5) / n as f64;
+                let p = std::f64::consts::TAU * (i as f64 + 0.5) / n as f64;
+                let sn = (1.0 - c * c).sqrt();
+                Vector3::new(sn * p.cos(), sn * p.sin(), z * c)
+            })
+            .collect()
     }
 
+    /// The lanes against the per-direction series kernel with the same tolerance, on a rough
+    /// conductor and a glass interface lit from above and from below, at `vσ ≈ 0.3, 1, 3` and
+    /// 6 in the mirror direction (`v = 2k cos 35°`, λ = 0.5 µm), near the lobes and over the
+    /// hemisphere.
+    ///
+    /// Bound per Stokes parameter of a lobe of `S0 = L` (the exit's one-at-a-time value), in
+    /// units `u = ε (4 + |ln L|) L + MIN_POSITIVE`: `|Δ| ≤ 8 u + tol L` (the first-order lanes'
+    /// `4 ε (4 + |ln L| + 2 |ln S0|)` with `S0 = 1`, doubled for the unpolarized-weight factor
+    /// `L̂/L` the integration tests bound separately, plus the two sums' truncations, each
+    /// within `tol/2`). Measured: f64 (tol 10⁻¹²) at most 0.43 tol L; f32 (tol 10⁻⁶) at most
+    /// 2.2 u near the lobes. Redone lanes: none near the lobes; over the hemisphere only those
+    /// whose sum needs more than `SERIES_ORDERS` orders or whose `g` is out of the lanes' range.
     #[test]
     fn lanes_match_the_per_direction_series() {
-        // σ of vσ ≈ 0.3, 1, 3 (and 6 in f64) at 0.5 µm near the mirror direction.
-        for sigma in [0.0066, 0.022, 0.066] {
+        let cases = [(0.015, true), (0.05, true), (0.15, true), (0.3, false)];
+        for (sigma, f32_in_lanes) in cases {
             for iface in [None, Some((1.5, false)), Some((1.5, true))] {
-                let exits = near(0.3, 97, if iface.is_some() { -1.0 } else { 1.0 });
-                let exits: Vec<_> = exits.iter().chain(&near(0.3, 97, 1.0)).copied().collect();
-                let (r, w) = run::<f64, Full>(sigma, 1e-12, iface, &exits);
-                println!("f64 Full σ {sigma} {iface:?}: redone {r}, worst {w:e}");
-                let (r, w) = run::<f64, Intensity>(sigma, 1e-12, iface, &exits);
-                println!("f64 Int σ {sigma} {iface:?}: redone {r}, worst {w:e}");
-                let (r, w) = run::<f32, Full>(sigma, 1e-6, iface, &exits);
-                println!("f32 Full σ {sigma} {iface:?}: redone {r}, worst {w:e}");
+                let z = if iface.is_some() { -1.0 } else { 1.0 };
+                let lobe: Vec<_> = near(0.3, 97, z)
+                    .into_iter()
+                    .chain(near(0.3, 97, 1.0))
+                    .collect();
+                let wide: Vec<_> = hemisphere(61, 1.0)
+                    .into_iter()
+                    .chain(hemisphere(61, z))
+                    .collect();
+                let what = format!("σ {sigma}, interface {iface:?}");
+                for (exits, near_lobe) in [(&lobe, true), (&wide, false)] {
+                    let (tol, units) = (1e-12, 1e-12 / (f64::EPSILON * 4.0));
+                    let (r, w) = run::<f64, Full>(sigma, tol, iface, exits);
+                    assert!(w <= 8.0 + units, "f64 Full {what}: {w} units");
+                    assert!(!near_lobe || r == 0, "f64 Full {what}: {r} lanes redone");
+                    let (r, w) = run::<f64, Intensity>(sigma, tol, iface, exits);
+                    assert!(w <= 8.0 + units, "f64 Intensity {what}: {w} units");
+                    assert!(
+                        !near_lobe || r == 0,
+                        "f64 Intensity {what}: {r} lanes redone"
+                    );
+                    let (r, w) = run::<f32, Full>(sigma, 1e-6, iface, exits);
+                    assert!(
+                        w <= 8.0 + 1e-6 / f64::from(f32::EPSILON) / 4.0,
+                        "f32 {what}: {w} units"
+                    );
+                    // Near the lobes every lane stays in lanes, but for a rare one whose S0 is
+                    // at the edge of the normal range; beyond the f32 lanes' g every lane is
+                    // redone in reflection (the overlapping last vector counts some twice; in
+                    // transmission v = k (cos θ_i − η cos θ_o) is smaller).
+                    if near_lobe && (f32_in_lanes || iface.is_none()) {
+                        let ok = if f32_in_lanes {
+                            r <= 2
+                        } else {
+                            r >= exits.len()
+                        };
+                        assert!(ok, "f32 {what}: {r} lanes redone");
+                    }
+                }
             }
         }
     }

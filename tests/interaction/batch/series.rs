@@ -1,0 +1,199 @@
+//! Verifies `Kernel::evaluate_batch` at the Kirchhoff series' roughness level
+//! (`interaction::batch::stages::series`: the lanes for a Gaussian PSD blurred in closed form)
+//! against the per-direction series kernel `Kernel::evaluate` with the same tolerance:
+//! proptest over the scenes of `lobes.rs` (incidence 0–83°, tilted surfaces, turned packet
+//! frames, polarized input, two coherence shapes of widths 0.3–300 λ, conductors with
+//! dielectric and absorbing indices, glass interfaces lit from either side, exits near the
+//! specular direction and over the hemisphere, not unit length), with the scene's first PSD
+//! component as a `GaussianPsd` whose rms height is scaled so that `vσ` at normal incidence,
+//! `4πσ/λ`, is 0.05–8 (the series' orders from one to ~90), at `Full`, `OneShape` and
+//! `Intensity` with `Partial` (the lanes, f64 to 10⁻¹⁰ and f32 to 10⁻⁶) and `Incoherent` (one
+//! exit at a time: bit for bit).
+//!
+//! Tolerance: the first-order lanes' documented bound (`lobes.rs`) plus `tol L`: each of the
+//! two sums is within `tol/2` of the whole series (the lanes stop where a falling term is below
+//! `tol/2` of the largest; the per-direction kernel by the geometric bound on the rest), `L`
+//! the lobe's one-at-a-time `S0`.
+
+use crate::common;
+
+use super::lobes::{
+    Columns, Scene, Unpolarizing, build, columns, geometry, interface_strategy, scene_strategy, soa,
+};
+use gmueller::Real;
+use gmueller::frame::Frame;
+use gmueller::gaussian::Gaussian;
+use gmueller::interaction::batch::DirectionsSoa;
+use gmueller::interaction::coherence::{CoherenceModel, CoherenceWeights};
+use gmueller::interaction::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf, RayleighRice};
+use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
+use gmueller::interaction::roughness::KirchhoffSeries;
+use gmueller::interaction::{
+    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, RoughSurface,
+};
+use gmueller::packet::WavePacket;
+use gmueller::psd::GaussianPsd;
+use nalgebra::Vector3;
+use num_complex::Complex;
+use proptest::prelude::*;
+
+/// The scene's first component as a Gaussian PSD, its rms height set to `vs λ/4π`.
+fn psd<T: Real>(sc: &Scene, vs: f64) -> GaussianPsd<T, 2> {
+    let (_, cov) = &sc.components[0];
+    let sigma = vs * sc.wavelength / (4.0 * std::f64::consts::PI);
+    let corr = Gaussian::new(cov.map(T::lit)).unwrap();
+    GaussianPsd::from_autocorrelation(T::lit(sigma * sigma), &corr).unwrap()
+}
+
+/// The batch against one exit at a time within the bound, for the material `material` and
+/// its interface.
+fn check<T, Pol, Coh, Sp, Sc>(
+    sc: &Scene,
+    what: &str,
+    tol: f64,
+    (material, interface): (RoughSurface<GaussianPsd<T, 2>, Sp, Sc>, Option<T>),
+) where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, GaussianPsd<T, 2>> + Default + 'static,
+    Sp: Pbsdf<T> + Copy + 'static,
+    Sc: Pbsdf<T> + Copy + 'static,
+{
+    let kernel = Kernel::<Pol, Coh>::default().with_roughness(KirchhoffSeries::new(tol).unwrap());
+    let (packet, surface): (WavePacket<T>, Frame<T>) = build::<T>(sc, 1.0);
+    let n = sc.exits.len();
+    let d: [Vec<T>; 3] = core::array::from_fn(|k| sc.exits.iter().map(|e| T::lit(e[k])).collect());
+    let dirs = DirectionsSoa {
+        x: &d[0],
+        y: &d[1],
+        z: &d[2],
+    };
+    let mut cols: Columns<T> = columns::<T>(n);
+    kernel
+        .evaluate_batch(
+            &material,
+            &packet,
+            &surface,
+            interface,
+            dirs,
+            &mut soa(&mut cols),
+            None,
+        )
+        .unwrap();
+    let eps = T::EPSILON.to_f64();
+    let ln_s0 = packet.stokes().s0().to_f64().ln().abs();
+    let plain = RoughSurface {
+        psd: material.psd,
+        specular: Unpolarizing(material.specular),
+        scatter: Unpolarizing(material.scatter),
+    };
+    let lanes = matches!(
+        Coh::LEVEL,
+        gmueller::interaction::coherence::CoherenceLevel::Partial
+    );
+    for i in 0..n {
+        let exit = Vector3::new(d[0][i], d[1][i], d[2][i]);
+        let g: Geometry<T> = geometry(&packet, &surface, interface, exit);
+        let r = kernel.evaluate(&material, &packet, &g);
+        let u = kernel.evaluate(&plain, &packet, &g);
+        let l_hat = [u.specular_intensity(), u.scattered_intensity()]
+            .map(|m| m.to_f64() * (1.0 + 3f64.sqrt()));
+        let wants: [Vec<f64>; 2] = match r.stokes() {
+            Some((a, b)) => [a, b].map(|v| v.vector().iter().map(|w| w.to_f64()).collect()),
+            None => [
+                vec![r.specular_intensity().to_f64()],
+                vec![r.scattered_intensity().to_f64()],
+            ],
+        };
+        for (lobe, want) in wants.iter().enumerate() {
+            let l = want[0];
+            let ln_l = if l > 0.0 { l.ln().abs() } else { 0.0 };
+            let bound = if lanes {
+                4.0 * eps * (4.0 + ln_l + 2.0 * ln_s0) * l.max(l_hat[lobe])
+                    + tol * l
+                    + T::MIN_POSITIVE.to_f64()
+            } else {
+                0.0
+            };
+            for (k, &w) in want.iter().enumerate() {
+                let b = cols[4 * lobe + k][i].to_f64();
+                assert!(
+                    (b - w).abs() <= bound,
+                    "{what}: exit {i} {exit:?} lobe {lobe} S{k}: batch {b:e}, one at a time \
+                     {w:e}, bound {bound:e}"
+                );
+            }
+        }
+    }
+}
+
+/// [`check`] at the scene's level (`level` 0–5 as in `lobes.rs`) on its conductor or glass.
+fn check_scene<T: Real>(sc: &Scene, vs: f64, what: &str) {
+    let tol = if T::EPSILON.to_f64() < 1e-10 {
+        1e-10
+    } else {
+        1e-6
+    };
+    macro_rules! level {
+        ($m:expr) => {
+            match sc.level {
+                0 => check::<T, Full, Partial, _, _>(sc, what, tol, $m),
+                1 => check::<T, Full, Incoherent, _, _>(sc, what, tol, $m),
+                2 => check::<T, OneShape, Partial, _, _>(sc, what, tol, $m),
+                3 => check::<T, OneShape, Incoherent, _, _>(sc, what, tol, $m),
+                4 => check::<T, Intensity, Partial, _, _>(sc, what, tol, $m),
+                _ => check::<T, Intensity, Incoherent, _, _>(sc, what, tol, $m),
+            }
+        };
+    }
+    let p = psd::<T>(sc, vs);
+    if sc.interface {
+        let eta = T::lit(sc.eta.re);
+        let glass = RoughSurface {
+            psd: p,
+            specular: FresnelInterface::new(eta).unwrap(),
+            scatter: RayleighRice::new(Complex::new(eta, T::zero())).unwrap(),
+        };
+        level!((glass, Some(eta)));
+    } else {
+        let eta = Complex::new(T::lit(sc.eta.re), T::lit(sc.eta.im));
+        let metal = RoughSurface {
+            psd: p,
+            specular: FresnelReflection::new(eta).unwrap(),
+            scatter: RayleighRice::new(eta).unwrap(),
+        };
+        level!((metal, None));
+    }
+}
+
+proptest! {
+    #![proptest_config(common::proptest_config(24))]
+
+    #[test]
+    fn series_batch_matches_the_per_direction_series_f64(
+        sc in scene_strategy(), vs in 0.05..8.0f64
+    ) {
+        check_scene::<f64>(&sc, vs, "f64");
+    }
+
+    #[test]
+    fn series_batch_matches_the_per_direction_series_f32(
+        sc in scene_strategy(), vs in 0.05..8.0f64
+    ) {
+        check_scene::<f32>(&sc, vs, "f32");
+    }
+
+    #[test]
+    fn series_batch_at_an_interface_matches_the_per_direction_series_f64(
+        sc in interface_strategy(), vs in 0.05..8.0f64
+    ) {
+        check_scene::<f64>(&sc, vs, "f64");
+    }
+
+    #[test]
+    fn series_batch_at_an_interface_matches_the_per_direction_series_f32(
+        sc in interface_strategy(), vs in 0.05..8.0f64
+    ) {
+        check_scene::<f32>(&sc, vs, "f32");
+    }
+}
