@@ -1,6 +1,6 @@
 //! A forward bounce over a batch of draws: [`Bsdf::sample_exit_batch`] draws exit directions
 //! for one light packet ([`LobeSampler::sample_batch`]) and weighs them with the kernel's batch
-//! path ([`Kernel::evaluate_batch`]), both in SIMD lanes where they have them.
+//! path ([`Kernel::evaluate_batch`](crate::interaction::Kernel::evaluate_batch)), both in SIMD lanes where they have them.
 //!
 //! # Formula
 //! The weight of draw `i` is what [`Bsdf::sample_exit`] gives for the same uniforms, applied
@@ -11,14 +11,16 @@
 //! ```
 //! `E_side` the coherent lobe's mass on the draw's side ([`super::Incident::specular_mass`]); a
 //! Dirac lobe's weight is its integral ([`Bsdf::exit_weight`]) applied to `S`, per draw. At the
-//! intensity levels only `S0` is written (the other three are set to 0). The batch evaluation
-//! is the first-order kernel's; at the roughness levels beyond first order every draw is
-//! weighed by [`Bsdf::exit_weight`] (the draws are still batched).
+//! intensity levels only `S0` is written (the other three are set to 0). The weights come from
+//! the kernel's batch evaluation at first order and with the Kirchhoff series (in lanes for a
+//! Gaussian PSD, [`Kernel::evaluate_batch`](crate::interaction::Kernel::evaluate_batch)); at the other roughness levels (geometric,
+//! quadrature) every draw is weighed by [`Bsdf::exit_weight`] (the draws are still batched).
 //!
 //! # Agreement
 //! The lanes' weights equal `exit_weight(..).to_mueller() · S` of the scalar path to the batch
 //! evaluation's bound and the lanes' pdf (`f64`: 10⁻¹⁰ relative of `W₀` is asserted; `f32`:
-//! 2⁻¹⁰, `tests/bsdf/sample_batch.rs`).
+//! 2⁻¹⁰, `tests/bsdf/sample_batch.rs`); with the Kirchhoff series, plus the series' tolerance
+//! (the batch and the scalar sums are each within half of it of the whole series).
 
 use nalgebra::Vector3;
 
@@ -26,10 +28,10 @@ use super::model::BsdfSurface;
 use super::sampler::{NO_LOBE, SampledLobe, SamplesSoa, UniformsSoa};
 use super::{Bsdf, BsdfKernel, LobeSampler};
 use crate::error::Error;
+use crate::interaction::Side;
 use crate::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
 use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
 use crate::interaction::roughness::{RoughnessLevel, RoughnessModel};
-use crate::interaction::{Kernel, Side};
 use crate::numerics::unit_direction;
 use crate::packet::WavePacket;
 use crate::real::Real;
@@ -138,10 +140,14 @@ where
         ];
         let light = packet.stokes();
         let intensity = K::Pol::LEVEL == PolarizationLevel::Intensity;
-        // The batch evaluation is the first-order kernel's; beyond first order every draw is
+        // The batch evaluation at first order and for the Kirchhoff series (both in lanes
+        // where `evaluate_batch` has them); at the other roughness levels every draw is
         // weighed by `exit_weight`.
-        let first = (<K::Rough as RoughnessModel>::LEVEL == RoughnessLevel::FirstOrder)
-            .then(|| Kernel::<K::Pol, K::Coh>::new(self.kernel.kernel().coherence().clone()));
+        let first = matches!(
+            <K::Rough as RoughnessModel>::LEVEL,
+            RoughnessLevel::FirstOrder | RoughnessLevel::KirchhoffSeries
+        )
+        .then(|| self.kernel.kernel());
         // A direction the evaluation accepts, for the elements it must skip.
         let stand_in = incident.to_source;
         let mut start = 0;

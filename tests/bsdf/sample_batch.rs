@@ -597,8 +597,10 @@ fn forward_batch_weights_equal_the_scalar_bounce() {
 }
 
 /// `Material::sample_exit_batch` against `Material::sample_exit` one draw at a time: gold at
-/// first order (lanes) and a Kirchhoff-series conductor (the draws batched, each weighed by
-/// `exit_weight`), Full · Partial; the same tolerance as the `Bsdf` test (10⁻¹⁰ of `W₀`).
+/// first order (lanes), the same gold rougher (`vσ ≈ 2.2`) with the Kirchhoff series (its
+/// weights in the series lanes; tolerance 10⁻¹², so that the two sums' truncations stay below
+/// the assertion) and a tangent-plane Kirchhoff-series conductor (the batch evaluation one
+/// exit at a time), Full · Partial; the same tolerance as the `Bsdf` test (10⁻¹⁰ of `W₀`).
 #[test]
 fn material_forward_batch_equals_its_scalar_bounce() {
     use gmueller::bsdf::{Material, ShadingPoint};
@@ -616,8 +618,21 @@ fn material_forward_batch_equals_its_scalar_bounce() {
         Metal::Au.index(0.5),
     )
     .unwrap();
+    let rough_gold = RoughConductor::new(
+        GaussianPsd::isotropic(0.1, 1.2).unwrap(),
+        Metal::Au.index(0.5),
+    )
+    .unwrap();
     let materials = [
         ("gold, first order", Material::new(gold, Level::ALL[7])),
+        (
+            "gold, Kirchhoff series in lanes",
+            Material::with_roughness(
+                rough_gold,
+                Level::ALL[7],
+                Roughness::Series(KirchhoffSeries::new(1e-12).unwrap()),
+            ),
+        ),
         (
             "Kirchhoff series",
             Material::with_roughness(

@@ -69,6 +69,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// `K_x ≫ K_y`: a bound with the packet's polarization alone failed by 4.3× in f32). For a
     /// non-polarizing pBSDF `L̂ ≤ (1 + √3) L`. In such a cancellation the per-direction kernel's
     /// own `f32` error is of the same order (4.5e-5 relative to `f64` in that case).
+    ///
+    /// **Roughness levels.** The lanes run at first order and, for a
+    /// [`crate::psd::GaussianPsd`] with `Partial<ClosedForm>` coherence, with the Kirchhoff
+    /// series ([`crate::interaction::roughness::KirchhoffSeries`]: every order's weight in
+    /// closed form, summed per lane until a falling term is below `tol/2` of the largest,
+    /// `interaction::batch::stages::series`); the bound above then gains `tol · L`, the two
+    /// sums' truncations (measured: at most `0.43 tol L` in f64). Lanes with `g = (vσ)²` at or
+    /// above 64 (`f64`) or 16 (`f32`) or the series' switch to the geometric limit, and lanes
+    /// whose sum needs more than 160 orders (far tails), are redone by the per-direction kernel.
+    /// Every other roughness level (and the incoherent series, a mixture PSD with the series)
+    /// goes exit by exit, bit for bit [`Kernel::evaluate_prepared`].
     /// pulp's AVX-512 back-end (x86-64-v4: 8 `f64` or 16 `f32` lanes) is on and is what
     /// dispatch picks on a CPU that has it; the stage tests run it where the machine has it
     /// (2026-12-04: an AMD EPYC with AVX-512), besides the scalar back-ends of 1–8 lanes and

@@ -13,6 +13,10 @@
 //! instruction under AVX-512, 4 or 8 under AVX2 + FMA. The `Intensity` level runs the `OneShape` stages on the effective vector
 //! `(1, 0, 0, 0)` and writes `S0` only.
 //!
+//! With the Kirchhoff series' roughness level (a Gaussian PSD, partially coherent), the
+//! scattered channels' weights are the series' sums ([`stages::series`]) instead of
+//! `ln α + ln K`; the loop is instantiated twice, with and without it.
+//!
 //! Per vector of exits, the stages in order: r̂ and `cos θ_o` ([`stages::geometry`]), the exit
 //! s vector and azimuth ([`stages::azimuth`]), `q_o` ([`stages::fresnel`]), the Rayleigh–Rice
 //! factors ([`stages::rayleigh_rice`]: Germer's in reflection, Elson's in transmission), `h_t`
