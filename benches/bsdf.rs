@@ -308,7 +308,8 @@ fn for_precision<T: Real>(c: &mut Criterion, prec: &str) {
 
 /// `sample_batch`: one sampler (Full · Partial, 3 µm of surface coherence), 4096 seeded draws
 /// per iteration, in lanes (`sample_batch`) and one at a time (`sample` in a loop over the
-/// same uniforms); rough glass backward with the exit above (40°) and gold backward (50°).
+/// same uniforms); rough glass backward with the exit above (40°) and gold backward (50°), and
+/// a rougher gold (σ = 0.1 µm, `vσ ≈ 2` at 35°) with the Kirchhoff series (its order lobes).
 fn batch_sampling<T: Real>(c: &mut Criterion, prec: &str) {
     use gmueller::bsdf::{SamplesSoa, UniformsSoa};
     use gmueller::interaction::{Full, Partial, RoughConductor};
@@ -324,9 +325,17 @@ fn batch_sampling<T: Real>(c: &mut Criterion, prec: &str) {
         gmueller::spectral::Metal::Au.index(T::lit(0.5)),
     )
     .unwrap();
+    let rough_gold = RoughConductor::new(
+        GaussianPsd::<T, 2>::isotropic(T::lit(0.1), T::lit(1.2)).unwrap(),
+        gmueller::spectral::Metal::Au.index(T::lit(0.5)),
+    )
+    .unwrap();
     let kernel = Kernel::<Full, Partial>::default();
     let bg = Bsdf::new(&glass, kernel, f, T::lit(0.5)).unwrap();
     let bc = Bsdf::new(&gold, kernel, f, T::lit(0.5)).unwrap();
+    let series =
+        kernel.with_roughness(gmueller::interaction::roughness::KirchhoffSeries::default());
+    let bs = Bsdf::new(&rough_gold, series, f, T::lit(0.5)).unwrap();
     let sky = SurfaceCoherence::new(T::lit(3.0)).unwrap();
     let samplers = [
         (
@@ -340,6 +349,14 @@ fn batch_sampling<T: Real>(c: &mut Criterion, prec: &str) {
         (
             "gold_backward",
             bc.incident_sampler(
+                dir::<T>(&f, 50f64.to_radians(), 10f64.to_radians(), 1.0),
+                &sky,
+            )
+            .unwrap(),
+        ),
+        (
+            "gold_series_backward",
+            bs.incident_sampler(
                 dir::<T>(&f, 50f64.to_radians(), 10f64.to_radians(), 1.0),
                 &sky,
             )
@@ -391,20 +408,26 @@ fn batch_sampling<T: Real>(c: &mut Criterion, prec: &str) {
     // from 35° above.
     bounce(&mut g, "glass_forward", &bg, &sky, &u);
     bounce(&mut g, "gold_forward", &bc, &sky, &u);
+    bounce(&mut g, "gold_series_forward", &bs, &sky, &u);
     g.finish();
 }
 
 /// `exit_bounce_batch` (`Bsdf::sample_exit_batch`) against `exit_bounce_loop` (`prepare` once,
 /// then `Bsdf::sample_exit` per draw, its weight applied to the packet's Stokes vector).
-fn bounce<T: Real, S>(
+fn bounce<T: Real, S, R>(
     g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
     name: &str,
-    b: &Bsdf<'_, T, S, Kernel<gmueller::interaction::Full, gmueller::interaction::Partial>>,
+    b: &Bsdf<'_, T, S, Kernel<gmueller::interaction::Full, gmueller::interaction::Partial, R>>,
     sky: &SurfaceCoherence<T>,
     u: &[Vec<T>; 3],
 ) where
     S: gmueller::bsdf::BsdfSurface<T>,
     gmueller::interaction::Partial: CoherenceWeights<T, S::Psd>,
+    R: gmueller::interaction::roughness::RoughnessWeights<
+            T,
+            S::Psd,
+            gmueller::interaction::Partial,
+        >,
 {
     use gmueller::bsdf::{SamplesSoa, UniformsSoa};
     use gmueller::interaction::batch::StokesSoa;

@@ -115,8 +115,9 @@ pub(crate) fn poisson_orders(g0: f64) -> ([(f64, f64); ORDER_LOBES], usize) {
 /// The series' lobes of one side: `(P_j, 𝒩(0, n̄_j C_p + Ξ))` (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct OrderLobes<T: Real> {
-    lobes: [(T, GaussLobe<T>); ORDER_LOBES],
-    count: usize,
+    /// `(P_j, lobe)`; the first `count` are the mixture.
+    pub(crate) lobes: [(T, GaussLobe<T>); ORDER_LOBES],
+    pub(crate) count: usize,
 }
 
 impl<T: Real> OrderLobes<T> {

@@ -217,7 +217,7 @@ fn cases_f64(f: &mut dyn FnMut(&str, &LobeSampler<'_, f64>, bool)) {
     );
 
     // The scalar fallback: a grazing backward specular lobe (the angle chart), grating orders,
-    // a Gaussian mixture, the rough series.
+    // a Gaussian mixture; then the rough series' order lobes (in lanes).
     let s = b.incident_sampler(
         dir(&fr, 86.0, 20.0, 1.0),
         &SurfaceCoherence::fixed(20.0).unwrap(),
@@ -251,7 +251,19 @@ fn cases_f64(f: &mut dyn FnMut(&str, &LobeSampler<'_, f64>, bool)) {
     let k = Kernel::<Full, Partial>::default().with_roughness(KirchhoffSeries::default());
     let rs = Bsdf::new(&rough, k, fr, 0.5).unwrap();
     let s = rs.incident_sampler(dir(&fr, 30.0, 0.0, 1.0), &c).unwrap();
-    f("rough series backward", &s, false);
+    f("rough series backward", &s, true);
+    let rough_glass =
+        RoughDielectric::new(GaussianPsd::isotropic(0.08, 1.5).unwrap(), 1.5).unwrap();
+    let k = Kernel::<Full, Partial>::default().with_roughness(KirchhoffSeries::default());
+    let rg = Bsdf::new(&rough_glass, k, fr, 0.5).unwrap();
+    for (deg, side) in [(35.0, 1.0), (25.0, -1.0)] {
+        let s = rg.incident_sampler(dir(&fr, deg, 10.0, side), &c).unwrap();
+        f(
+            &format!("rough glass series backward {deg}° side {side}"),
+            &s,
+            true,
+        );
+    }
 }
 
 /// f64: lanes equal the scalar sampler to 1e-12 relative; a lobe chosen differently (a uniform
@@ -280,7 +292,8 @@ fn lanes_equal_the_scalar_sampler_f64() {
     });
 }
 
-/// The f32 cases: rough glass (both sides, both directions) and gold, Full and Intensity.
+/// The f32 cases: rough glass (both sides, both directions) and gold, Full and Intensity; rough
+/// glass with the Kirchhoff series' order lobes.
 fn cases_f32(f: &mut dyn FnMut(&str, &LobeSampler<'_, f32>)) {
     let fr = Frame::<f32>::from_normal(Vector3::new(0.2, -0.1, 1.0)).unwrap();
     let d = |deg: f32, phi: f32, side: f32| {
@@ -308,6 +321,12 @@ fn cases_f32(f: &mut dyn FnMut(&str, &LobeSampler<'_, f32>)) {
     let g = Bsdf::new(&gold, Kernel::<Intensity, Partial>::default(), fr, 0.5).unwrap();
     let s = g.incident_sampler(d(70.0, 10.0, 1.0), &c).unwrap();
     f("f32 gold backward 70° (Intensity)", &s);
+    let rough =
+        RoughDielectric::new(GaussianPsd::<f32, 2>::isotropic(0.08, 1.5).unwrap(), 1.5).unwrap();
+    let k = Kernel::<Full, Partial>::default().with_roughness(KirchhoffSeries::default());
+    let r = Bsdf::new(&rough, k, fr, 0.5).unwrap();
+    let s = r.incident_sampler(d(35.0, 10.0, -1.0), &c).unwrap();
+    f("f32 rough glass series backward 35° side -1", &s);
 }
 
 /// f32: the direction within 64 ε and the pdf within 2⁻¹² relative of the scalar sampler's, on

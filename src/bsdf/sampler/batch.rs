@@ -4,13 +4,15 @@
 //!
 //! # Lanes and fallback
 //! The draws of a sampler whose lobes are Gaussians in `h_t` — the specular lobe (a Dirac delta,
-//! or one or two channel Gaussians) and at most one scattered Gaussian (a Gaussian PSD at first
-//! order, blurred by the coherence or in the incoherent limit), without the angle chart of a
-//! grazing backward specular lobe — run in lanes, 8 (`f64`) or 16 (`f32`) per instruction under
+//! or one or two channel Gaussians) and one scattered Gaussian (a Gaussian PSD at first order,
+//! blurred by the coherence or in the incoherent limit) or the Kirchhoff series' mixture of at
+//! most six order lobes per side (`bsdf::orders`: the lobe chosen per lane from `u_lobe`'s
+//! remainder as `OrderLobes::sample` does, the density `Σ_j P_j 𝒩_j` of the side holding the
+//! direction), without the angle chart of a grazing backward specular lobe — run in lanes, 8 (`f64`) or 16 (`f32`) per instruction under
 //! AVX-512, 4 or 8 under AVX2 + FMA: the part from `u_lobe`, a Box–Muller point from `u`
 //! (the vector logarithm and sine/cosine of [`crate::simd`]), the direction of its `h_t`, and the
 //! density of that direction recomputed from it as [`LobeSampler::pdf`] does. Every other
-//! sampler (mixtures, grating orders, the power lobe, the series' orders, the angle chart) draws
+//! sampler (mixture PSDs, grating orders, the power lobe, the disk lobe, the angle chart) draws
 //! each element with [`LobeSampler::sample`].
 //!
 //! # Agreement with `sample`
@@ -29,6 +31,7 @@ use pulp::{Simd, WithSimd};
 
 use super::{LobeSampler, Part, SampledLobe, Scatter, SideMap, Specular};
 use crate::bsdf::lobes::GaussLobe;
+use crate::bsdf::orders::ORDER_LOBES;
 use crate::error::Error;
 use crate::interaction::Side;
 use crate::interaction::batch::DirectionsSoa;
@@ -178,6 +181,18 @@ enum Spec<T> {
     Gauss([(T, Gauss<T>); 2], usize),
 }
 
+/// The scattered lobes in lanes' terms.
+#[derive(Debug, Clone, Copy)]
+enum Scat<T> {
+    /// No scattered lobe.
+    None,
+    /// One Gaussian on both sides.
+    One(Gauss<T>),
+    /// The Kirchhoff series' orders per side (reflected, transmitted): `count` lobes
+    /// `(P_j, lobe)` each (`bsdf::orders`).
+    Series([([(T, Gauss<T>); ORDER_LOBES], usize); 2]),
+}
+
 /// A sampler the lanes can draw from (module docs): its constants.
 #[derive(Debug, Clone, Copy)]
 struct LaneSampler<T> {
@@ -185,7 +200,7 @@ struct LaneSampler<T> {
     maps: [Map<T>; 2],
     transmits: bool,
     spec: Spec<T>,
-    scat: Option<Gauss<T>>,
+    scat: Scat<T>,
 }
 
 impl<F: Real> LaneSampler<F> {
@@ -206,8 +221,12 @@ impl<F: Real> LaneSampler<F> {
             ),
         };
         let scat = match s.scatter {
-            Scatter::None => None,
-            Scatter::One(l) => Some(Gauss::of(&l)),
+            Scatter::None => Scat::None,
+            Scatter::One(l) => Scat::One(Gauss::of(&l)),
+            Scatter::Series(sides) => Scat::Series(sides.map(|o| {
+                let lobes = o.lobes.map(|(w, l)| (w, Gauss::of(&l)));
+                (lobes, o.count)
+            })),
             _ => return None,
         };
         Some(Self {
@@ -481,21 +500,39 @@ fn pick<S: Simd, F: Real>(s: S, m: F::M<S>, a: F, b: F) -> F::V<S> {
     F::vselect(s, m, F::vsplat(s, a), F::vsplat(s, b))
 }
 
+/// Five constants on every lane.
+#[inline(always)]
+fn splat5<S: Simd, F: Real>(s: S, f: [F; 5]) -> [F::V<S>; 5] {
+    [
+        F::vsplat(s, f[0]),
+        F::vsplat(s, f[1]),
+        F::vsplat(s, f[2]),
+        F::vsplat(s, f[3]),
+        F::vsplat(s, f[4]),
+    ]
+}
+
 /// `𝒩(h; c, L Lᵀ)` of one lobe on every lane (`GaussLobe::density`).
 #[inline(always)]
 fn density<S: Simd, F: Real>(s: S, g: &Gauss<F>, hx: F::V<S>, hy: F::V<S>) -> F::V<S> {
-    let c = |v: F| F::vsplat(s, v);
-    let [l00, l10, l11] = g.l;
-    let z0 = F::vdiv(s, F::vsub(s, hx, c(g.c[0])), c(l00));
-    let z1 = F::vdiv(
-        s,
-        F::vsub(s, F::vsub(s, hy, c(g.c[1])), F::vmul(s, c(l10), z0)),
-        c(l11),
-    );
+    density_lanes::<S, F>(s, splat5::<S, F>(s, g.flat()), F::vsplat(s, g.norm), hx, hy)
+}
+
+/// [`density`] with the lobe's constants `[c₀, c₁, l₀₀, l₁₀, l₁₁]` and `norm` per lane.
+#[inline(always)]
+fn density_lanes<S: Simd, F: Real>(
+    s: S,
+    [c0, c1, l00, l10, l11]: [F::V<S>; 5],
+    norm: F::V<S>,
+    hx: F::V<S>,
+    hy: F::V<S>,
+) -> F::V<S> {
+    let z0 = F::vdiv(s, F::vsub(s, hx, c0), l00);
+    let z1 = F::vdiv(s, F::vsub(s, F::vsub(s, hy, c1), F::vmul(s, l10, z0)), l11);
     let q = F::vadd(s, F::vmul(s, z0, z0), F::vmul(s, z1, z1));
     F::vmul(
         s,
-        c(g.norm),
+        norm,
         crate::simd::exp::vexp::<S, F>(s, F::vmul(s, F::vlit(s, -0.5), q)),
     )
 }
@@ -571,7 +608,6 @@ fn lanes_of<S: Simd, F: Real>(
         l: [F::one(), F::zero(), F::one()],
         norm: F::one(),
     };
-    let scat = c.scat.unwrap_or(unit);
     let (spec0, spec1, two) = match c.spec {
         Spec::Gauss(l, count) => (l[0], l[1], count == 2),
         _ => ((F::one(), unit), (F::zero(), unit), false),
@@ -581,15 +617,50 @@ fn lanes_of<S: Simd, F: Real>(
     } else {
         F::vlt(s, zero, zero)
     };
-    let (g_scat, g0, g1) = (scat.flat(), spec0.1.flat(), spec1.1.flat());
-    let [cx, cy, l00, l10, l11] = core::array::from_fn(|j| {
-        F::vselect(
-            s,
-            scattered,
-            k(g_scat[j]),
-            pick::<S, F>(s, second, g1[j], g0[j]),
-        )
-    });
+    let (g0, g1) = (spec0.1.flat(), spec1.1.flat());
+    let mut g = [zero; 5];
+    for j in 0..5 {
+        g[j] = pick::<S, F>(s, second, g1[j], g0[j]);
+    }
+    // The scattered lobe: the one Gaussian, or the series' order lobe `w` chooses on the
+    // part's side (`OrderLobes::sample`: the first `j` with `w < Σ_{i≤j} P_i`, the last
+    // taking the rest).
+    let g_scat = match c.scat {
+        Scat::None => splat5::<S, F>(s, unit.flat()),
+        Scat::One(l) => splat5::<S, F>(s, l.flat()),
+        Scat::Series(sides) => {
+            let mut out = [zero; 5];
+            for (side, (lobes, count)) in sides.iter().enumerate() {
+                let mut sel = splat5::<S, F>(s, lobes[count - 1].1.flat());
+                let mut acc = [F::zero(); ORDER_LOBES];
+                let mut a = F::zero();
+                for j in 0..count - 1 {
+                    a += lobes[j].0;
+                    acc[j] = a;
+                }
+                for j in (0..count - 1).rev() {
+                    let m = F::vlt(s, w, k(acc[j]));
+                    let f = lobes[j].1.flat();
+                    for i in 0..5 {
+                        sel[i] = F::vselect(s, m, k(f[i]), sel[i]);
+                    }
+                }
+                if side == 0 {
+                    out = sel;
+                } else {
+                    for i in 0..5 {
+                        out[i] = F::vselect(s, transmitted, sel[i], out[i]);
+                    }
+                }
+            }
+            out
+        }
+    };
+    let mut lobe = [zero; 5];
+    for j in 0..5 {
+        lobe[j] = F::vselect(s, scattered, g_scat[j], g[j]);
+    }
+    let [cx, cy, l00, l10, l11] = lobe;
 
     // Box–Muller (`GaussLobe::sample`): r = √(−2 ln(1 − u₀)), (sin, cos) of 2π u₁.
     let open = sub(s, F::vlit(s, 1.0), clamp01::<S, F>(s, u0));
@@ -724,19 +795,39 @@ fn pdf_lanes<S: Simd, F: Real>(s: S, c: &LaneSampler<F>, d: [F::V<S>; 3]) -> F::
         }
         _ => zero,
     };
+    let mirrored = match (m0.mirror, m1.mirror) {
+        (false, false) => F::vlt(s, zero, zero),
+        (true, true) => F::veq(s, zero, zero),
+        (true, false) => F::vnot(s, below),
+        (false, true) => below,
+    };
+    let fy = F::vselect(s, mirrored, sub(s, zero, gy), gy);
     let scat = match c.scat {
-        Some(g) => {
-            let mirrored = match (m0.mirror, m1.mirror) {
-                (false, false) => F::vlt(s, zero, zero),
-                (true, true) => F::veq(s, zero, zero),
-                (true, false) => F::vnot(s, below),
-                (false, true) => below,
-            };
-            let fy = F::vselect(s, mirrored, sub(s, zero, gy), gy);
+        Scat::One(g) => {
             let dens = density::<S, F>(s, &g, gx, fy);
             F::vselect(s, F::vlt(s, zero, p_scat), mul(s, p_scat, dens), zero)
         }
-        None => zero,
+        Scat::Series(sides) => {
+            // `OrderLobes::density` of the side holding the direction: `Σ_j P_j 𝒩_j(h)`, a
+            // side with fewer lobes padded with weight 0 (`a + 0·𝒩 = a`).
+            let [(l0, n0), (l1, n1)] = sides;
+            let n1 = if c.transmits { n1 } else { 0 };
+            let mut dens = zero;
+            for j in 0..n0.max(n1) {
+                let (w0, g0) = if j < n0 { l0[j] } else { (F::zero(), l0[0].1) };
+                let (w1, g1) = if j < n1 { l1[j] } else { (F::zero(), l0[0].1) };
+                let (f0, f1) = (g0.flat(), g1.flat());
+                let mut g = [zero; 5];
+                for i in 0..5 {
+                    g[i] = pick::<S, F>(s, below, f1[i], f0[i]);
+                }
+                let dj =
+                    density_lanes::<S, F>(s, g, pick::<S, F>(s, below, g1.norm, g0.norm), gx, fy);
+                dens = add(s, dens, mul(s, pick::<S, F>(s, below, w1, w0), dj));
+            }
+            F::vselect(s, F::vlt(s, zero, p_scat), mul(s, p_scat, dens), zero)
+        }
+        Scat::None => zero,
     };
     let density = mul(s, mul(s, add(s, spec, scat), mul(s, kd, kd)), cos);
     F::vselect(s, inside, density, zero)
