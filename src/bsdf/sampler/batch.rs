@@ -181,6 +181,9 @@ enum Spec<T> {
     Gauss([(T, Gauss<T>); 2], usize),
 }
 
+/// One side's order lobes: `(P_j, lobe)` and their count.
+type OrderLanes<T> = ([(T, Gauss<T>); ORDER_LOBES], usize);
+
 /// The scattered lobes in lanes' terms.
 #[derive(Debug, Clone, Copy)]
 enum Scat<T> {
@@ -190,7 +193,7 @@ enum Scat<T> {
     One(Gauss<T>),
     /// The Kirchhoff series' orders per side (reflected, transmitted): `count` lobes
     /// `(P_j, lobe)` each (`bsdf::orders`).
-    Series([([(T, Gauss<T>); ORDER_LOBES], usize); 2]),
+    Series([OrderLanes<T>; 2]),
 }
 
 /// A sampler the lanes can draw from (module docs): its constants.
