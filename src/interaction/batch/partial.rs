@@ -594,11 +594,14 @@ where
         return Some(None);
     }
     let [x, y, h] = &prepared.sections;
+    // |v| ≤ k (cos θ_i + 1) in reflection, k (1 + η_t) in transmission.
+    let eta = prep.transmission.map_or(T::one(), |t| t.eta.max(T::one()));
+    let v_max = prep.inc.k * (T::one() + eta);
     Some(SeriesPrep::new(
         [x.as_ref(), y.as_ref(), h.as_ref()],
         prep.three,
         psd,
-        prep.mirrored,
+        (prep.mirrored, v_max),
         params,
     ))
 }

@@ -536,7 +536,8 @@ pub(crate) const SERIES_ORDERS: usize = 160;
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct SeriesChannel<T: Real> {
     /// `(a, b, c)` with `h_tᵀ adj(Ξ) h_t = (a h₀ + b h₁)² + (c h₀)²` at the lanes' `h_t` (the
-    /// PSD's `h_t` mirrored where the section is, [`SeriesPrep::new`]).
+    /// PSD's `h_t` mirrored where the section is, [`SeriesPrep::new`]). The orders past
+    /// [`SeriesPrep::orders`] are not set.
     pub(crate) quad: [T; 3],
     /// `ln 2πσ² − ½ ln|nA + Ξ| − ln n!` at index `n − 1`.
     pub(crate) k: [T; SERIES_ORDERS],
@@ -562,6 +563,9 @@ pub(crate) struct SeriesPrep<T: Real> {
     pub(crate) ln_half_tol: T,
     /// Lanes with `g ≥ g_max` are redone (the geometric switch, or the lanes' range).
     pub(crate) g_max: T,
+    /// The orders built (at most [`SERIES_ORDERS`]): `ĝ + 12√ĝ + 24` for the largest `g` a lane
+    /// can have, `ĝ = min(g_max, (v_max σ)²)`; a lane whose sum needs more is redone.
+    pub(crate) orders: usize,
 }
 
 /// The largest `g` the series lanes sum in `f64` and in `f32`: the terms' parts `g`,
@@ -574,18 +578,36 @@ impl<T: Real> SeriesPrep<T> {
     /// the prepared packet, the Gaussian PSD `psd` (variance `σ²`, spectral Cholesky factor
     /// `L_A`), mirrored as [`LobePrep::new`] (`mirrored`: light from below an interface, the
     /// PSD's `h_t = (h₀, −h₁)` of the lanes' and each section `D Ξ D`, as `psd_xi` and
-    /// `Geometry::psd_h` have them), the series' `tolerance` and its switch to the geometric
-    /// limit `geometric_from`. `None` where a constant is not finite or `|nA + Ξ|` not positive.
+    /// `Geometry::psd_h` have them), `v_max` a bound on the lanes' phase factors `|v|`, the
+    /// series' `tolerance` and its switch to the geometric limit `geometric_from`. `None` where a constant is not finite or `|nA + Ξ|` not positive.
     pub(crate) fn new(
         sections: [Option<&crate::gaussian::Gaussian<T, 2>>; 3],
         three: bool,
         psd: &GaussianPsd<T, 2>,
-        mirrored: bool,
+        (mirrored, v_max): (bool, T),
         (tolerance, geometric_from): (f64, f64),
     ) -> Option<Self> {
         use crate::interaction::roughness::{GaussianTerms, SERIES_MAX_G, ln_factorial};
         use crate::psd::CorrelationPowers;
         let (sigma2, la) = psd.gaussian_spectrum()?;
+        let lane_g = if T::EPSILON.to_f64() < 1e-10 {
+            SERIES_LANE_G.0
+        } else {
+            SERIES_LANE_G.1
+        };
+        let g_max = geometric_from.min(SERIES_MAX_G).min(lane_g);
+        let g_hi = (v_max * v_max * sigma2).to_f64().min(g_max);
+        if !(g_hi >= 0.0) {
+            return None;
+        }
+        let orders = ((g_hi + 12.0 * g_hi.sqrt() + 24.0).ceil() as usize).min(SERIES_ORDERS);
+        let ln_fact: [f64; SERIES_ORDERS] = core::array::from_fn(|i| {
+            if i < orders {
+                ln_factorial(i as u64 + 1)
+            } else {
+                0.0
+            }
+        });
         let sign = if mirrored { T::one() } else { -T::one() };
         let quad = |l: &nalgebra::Matrix2<T>| [l[(1, 0)], sign * l[(0, 0)], l[(1, 1)]];
         let zero = Vector2::zeros();
@@ -597,13 +619,13 @@ impl<T: Real> SeriesPrep<T> {
                 k: [T::zero(); SERIES_ORDERS],
                 half_inv_det: [T::zero(); SERIES_ORDERS],
             };
-            for i in 0..SERIES_ORDERS {
+            for i in 0..orders {
                 let n = (i + 1) as f64;
                 let det = (n * gt.d2 + gt.d1) * n + gt.d0;
                 if !(det > 0.0 && det.is_finite()) {
                     return None;
                 }
-                out.k[i] = T::lit(gt.ln_front - 0.5 * det.ln() - ln_factorial(i as u64 + 1));
+                out.k[i] = T::lit(gt.ln_front - 0.5 * det.ln() - ln_fact[i]);
                 out.half_inv_det[i] = T::lit(0.5 / det);
             }
             let finite = out.quad.iter().chain(&out.k).chain(&out.half_inv_det);
@@ -615,16 +637,12 @@ impl<T: Real> SeriesPrep<T> {
         } else {
             (half, half)
         };
-        let lane_g = if T::EPSILON.to_f64() < 1e-10 {
-            SERIES_LANE_G.0
-        } else {
-            SERIES_LANE_G.1
-        };
         let out = Self {
             psd_quad: quad(&la),
             channels: [x, y, half],
             ln_half_tol: T::lit((0.5 * tolerance).ln()),
-            g_max: T::lit(geometric_from.min(SERIES_MAX_G).min(lane_g)),
+            g_max: T::lit(g_max),
+            orders,
         };
         let finite = out.psd_quad.iter().all(|v| v.is_finite()) && out.ln_half_tol.is_finite();
         finite.then_some(out)

@@ -20,11 +20,13 @@
 //! the geometric limit, or the lanes' range: `g < 64` in `f64`, `16` in `f32`, where `g`,
 //! `(n − 1) ln g` and `ln n!`, each `~g ln g` before they cancel, are rounded in the lanes'
 //! type while the per-direction kernel sums in `f64`), and lanes whose sum has not stopped by
-//! order [`SERIES_ORDERS`] (far tails, where the orders that dominate lie far above `g`).
+//! the last order built ([`SeriesPrep::orders`]: `ĝ + 12√ĝ + 24` for the largest `g` of the
+//! packet's exits, at most `SERIES_ORDERS`, 160; far tails, where the orders that dominate lie
+//! far above `g`).
 
 use pulp::Simd;
 
-use super::super::prep::{SERIES_ORDERS, SeriesChannel, SeriesPrep};
+use super::super::prep::{SeriesChannel, SeriesPrep};
 use crate::real::Real;
 use crate::simd::exp::vexp_nonpositive;
 use crate::simd::ln::vln;
@@ -102,12 +104,13 @@ pub(crate) fn log_weights<S: Simd, F: Real, const NC: usize>(
     let mut prev = [ninf; NC];
     let outside = F::vnot(s, inside);
     let mut stopped = [outside; NC];
-    let mut last = SERIES_ORDERS;
-    for i in 0..SERIES_ORDERS {
+    let orders = p.orders;
+    let mut last = orders;
+    for i in 0..orders {
         let b = base::<S, F>(s, i, neg_g, ln_g);
         // The stop test every 4 orders (and at the last): once met it holds at every later
         // order (the ratios fall, the terms fall, m stays).
-        let test = i % 4 == 3 || i + 1 == SERIES_ORDERS;
+        let test = i % 4 == 3 || i + 1 == orders;
         let mut all = outside;
         for j in 0..NC {
             let t = term::<S, F>(s, ch[j], i, b, c1, c0[j]);
@@ -330,7 +333,7 @@ mod tests {
     /// `L̂/L` the integration tests bound separately, plus the two sums' truncations, each
     /// within `tol/2`). Measured: f64 (tol 10⁻¹²) at most 0.43 tol L; f32 (tol 10⁻⁶) at most
     /// 2.2 u near the lobes. Redone lanes: none near the lobes; over the hemisphere only those
-    /// whose sum needs more than `SERIES_ORDERS` orders or whose `g` is out of the lanes' range.
+    /// whose sum needs more orders than were built (`SeriesPrep::orders`) or whose `g` is out of the lanes' range.
     #[test]
     fn lanes_match_the_per_direction_series() {
         let cases = [(0.015, true), (0.05, true), (0.15, true), (0.3, false)];
