@@ -597,7 +597,7 @@ impl<T: Real> SeriesPrep<T> {
         };
         let g_max = geometric_from.min(SERIES_MAX_G).min(lane_g);
         let g_hi = (v_max * v_max * sigma2).to_f64().min(g_max);
-        if !(g_hi >= 0.0) {
+        if g_hi.is_nan() || g_hi < 0.0 {
             return None;
         }
         let orders = ((g_hi + 12.0 * g_hi.sqrt() + 24.0).ceil() as usize).min(SERIES_ORDERS);
@@ -619,14 +619,15 @@ impl<T: Real> SeriesPrep<T> {
                 k: [T::zero(); SERIES_ORDERS],
                 half_inv_det: [T::zero(); SERIES_ORDERS],
             };
-            for i in 0..orders {
+            let orders_of = out.k.iter_mut().zip(&mut out.half_inv_det).zip(&ln_fact);
+            for (i, ((k, e), lf)) in orders_of.take(orders).enumerate() {
                 let n = (i + 1) as f64;
                 let det = (n * gt.d2 + gt.d1) * n + gt.d0;
-                if !(det > 0.0 && det.is_finite()) {
+                if det.is_nan() || det <= 0.0 || det.is_infinite() {
                     return None;
                 }
-                out.k[i] = T::lit(gt.ln_front - 0.5 * det.ln() - ln_fact[i]);
-                out.half_inv_det[i] = T::lit(0.5 / det);
+                *k = T::lit(gt.ln_front - 0.5 * det.ln() - lf);
+                *e = T::lit(0.5 / det);
             }
             let finite = out.quad.iter().chain(&out.k).chain(&out.half_inv_det);
             finite.into_iter().all(|v| v.is_finite()).then_some(out)
