@@ -77,7 +77,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// `interaction::batch::stages::series`); the bound above then gains `tol · L`, the two
     /// sums' truncations (measured: at most `0.43 tol L` in f64). Lanes with `g = (vσ)²` at or
     /// above 64 (`f64`) or 16 (`f32`) or the series' switch to the geometric limit, and lanes
-    /// whose sum needs more than 160 orders (far tails), are redone by the per-direction kernel.
+    /// whose sum needs more orders than the call builds (`ĝ + 12√ĝ + 24` for the largest `g`
+    /// its exits can have, at most 160: far tails), are redone by the per-direction kernel.
     /// Every other roughness level (and the incoherent series, a mixture PSD with the series)
     /// goes exit by exit, bit for bit [`Kernel::evaluate_prepared`].
     /// pulp's AVX-512 back-end (x86-64-v4: 8 `f64` or 16 `f32` lanes) is on and is what
