@@ -20,19 +20,8 @@ use super::Lanes;
 #[inline(always)]
 pub(crate) fn vexp<S: Simd, F: Lanes>(s: S, x: F::V<S>) -> F::V<S> {
     let c = |v: f64| F::vlit(s, v);
-    let x = F::vmin(s, F::vmax(s, x, c(F::EXP_LO)), c(F::EXP_HI));
+    let (p, nf) = reduced::<S, F>(s, F::vmin(s, F::vmax(s, x, c(F::EXP_LO)), c(F::EXP_HI)));
     let shifter = c(F::SHIFTER);
-    let nf = F::vsub(
-        s,
-        F::vmul_add(s, x, c(core::f64::consts::LOG2_E), shifter),
-        shifter,
-    );
-    let r = F::vneg_mul_add(s, nf, c(F::LN2_HI), x);
-    let r = F::vneg_mul_add(s, nf, c(F::LN2_LO), r);
-    let mut p = c(F::EXP_POLY[0]);
-    for &k in &F::EXP_POLY[1..] {
-        p = F::vmul_add(s, p, r, c(k));
-    }
     let n1 = F::vsub(s, F::vmul_add(s, nf, c(0.5), shifter), shifter);
     let n2 = F::vsub(s, nf, n1);
     F::vmul(s, F::vmul(s, p, F::vpow2(s, n1)), F::vpow2(s, n2))
@@ -47,7 +36,15 @@ pub(crate) fn vexp<S: Simd, F: Lanes>(s: S, x: F::V<S>) -> F::V<S> {
 #[inline(always)]
 pub(crate) fn vexp_nonpositive<S: Simd, F: Lanes>(s: S, x: F::V<S>) -> F::V<S> {
     let c = |v: f64| F::vlit(s, v);
-    let x = F::vmin(s, F::vmax(s, x, c(F::EXP_NORMAL_LO)), c(0.0));
+    let (p, nf) = reduced::<S, F>(s, F::vmin(s, F::vmax(s, x, c(F::EXP_NORMAL_LO)), c(0.0)));
+    F::vmul(s, p, F::vpow2(s, nf))
+}
+
+/// The Cody–Waite reduction and the polynomial shared by [`vexp`] and [`vexp_nonpositive`]:
+/// `(Σ_{j ≤ J} rʲ/j!, n)` with `eˣ = Σ · 2ⁿ` for the clamped `x`.
+#[inline(always)]
+fn reduced<S: Simd, F: Lanes>(s: S, x: F::V<S>) -> (F::V<S>, F::V<S>) {
+    let c = |v: f64| F::vlit(s, v);
     let shifter = c(F::SHIFTER);
     let nf = F::vsub(
         s,
@@ -60,7 +57,7 @@ pub(crate) fn vexp_nonpositive<S: Simd, F: Lanes>(s: S, x: F::V<S>) -> F::V<S> {
     for &k in &F::EXP_POLY[1..] {
         p = F::vmul_add(s, p, r, c(k));
     }
-    F::vmul(s, p, F::vpow2(s, nf))
+    (p, nf)
 }
 
 #[cfg(test)]

@@ -28,13 +28,14 @@ use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, Stoke
 use gmueller::interaction::coherence::{CoherenceModel, CoherenceWeights};
 use gmueller::interaction::pbsdf::Pbsdf;
 use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
+use gmueller::interaction::roughness::RoughnessWeights;
 use gmueller::interaction::{
     Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, RoughConductor,
     RoughDielectric, RoughSurface,
 };
 use gmueller::mueller::Mueller;
 use gmueller::packet::{CoherenceShape, WavePacket};
-use gmueller::psd::{GaussianMixturePsd, GaussianPsd};
+use gmueller::psd::{GaussianMixturePsd, GaussianPsd, Psd};
 use gmueller::stokes::Stokes;
 use nalgebra::{Matrix2, Matrix4, Vector3, Vector4};
 use num_complex::Complex;
@@ -173,16 +174,18 @@ pub(super) fn columns<T: Real>(n: usize) -> Columns<T> {
 /// cancels `u`'s polarization — the packet's, or the polarization the coherence channels give
 /// an unpolarized packet where `K_x ≫ K_y` (the specular lobe far from the mirror direction,
 /// near Brewster's angle: [`lane_specular_where_the_coherence_polarizes_and_fresnel_cancels`]).
-fn l_hat<T, Pol, Coh, Sp, Sc>(
-    kernel: &Kernel<Pol, Coh>,
-    material: &RoughSurface<GaussianMixturePsd<T, 2>, Sp, Sc>,
+fn l_hat<T, Pol, Coh, Rough, P, Sp, Sc>(
+    kernel: &Kernel<Pol, Coh, Rough>,
+    material: &RoughSurface<P, Sp, Sc>,
     packet: &WavePacket<T>,
     g: &Geometry<T>,
 ) -> [f64; 2]
 where
     T: Real,
     Pol: PolarizationModel,
-    Coh: CoherenceModel + CoherenceWeights<T, GaussianMixturePsd<T, 2>>,
+    Coh: CoherenceModel + CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
+    P: Psd<T, 2> + Clone,
     Sp: Pbsdf<T> + Copy,
     Sc: Pbsdf<T> + Copy,
 {
@@ -193,6 +196,83 @@ where
     };
     let r = kernel.evaluate(&plain, packet, g);
     [r.specular_intensity(), r.scattered_intensity()].map(|m| m.to_f64() * (1.0 + 3f64.sqrt()))
+}
+
+/// The batch's columns `cols` (as [`soa`] lays them out) for the exits `d` against
+/// `kernel.evaluate` one exit at a time: each Stokes parameter of each lobe within
+/// `4ε (4 + |ln L| + 2|ln S0|) max(L, L̂) + tol L + MIN_POSITIVE` (`L` the lobe's `S0` one at a
+/// time, `S0` the packet's, `L̂` of [`l_hat`], `tol` the roughness level's own sum tolerance, 0
+/// at first order), or bit for bit where `exact`; and valid Stokes vectors.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn compare<T, Pol, Coh, Rough, P, Sp, Sc>(
+    what: &str,
+    kernel: &Kernel<Pol, Coh, Rough>,
+    (material, interface): (&RoughSurface<P, Sp, Sc>, Option<T>),
+    (packet, surface): (&WavePacket<T>, &Frame<T>),
+    d: &[Vec<T>; 3],
+    cols: &Columns<T>,
+    tol: f64,
+    exact: bool,
+) where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
+    P: Psd<T, 2> + Clone,
+    Sp: Pbsdf<T> + Copy,
+    Sc: Pbsdf<T> + Copy,
+{
+    let eps = T::EPSILON.to_f64();
+    let ln_s0 = packet.stokes().s0().to_f64().ln().abs();
+    for (i, e) in d[0].iter().zip(&d[1]).zip(&d[2]).enumerate() {
+        let exit = Vector3::new(*e.0.0, *e.0.1, *e.1);
+        let g = geometry(packet, surface, interface, exit);
+        let r = kernel.evaluate(material, packet, &g);
+        let l_hat = l_hat(kernel, material, packet, &g);
+        let wants: [Vec<f64>; 2] = match r.stokes() {
+            Some((a, b)) => [a, b].map(|v| v.vector().iter().map(|w| w.to_f64()).collect()),
+            None => [
+                vec![r.specular_intensity().to_f64()],
+                vec![r.scattered_intensity().to_f64()],
+            ],
+        };
+        for (lobe, want) in wants.iter().enumerate() {
+            let l = want[0];
+            let ln_l = if l > 0.0 { l.ln().abs() } else { 0.0 };
+            let scale = l.max(l_hat[lobe]);
+            let bound = if exact {
+                0.0
+            } else {
+                4.0 * eps * (4.0 + ln_l + 2.0 * ln_s0) * scale + tol * l + T::MIN_POSITIVE.to_f64()
+            };
+            let got: Vec<f64> = (0..want.len())
+                .map(|k| cols[4 * lobe + k][i].to_f64())
+                .collect();
+            for (k, (&b, &w)) in got.iter().zip(want).enumerate() {
+                assert!(
+                    (b - w).abs() <= bound,
+                    "{what}: exit {i} {exit:?} lobe {lobe} S{k}: batch {b:e}, one at a time {w:e}, \
+                     bound {bound:e}"
+                );
+            }
+            if want.len() == 4 {
+                // As ratios to S0: the squares of tiny entries would underflow.
+                let r = |k: usize| {
+                    if got[0] > 0.0 {
+                        got[k] / got[0]
+                    } else {
+                        got[k]
+                    }
+                };
+                let pol = r(1) * r(1) + r(2) * r(2) + r(3) * r(3);
+                let one = if got[0] > 0.0 { 1.0 } else { 0.0 };
+                assert!(
+                    got[0] >= 0.0 && pol <= one * (1.0 + 8.0 * eps),
+                    "{what}: exit {i} lobe {lobe}: {got:?} is not a valid Stokes vector (one at a time: {want:?})"
+                );
+            }
+        }
+    }
 }
 
 /// The batch against one exit at a time within the documented bound, valid Stokes vectors,
@@ -231,51 +311,16 @@ fn check<T, Pol, Coh, Sp, Sc>(
             None,
         )
         .unwrap();
-    let eps = T::EPSILON.to_f64();
-    let ln_s0 = packet.stokes().s0().to_f64().ln().abs();
-    for (i, e) in d[0].iter().zip(&d[1]).zip(&d[2]).enumerate() {
-        let exit = Vector3::new(*e.0.0, *e.0.1, *e.1);
-        let g = geometry(&packet, &surface, interface, exit);
-        let r = kernel.evaluate(&material, &packet, &g);
-        let l_hat = l_hat(&kernel, &material, &packet, &g);
-        let wants: [Vec<f64>; 2] = match r.stokes() {
-            Some((a, b)) => [a, b].map(|v| v.vector().iter().map(|w| w.to_f64()).collect()),
-            None => [
-                vec![r.specular_intensity().to_f64()],
-                vec![r.scattered_intensity().to_f64()],
-            ],
-        };
-        for (lobe, want) in wants.iter().enumerate() {
-            let l = want[0];
-            let ln_l = if l > 0.0 { l.ln().abs() } else { 0.0 };
-            let scale = l.max(l_hat[lobe]);
-            let bound = 4.0 * eps * (4.0 + ln_l + 2.0 * ln_s0) * scale + T::MIN_POSITIVE.to_f64();
-            let got: Vec<f64> = (0..4).map(|k| cols[4 * lobe + k][i].to_f64()).collect();
-            for (k, (&b, &w)) in got.iter().zip(want).enumerate() {
-                assert!(
-                    (b - w).abs() <= bound,
-                    "{what}: exit {i} {exit:?} lobe {lobe} S{k}: batch {b:e}, one at a time {w:e}, \
-                     bound {bound:e}"
-                );
-            }
-            if want.len() == 4 {
-                // As ratios to S0: the squares of tiny entries would underflow.
-                let r = |k: usize| {
-                    if got[0] > 0.0 {
-                        got[k] / got[0]
-                    } else {
-                        got[k]
-                    }
-                };
-                let pol = r(1) * r(1) + r(2) * r(2) + r(3) * r(3);
-                let one = if got[0] > 0.0 { 1.0 } else { 0.0 };
-                assert!(
-                    got[0] >= 0.0 && pol <= one * (1.0 + 8.0 * eps),
-                    "{what}: exit {i} lobe {lobe}: {got:?} is not a valid Stokes vector (one at a time: {want:?})"
-                );
-            }
-        }
-    }
+    compare(
+        what,
+        &kernel,
+        (&material, interface),
+        (&packet, &surface),
+        &d,
+        &cols,
+        0.0,
+        false,
+    );
     // Three wavelengths of the same path through the spectral batch, against one call each.
     let built: Vec<_> = [1.0, 1.1, 1.25]
         .iter()

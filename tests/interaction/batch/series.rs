@@ -13,12 +13,13 @@
 //! Tolerance: the first-order lanes' documented bound (`lobes.rs`) plus `tol L`: each of the
 //! two sums is within `tol/2` of the whole series (the lanes stop where a falling term is below
 //! `tol/2` of the largest; the per-direction kernel by the geometric bound on the rest), `L`
-//! the lobe's one-at-a-time `S0`.
+//! the lobe's one-at-a-time `S0` (`lobes.rs`'s `compare`, which also asks for valid Stokes
+//! vectors).
 
 use crate::common;
 
 use super::lobes::{
-    Columns, Scene, Unpolarizing, build, columns, geometry, interface_strategy, scene_strategy, soa,
+    Columns, Scene, build, columns, compare, interface_strategy, scene_strategy, soa,
 };
 use gmueller::Real;
 use gmueller::frame::Frame;
@@ -26,14 +27,11 @@ use gmueller::gaussian::Gaussian;
 use gmueller::interaction::batch::DirectionsSoa;
 use gmueller::interaction::coherence::{CoherenceModel, CoherenceWeights};
 use gmueller::interaction::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf, RayleighRice};
-use gmueller::interaction::polarization::{KernelOutput, PolarizationModel};
+use gmueller::interaction::polarization::PolarizationModel;
 use gmueller::interaction::roughness::KirchhoffSeries;
-use gmueller::interaction::{
-    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, RoughSurface,
-};
+use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, RoughSurface};
 use gmueller::packet::WavePacket;
 use gmueller::psd::GaussianPsd;
-use nalgebra::Vector3;
 use num_complex::Complex;
 use proptest::prelude::*;
 
@@ -80,51 +78,20 @@ fn check<T, Pol, Coh, Sp, Sc>(
             None,
         )
         .unwrap();
-    let eps = T::EPSILON.to_f64();
-    let ln_s0 = packet.stokes().s0().to_f64().ln().abs();
-    let plain = RoughSurface {
-        psd: material.psd,
-        specular: Unpolarizing(material.specular),
-        scatter: Unpolarizing(material.scatter),
-    };
     let lanes = matches!(
         Coh::LEVEL,
         gmueller::interaction::coherence::CoherenceLevel::Partial
     );
-    for i in 0..n {
-        let exit = Vector3::new(d[0][i], d[1][i], d[2][i]);
-        let g: Geometry<T> = geometry(&packet, &surface, interface, exit);
-        let r = kernel.evaluate(&material, &packet, &g);
-        let u = kernel.evaluate(&plain, &packet, &g);
-        let l_hat = [u.specular_intensity(), u.scattered_intensity()]
-            .map(|m| m.to_f64() * (1.0 + 3f64.sqrt()));
-        let wants: [Vec<f64>; 2] = match r.stokes() {
-            Some((a, b)) => [a, b].map(|v| v.vector().iter().map(|w| w.to_f64()).collect()),
-            None => [
-                vec![r.specular_intensity().to_f64()],
-                vec![r.scattered_intensity().to_f64()],
-            ],
-        };
-        for (lobe, want) in wants.iter().enumerate() {
-            let l = want[0];
-            let ln_l = if l > 0.0 { l.ln().abs() } else { 0.0 };
-            let bound = if lanes {
-                4.0 * eps * (4.0 + ln_l + 2.0 * ln_s0) * l.max(l_hat[lobe])
-                    + tol * l
-                    + T::MIN_POSITIVE.to_f64()
-            } else {
-                0.0
-            };
-            for (k, &w) in want.iter().enumerate() {
-                let b = cols[4 * lobe + k][i].to_f64();
-                assert!(
-                    (b - w).abs() <= bound,
-                    "{what}: exit {i} {exit:?} lobe {lobe} S{k}: batch {b:e}, one at a time \
-                     {w:e}, bound {bound:e}"
-                );
-            }
-        }
-    }
+    compare(
+        what,
+        &kernel,
+        (&material, interface),
+        (&packet, &surface),
+        &d,
+        &cols,
+        tol,
+        !lanes,
+    );
 }
 
 /// [`check`] at the scene's level (`level` 0–5 as in `lobes.rs`) on its conductor or glass.
@@ -166,8 +133,45 @@ fn check_scene<T: Real>(sc: &Scene, vs: f64, what: &str) {
     }
 }
 
+/// The scene at `lambda` times its wavelength and coherence widths (the same scene in units of
+/// the wavelength) with correlation lengths `lambda × ell` times its own (`ℓ/λ` scaled by `ell`).
+fn scaled(mut sc: Scene, lambda: f64, ell: f64) -> Scene {
+    sc.wavelength *= lambda;
+    sc.width *= lambda;
+    for (_, cov) in &mut sc.components {
+        *cov *= (lambda * ell) * (lambda * ell);
+    }
+    sc
+}
+
 proptest! {
     #![proptest_config(common::proptest_config(24))]
+
+    /// At the edges: wavelengths 10⁻²–10² µm, correlation lengths 10⁻²–10² times the scenes'
+    /// (ℓ/λ from ~10⁻³ to ~10³: lobes from the whole hemisphere to far below a degree, whose
+    /// far exits need orders well past those built, and are redone), and `vσ` at the lanes' `g`
+    /// limit (f64: 64, `vσ` 7.5–8.5 at normal incidence, more at oblique exits).
+    #[test]
+    fn series_batch_at_extreme_scales_f64(
+        sc in prop_oneof![scene_strategy(), interface_strategy()],
+        log_lambda in -2.0..2.0f64, log_ell in -2.0..2.0f64,
+        vs in prop_oneof![0.05..8.0f64, 7.5..8.5f64],
+    ) {
+        let sc = scaled(sc, 10f64.powf(log_lambda), 10f64.powf(log_ell));
+        check_scene::<f64>(&sc, vs, "f64 extreme");
+    }
+
+    /// [`series_batch_at_extreme_scales_f64`] in f32, `vσ` near its lanes' limit `g = 16`
+    /// (`vσ` 3.7–4.3: lanes on both sides of it in one call, the far side redone).
+    #[test]
+    fn series_batch_at_extreme_scales_f32(
+        sc in prop_oneof![scene_strategy(), interface_strategy()],
+        log_lambda in -2.0..2.0f64, log_ell in -2.0..2.0f64,
+        vs in prop_oneof![0.05..8.0f64, 3.7..4.3f64],
+    ) {
+        let sc = scaled(sc, 10f64.powf(log_lambda), 10f64.powf(log_ell));
+        check_scene::<f32>(&sc, vs, "f32 extreme");
+    }
 
     #[test]
     fn series_batch_matches_the_per_direction_series_f64(

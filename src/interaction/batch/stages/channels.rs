@@ -170,8 +170,9 @@ fn row<S: Simd, F: Real>(s: S, m: &nalgebra::Matrix4<F>, i: usize, v: [F::V<S>; 
 /// `u` onto the cone of valid Stokes vectors, as the scalar `onto_cone` but without its
 /// divisions where the squares allow: the polarized part `u_p` scaled by `u₀/√|u_p|²` where
 /// `|u_p|² > u₀²` (one quotient and one root, computed only for a vector with such a lane), 0
-/// where `u₀ ≤ 0`. A vector with a positive lane whose `u₀²` is not a normal number or whose
-/// `|u_p|²` is not finite takes the scalar's operations ([`onto_cone_exact`]).
+/// where `u₀ ≤ 0`. A positive lane whose `u₀²` is not a normal number or whose `|u_p|²` is not
+/// finite takes the scalar's operations ([`onto_cone_exact`]); the other lanes of its vector
+/// keep theirs, so that no lane's result depends on its neighbours.
 ///
 /// Against the scalar (which tests `Σ(u_k/u₀)² > 1` and multiplies by `1/√Σ(u_k/u₀)²`): `u₀`
 /// and the zero vector bit for bit; each `u_k` within `6 ε |u_k|` (where both scale, within
@@ -203,21 +204,33 @@ pub(crate) fn onto_cone<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4]
         ),
         F::vle(s, pol2, c(F::MAX)),
     );
-    if F::vany(s, and(s, pos, F::vnot(s, safe))) {
-        return onto_cone_exact::<S, F>(s, u);
-    }
     let over = and(s, pos, F::vlt(s, u02, pol2));
     let f = if F::vany(s, over) {
         F::vselect(s, over, F::vdiv(s, u[0], F::vsqrt(s, pol2)), one)
     } else {
         one
     };
-    [
+    let fast = [
         F::vselect(s, pos, u[0], zero),
         F::vselect(s, pos, F::vmul(s, u[1], f), zero),
         F::vselect(s, pos, F::vmul(s, u[2], f), zero),
         F::vselect(s, pos, F::vmul(s, u[3], f), zero),
-    ]
+    ];
+    let exact = and(s, pos, F::vnot(s, safe));
+    if F::vany(s, exact) {
+        // Only the lanes that need them take the scalar's operations: every lane's result is
+        // its own, whatever its neighbours (a batch of any length gives the same entries).
+        // (Explicit selects: a closure around SIMD calls is not inlined into the
+        // target-feature code.)
+        let e = onto_cone_exact::<S, F>(s, u);
+        return [
+            F::vselect(s, exact, e[0], fast[0]),
+            F::vselect(s, exact, e[1], fast[1]),
+            F::vselect(s, exact, e[2], fast[2]),
+            F::vselect(s, exact, e[3], fast[3]),
+        ];
+    }
+    fast
 }
 
 /// [`onto_cone`] with the scalar `onto_cone`'s operations, so its result bit for bit, at every
