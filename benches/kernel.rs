@@ -17,7 +17,8 @@
 //! `kernel_batch_levels/{f64,f32}`: `evaluate_batch` at the Intensity and Full levels at a rough
 //! glass interface, exits near the lobes and over both hemispheres.
 //! `kernel_batch_spectral/{f64,f32}`: `evaluate_batch_spectral` on 4 wavelengths × the same
-//! 1024 exits against 4 `evaluate_batch` calls.
+//! 1024 exits against 4 `evaluate_batch` calls, at first order and (`-series`) with the
+//! Kirchhoff series at `vσ ≈ 1`.
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -758,10 +759,34 @@ fn batch_levels_for<T: Real>(c: &mut Criterion, prec: &str) {
 /// geometry once per vector of exits) against four `evaluate_batch` calls, both lobes and the
 /// exit frames. Throughput counts direction–wavelength pairs.
 fn batch_spectral_for<T: Real>(c: &mut Criterion, prec: &str) {
+    let mut g = c.benchmark_group(format!("kernel_batch_spectral/{prec}"));
+    g.throughput(criterion::Throughput::Elements(
+        (SPECTRAL_EXITS * SPECTRAL_W) as u64,
+    ));
+    // First order (σ = 20 nm), and the Kirchhoff series at `vσ ≈ 1` (σ = 40 nm, tol 10⁻⁶).
+    spectral_case::<T, _>(&mut g, "", 0.02, Kernel::<Full, Partial>::default());
+    let series = KirchhoffSeries::new(1e-6).unwrap();
+    let kernel = Kernel::<Full, Partial>::default().with_roughness(series);
+    spectral_case::<T, _>(&mut g, "-series", 0.04, kernel);
+    g.finish();
+}
+
+const SPECTRAL_EXITS: usize = 1024;
+const SPECTRAL_W: usize = 4;
+
+/// One case of [`batch_spectral_for`]: the PSD's rms height `sigma` (µm) and the kernel.
+fn spectral_case<T: Real, Rough>(
+    g: &mut criterion::BenchmarkGroup<'_, WallTime>,
+    suffix: &str,
+    sigma: f64,
+    kernel: Kernel<Full, Partial, Rough>,
+) where
+    Rough: RoughnessWeights<T, GaussianPsd<T, 2>, Partial>,
+{
     use gmueller::interaction::batch::Wavelength;
-    const M: usize = 1024;
-    const W: usize = 4;
-    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
+    const M: usize = SPECTRAL_EXITS;
+    const W: usize = SPECTRAL_W;
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(sigma), T::lit(2.0)).unwrap();
     let materials: Vec<_> = (0..W)
         .map(|w| {
             let eta = Complex::new(T::lit(1.52 - 0.01 * w as f64), T::zero());
@@ -793,7 +818,6 @@ fn batch_spectral_for<T: Real>(c: &mut Criterion, prec: &str) {
             interface: None,
         })
         .collect();
-    let kernel = Kernel::<Full, Partial>::default();
     let surf = surface::<T>();
     let mut rng = Lcg(0xba7c);
     let exits: Vec<Vector3<T>> = (0..M)
@@ -828,10 +852,8 @@ fn batch_spectral_for<T: Real>(c: &mut Criterion, prec: &str) {
         y: &y,
         z: &z,
     };
-    let mut g = c.benchmark_group(format!("kernel_batch_spectral/{prec}"));
-    g.throughput(criterion::Throughput::Elements((M * W) as u64));
     g.bench_function(
-        BenchmarkId::new("evaluate_batch_spectral", "4x1024"),
+        BenchmarkId::new(format!("evaluate_batch_spectral{suffix}"), "4x1024"),
         |bch| {
             bch.iter(|| {
                 kernel
@@ -848,7 +870,7 @@ fn batch_spectral_for<T: Real>(c: &mut Criterion, prec: &str) {
         },
     );
     g.bench_function(
-        BenchmarkId::new("evaluate_batch-per-wavelength", "4x1024"),
+        BenchmarkId::new(format!("evaluate_batch-per-wavelength{suffix}"), "4x1024"),
         |bch| {
             bch.iter(|| {
                 for (w, out) in wavelengths.iter().zip(outs.iter_mut()) {
@@ -868,7 +890,6 @@ fn batch_spectral_for<T: Real>(c: &mut Criterion, prec: &str) {
             });
         },
     );
-    g.finish();
 }
 
 /// Reflection against transmission at a rough glass interface (`RoughDielectric`, η = 1.5, the

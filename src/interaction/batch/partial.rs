@@ -322,8 +322,9 @@ fn pick<S: Simd, F: Real>(s: S, m: F::M<S>, b: [F::V<S>; 4], a: [F::V<S>; 4]) ->
 /// for the lanes the loop cannot do.
 pub(crate) struct PartialLobes<'r, 'e, 'o, 'f, F: Real> {
     pub(crate) preps: &'r [LobePrep<F>],
-    /// The Kirchhoff series' constants (with one wavelength only), `None` at first order.
-    pub(crate) series: Option<&'r SeriesPrep<F>>,
+    /// The Kirchhoff series' constants of each wavelength (`series[w]` of `preps[w]`); empty
+    /// or `None` at first order.
+    pub(crate) series: &'r [Option<SeriesPrep<F>>],
     pub(crate) exits: DirectionsSoa<'e, F>,
     pub(crate) outs: &'r mut [LobesSoa<'o, F>],
     pub(crate) frames: Option<&'r mut ExitFramesSoa<'f, F>>,
@@ -420,7 +421,7 @@ impl<F: Real> WithSimd for PartialLobes<'_, '_, '_, '_, F> {
 fn lobe_loop<S: Simd, F: Real>(
     s: S,
     preps: &[LobePrep<F>],
-    series: Option<&SeriesPrep<F>>,
+    series: &[Option<SeriesPrep<F>>],
     [xs, ys, zs]: [&[F]; 3],
     outs: &mut [LobesSoa<'_, F>],
     mut frames: Option<&mut ExitFramesSoa<'_, F>>,
@@ -452,7 +453,8 @@ fn lobe_loop<S: Simd, F: Real>(
             }
         }
         for (w, (p, out)) in preps.iter().zip(outs.iter_mut()).enumerate() {
-            let l = lobe_lanes_either_side::<S, F>(s, p, series, &e);
+            let sp = series.get(w).and_then(Option::as_ref);
+            let l = lobe_lanes_either_side::<S, F>(s, p, sp, &e);
             for k in 0..stokes_len {
                 store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
                 store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
@@ -717,7 +719,7 @@ where
     };
     Some(crate::simd::dispatch(PartialLobes {
         preps: core::slice::from_ref(&prep),
-        series: series.as_ref(),
+        series: core::slice::from_ref(&series),
         exits,
         outs: core::slice::from_mut(out),
         frames,
@@ -750,7 +752,7 @@ mod tests {
         let mut calls = 0;
         crate::simd::dispatch(PartialLobes {
             preps: core::slice::from_ref(prep),
-            series: None,
+            series: &[],
             exits: DirectionsSoa { x, y, z },
             outs: core::slice::from_mut(&mut out),
             frames: None,

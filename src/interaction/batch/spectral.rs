@@ -4,20 +4,23 @@
 //! The wavelengths share the path's direction, so they share the exit geometry: r̂, `cos θ_o`
 //! and the exit s/p frame are computed once per vector of exits, then the lobes of each
 //! wavelength (its index, wavenumber, Stokes vector and coherence shapes) from them. On the
-//! lane path of [`Kernel::evaluate_batch`] (see there) that is one pass over the exits for
-//! up to [`MAX_WAVELENGTHS`] wavelengths; elsewhere the wavelengths go one
-//! [`Kernel::evaluate_batch`] after another.
+//! lane path of [`Kernel::evaluate_batch`] (see there: first order, and the Kirchhoff series
+//! of a Gaussian PSD with partial coherence, each wavelength with its own orders) that is one
+//! pass over the exits for up to [`MAX_WAVELENGTHS`] wavelengths; elsewhere the wavelengths go
+//! one [`Kernel::evaluate_batch`] after another.
 
 use nalgebra::Vector3;
 
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
-use super::partial::{PartialLobes, lane_prep, scalar_exit};
-use super::prep::LobePrep;
+use super::partial::{PartialLobes, lane_prep, scalar_exit, series_prep};
+use super::prep::{LobePrep, SeriesPrep};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
 use crate::interaction::polarization::PolarizationModel;
+use crate::interaction::prepared::PreparedPacket;
+use crate::interaction::roughness::{RoughnessModel, RoughnessWeights};
 use crate::interaction::{Kernel, Surface};
 use crate::packet::WavePacket;
 use crate::real::Real;
@@ -48,7 +51,7 @@ impl<T: Real, S> Clone for Wavelength<'_, T, S> {
 
 impl<T: Real, S> Copy for Wavelength<'_, T, S> {}
 
-impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
+impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<Pol, Coh, Rough> {
     /// [`Kernel::evaluate_batch`] for several wavelengths along one path: `outs[w]` receives
     /// the lobes of `wavelengths[w]` for every exit of `exits`, and `frames` (when given) the
     /// exit s/p frames, which do not depend on the wavelength.
@@ -57,7 +60,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
     /// `kernel.evaluate_batch(w.material, w.packet, surface, w.interface, exits, ..)`: the
     /// same stages on the same inputs, with the exit geometry computed once for all the
     /// wavelengths of a pass (lane path) — so the documented bound of `evaluate_batch` against
-    /// the per-direction kernel holds for each wavelength.
+    /// the per-direction kernel holds for each wavelength. That holds at every roughness level:
+    /// with the Kirchhoff series in lanes each wavelength has its own series constants (its
+    /// `vσ`, orders and sections), and the pass groups the exits into the same vectors as
+    /// `evaluate_batch`.
     ///
     /// # Errors
     /// - [`Error::OutOfRange`] when `outs` and `wavelengths` differ in length, when a slice of
@@ -119,6 +125,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         T: Real,
         S: Surface<T>,
         Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         if outs.len() != wavelengths.len() {
             return Err(Error::OutOfRange {
@@ -165,12 +172,13 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
         surface: &Frame<T>,
         exits: DirectionsSoa<'_, T>,
         outs: &mut [LobesSoa<'_, T>],
-        mut frames: Option<&mut ExitFramesSoa<'_, T>>,
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
     ) -> Result<(), Error>
     where
         T: Real,
         S: Surface<T>,
         Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
         let mut prepared = [const { None }; MAX_WAVELENGTHS];
         let mut preps: [Option<LobePrep<T>>; MAX_WAVELENGTHS] = [None; MAX_WAVELENGTHS];
@@ -187,13 +195,63 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             // at an interface, or none).
             lanes &= wl.interface.is_some() == ws[0].interface.is_some() && preps[w].is_some();
         }
+        let pass = Pass {
+            ws,
+            prepared: &prepared,
+            preps: &preps,
+            surface,
+            exits,
+        };
+        if lanes && self.roughness().lane_series().is_some() {
+            // The series' constants of every wavelength (up to 62 KB in f64: built only for
+            // the series).
+            let mut series = [const { None }; MAX_WAVELENGTHS];
+            for (w, sp) in series.iter_mut().enumerate().take(ws.len()) {
+                let (Some(p), Some(prep)) = (&prepared[w], &preps[w]) else {
+                    unreachable!("every wavelength has lane constants")
+                };
+                match series_prep(self, ws[w].material, p, prep) {
+                    Some(Some(c)) => *sp = Some(c),
+                    _ => lanes = false,
+                }
+            }
+            if lanes {
+                return self.lanes_pass(&pass, &series[..ws.len()], outs, frames);
+            }
+        }
         if !lanes {
+            let mut frames = frames;
             for (w, (wl, out)) in ws.iter().zip(outs.iter_mut()).enumerate() {
                 let f = if w == 0 { frames.as_deref_mut() } else { None };
                 self.evaluate_batch(wl.material, wl.packet, surface, wl.interface, exits, out, f)?;
             }
             return Ok(());
         }
+        self.lanes_pass(&pass, &[], outs, frames)
+    }
+
+    /// The lane path of one pass: every wavelength has its lane constants (and, with the
+    /// series, `series[w]`).
+    fn lanes_pass<T, S>(
+        &self,
+        pass: &Pass<'_, '_, '_, T, S, Pol, Coh>,
+        series: &[Option<SeriesPrep<T>>],
+        outs: &mut [LobesSoa<'_, T>],
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error>
+    where
+        T: Real,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
+    {
+        let Pass {
+            ws,
+            prepared,
+            preps,
+            surface,
+            exits,
+        } = *pass;
         // Every wavelength has its constants: gather them contiguously.
         let Some(Some(p0)) = preps.first().copied() else {
             return Ok(());
@@ -222,7 +280,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             )
         };
         crate::simd::dispatch(PartialLobes {
-            series: None,
+            series,
             preps: &gathered[..ws.len()],
             exits,
             outs,
@@ -230,6 +288,16 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel> Kernel<Pol, Coh> {
             scalar: &mut scalar,
         })
     }
+}
+
+/// What a lane pass of [`Kernel::evaluate_batch_spectral`] reads: the wavelengths, their
+/// prepared packets and lane constants, the surface and the exits.
+struct Pass<'p, 'w, 'e, T: Real, S, Pol: PolarizationModel, Coh: CoherenceModel> {
+    ws: &'p [Wavelength<'w, T, S>],
+    prepared: &'p [Option<PreparedPacket<T, Pol, Coh>>; MAX_WAVELENGTHS],
+    preps: &'p [Option<LobePrep<T>>; MAX_WAVELENGTHS],
+    surface: &'p Frame<T>,
+    exits: DirectionsSoa<'e, T>,
 }
 
 #[cfg(test)]
@@ -337,7 +405,26 @@ mod tests {
         Sp: Pbsdf<T>,
         Sc: Pbsdf<T>,
     {
-        let kernel = Kernel::<Pol, Coh>::default();
+        same_with(Kernel::<Pol, Coh>::default(), materials, interface, counts)
+    }
+
+    /// [`same_as_one_by_one`] for `kernel` at any roughness level; a wavelength counts as in
+    /// the lanes when it has lane constants and, for the series, the series' constants.
+    fn same_with<T, Pol, Coh, Rough, P, Sp, Sc>(
+        kernel: Kernel<Pol, Coh, Rough>,
+        materials: &[RoughSurface<P, Sp, Sc>],
+        interface: Option<T>,
+        counts: &[usize],
+    ) -> (usize, usize)
+    where
+        T: Real,
+        Pol: PolarizationModel,
+        Coh: CoherenceWeights<T, P> + CoherenceModel,
+        Rough: RoughnessWeights<T, P, Coh>,
+        P: Psd<T, 2>,
+        Sp: Pbsdf<T>,
+        Sc: Pbsdf<T>,
+    {
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
         let d = exits::<T>(interface.is_some());
         let n = d[0].len();
@@ -372,10 +459,12 @@ mod tests {
                         None => surface,
                     };
                     let prepared = kernel.prepare(w.packet, &facing).unwrap();
-                    let lanes = super::lane_prep(
+                    let prep = super::lane_prep(
                         &kernel, w.material, &prepared, w.packet, &surface, interface,
-                    )
-                    .is_some();
+                    );
+                    let lanes = prep.is_some_and(|p| {
+                        !matches!(series_prep(&kernel, w.material, &prepared, &p), Some(None))
+                    });
                     lanes_taken += usize::from(lanes);
                 }
                 let (mut one, mut fr1) = buffers::<T>(1, n);
@@ -467,6 +556,72 @@ mod tests {
         );
         assert_eq!(lanes, 0, "the plane wave has no lane path");
         assert!(lit > 100, "only {lit} lit entries (plane wave)");
+    }
+
+    /// The Kirchhoff series in lanes (a Gaussian PSD, partially coherent): rough gold, copper
+    /// and tungsten at `vσ` ≈ 1.6–3 and glass lit from above, three levels, 1–11 wavelengths.
+    #[test]
+    fn the_series_lanes_equal_one_wavelength_at_a_time_bit_for_bit() {
+        use crate::interaction::roughness::KirchhoffSeries;
+        fn rough<T: Real>(
+            m: &RoughConductor<T, GaussianPsd<T, 2>>,
+        ) -> RoughConductor<T, GaussianPsd<T, 2>> {
+            let psd =
+                GaussianPsd::<T, 2>::isotropic(m.psd.variance().sqrt() * T::lit(3.0), T::lit(1.8));
+            RoughSurface {
+                psd: psd.unwrap(),
+                ..*m
+            }
+        }
+        fn run<T: Real>(tol: f64) -> usize {
+            let metals: Vec<_> = conductors::<T>().iter().map(rough).collect();
+            let glass: Vec<_> = [1.5, 1.52]
+                .map(|eta| {
+                    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.06), T::lit(1.5)).unwrap();
+                    RoughDielectric::new(psd, T::lit(eta)).unwrap()
+                })
+                .to_vec();
+            let series = KirchhoffSeries::new(tol).unwrap();
+            let counts = [1, 3, 8, 11];
+            let all: usize = counts.iter().sum();
+            let runs = [
+                same_with(
+                    Kernel::<Full, Partial>::default().with_roughness(series),
+                    &metals,
+                    None,
+                    &counts,
+                ),
+                same_with(
+                    Kernel::<OneShape, Partial>::default().with_roughness(series),
+                    &metals,
+                    None,
+                    &counts,
+                ),
+                same_with(
+                    Kernel::<Intensity, Partial>::default().with_roughness(series),
+                    &metals,
+                    None,
+                    &counts,
+                ),
+                same_with(
+                    Kernel::<Full, Partial>::default().with_roughness(series),
+                    &glass,
+                    Some(T::lit(1.5)),
+                    &counts,
+                ),
+            ];
+            for (level, (_, lanes)) in runs.iter().enumerate() {
+                assert_eq!(
+                    *lanes, all,
+                    "run {level}: wavelengths outside the series lanes"
+                );
+            }
+            runs.iter().map(|r| r.0).sum()
+        }
+        let lit = run::<f64>(1e-10);
+        assert!(lit > 2000, "only {lit} lit entries");
+        let lit = run::<f32>(1e-6);
+        assert!(lit > 1500, "only {lit} lit entries (f32)");
     }
 
     #[test]

@@ -243,7 +243,7 @@ mod tests {
                     };
                     crate::simd::dispatch(PartialLobes {
                         preps: core::slice::from_ref(&prep),
-                        series: Some(&series),
+                        series: core::slice::from_ref(&Some(series)),
                         exits: DirectionsSoa {
                             x: &d[0],
                             y: &d[1],
