@@ -487,17 +487,12 @@ fn batch_partial_for<T: Real>(c: &mut Criterion, prec: &str) {
         interface: None,
     };
     batch.bench(&mut g, "lobe-1024", &exits);
-    g.bench_function(
+    per_direction(
+        &mut g,
         BenchmarkId::new("per-direction-prepared", "lobe-1024"),
-        |bch| {
-            bch.iter(|| {
-                let prepared = kernel.prepare(black_box(&packet), &surf).unwrap();
-                for e in &exits {
-                    let geo = Geometry::for_packet(&packet, &surf, *e).unwrap();
-                    black_box(kernel.evaluate_prepared(black_box(&material), &prepared, &geo));
-                }
-            });
-        },
+        (&kernel, &material),
+        (&packet, &surf),
+        &exits,
     );
     g.finish();
 }
@@ -564,18 +559,60 @@ fn batch_series_for<T: Real>(c: &mut Criterion, prec: &str) {
         }
         .bench(&mut g, &format!("intensity-series-{name}"), &exits);
         if name == "vs1" {
-            g.bench_function(BenchmarkId::new("per-direction-series", name), |bch| {
-                bch.iter(|| {
-                    let prepared = series.prepare(black_box(&packet), &surf).unwrap();
-                    for e in &exits {
-                        let geo = Geometry::for_packet(&packet, &surf, *e).unwrap();
-                        black_box(series.evaluate_prepared(black_box(&material), &prepared, &geo));
-                    }
-                });
-            });
+            per_direction(
+                &mut g,
+                BenchmarkId::new("per-direction-series", name),
+                (&series, &material),
+                (&packet, &surf),
+                &exits,
+            );
+            // Small batches: the series' constants are built once per call (`SeriesPrep`,
+            // 7.7 KB in f64), against the per-direction series on the same few exits.
+            for n in [1, 2, 3, 4, 16, 64] {
+                BatchScene {
+                    kernel: &series,
+                    material: &material,
+                    packet: &packet,
+                    surface: &surf,
+                    interface: None,
+                }
+                .bench(&mut g, &format!("series-{name}-n{n}"), &exits[..n]);
+                per_direction(
+                    &mut g,
+                    BenchmarkId::new("per-direction-series", format!("{name}-n{n}")),
+                    (&series, &material),
+                    (&packet, &surf),
+                    &exits[..n],
+                );
+            }
         }
     }
     g.finish();
+}
+
+/// Times `prepare` once and `Geometry::for_packet` + `evaluate_prepared` per exit, as `id`.
+fn per_direction<T: Real, Pol: PolarizationModel, Rough, P, Sp, Sc>(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    id: BenchmarkId,
+    (kernel, material): (&Kernel<Pol, Partial, Rough>, &RoughSurface<P, Sp, Sc>),
+    (packet, surf): (&WavePacket<T>, &Frame<T>),
+    exits: &[Vector3<T>],
+) where
+    P: Psd<T, 2> + 'static,
+    Partial: CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Partial>,
+    Sp: Pbsdf<T> + 'static,
+    Sc: Pbsdf<T> + 'static,
+{
+    g.bench_function(id, |bch| {
+        bch.iter(|| {
+            let prepared = kernel.prepare(black_box(packet), surf).unwrap();
+            for e in exits {
+                let geo = Geometry::for_packet(packet, surf, *e).unwrap();
+                black_box(kernel.evaluate_prepared(black_box(material), &prepared, &geo));
+            }
+        });
+    });
 }
 
 /// One `Kernel::<Pol, Partial>::evaluate_batch` scene of the batch benches.

@@ -45,7 +45,7 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa};
-use super::prep::{Incidence, LobePrep, SeriesPrep, TransmissionPrep};
+use super::prep::{Incidence, LobePrep, SERIES_MIN_EXITS, SeriesPrep, TransmissionPrep};
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
 use crate::error::Error;
@@ -700,6 +700,9 @@ where
     Coh: CoherenceWeights<T, S::Psd>,
     Rough: RoughnessWeights<T, S::Psd, Coh>,
 {
+    if kernel.roughness().lane_series().is_some() && exits.len() < SERIES_MIN_EXITS {
+        return None;
+    }
     let prep = lane_prep(kernel, material, prepared, packet, surface, interface)?;
     let series = match series_prep(kernel, material, prepared, &prep) {
         None => None,

@@ -527,6 +527,11 @@ impl<F: Real> TransmissionConsts<F> {
     }
 }
 
+/// The fewest exits for which a call runs the series in lanes: below, one exit at a time is
+/// cheaper than building [`SeriesPrep`] (`kernel_batch_series`, 2026-12-07, AVX2, `vσ ≈ 1`:
+/// about 2 µs per exit one at a time against 4–6 µs for a call of 1–4 exits in lanes).
+pub(crate) const SERIES_MIN_EXITS: usize = 3;
+
 /// The most orders the series lanes sum ([`SeriesPrep`]); a lane whose sum has not met its
 /// bound by then is redone by the per-direction kernel.
 pub(crate) const SERIES_ORDERS: usize = 160;

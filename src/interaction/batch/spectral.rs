@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
 use super::partial::{PartialLobes, lane_prep, scalar_exit, series_prep};
-use super::prep::{LobePrep, SeriesPrep};
+use super::prep::{LobePrep, SERIES_MIN_EXITS, SeriesPrep};
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
@@ -202,6 +202,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             surface,
             exits,
         };
+        if self.roughness().lane_series().is_some() {
+            lanes &= exits.len() >= SERIES_MIN_EXITS;
+        }
         if lanes && self.roughness().lane_series().is_some() {
             // The series' constants of every wavelength (up to 62 KB in f64: built only for
             // the series).
