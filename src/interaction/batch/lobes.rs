@@ -80,8 +80,9 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// whose sum needs more orders than the call builds (`ĝ + 12√ĝ + 24` for the largest `g`
     /// its exits can have, at most 160: far tails), are redone by the per-direction kernel. A
     /// call of fewer than 3 exits takes the per-direction series for all of them (building the
-    /// series' constants costs more than 2 exits one at a time). Every other roughness level (and the incoherent series, a mixture PSD with the series)
-    /// goes exit by exit, bit for bit [`Kernel::evaluate_prepared`].
+    /// series' constants costs more than 2 exits one at a time). Every other roughness level
+    /// (and the incoherent series, a mixture PSD with the series) goes exit by exit, bit for
+    /// bit [`Kernel::evaluate_prepared`].
     /// pulp's AVX-512 back-end (x86-64-v4: 8 `f64` or 16 `f32` lanes) is on and is what
     /// dispatch picks on a CPU that has it; the stage tests run it where the machine has it
     /// (2026-12-04: an AMD EPYC with AVX-512), besides the scalar back-ends of 1–8 lanes and

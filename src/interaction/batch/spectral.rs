@@ -202,10 +202,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             surface,
             exits,
         };
-        if self.roughness().lane_series().is_some() {
-            lanes &= exits.len() >= SERIES_MIN_EXITS;
-        }
-        if lanes && self.roughness().lane_series().is_some() {
+        let with_series = self.roughness().lane_series().is_some();
+        // A call of fewer than `SERIES_MIN_EXITS` exits takes the series one exit at a time.
+        lanes &= !with_series || exits.len() >= SERIES_MIN_EXITS;
+        if lanes && with_series {
             // The series' constants of every wavelength (up to 62 KB in f64: built only for
             // the series).
             let mut series = [const { None }; MAX_WAVELENGTHS];
