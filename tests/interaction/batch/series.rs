@@ -148,9 +148,10 @@ proptest! {
     #![proptest_config(common::proptest_config(24))]
 
     /// At the edges: wavelengths 10⁻²–10² µm, correlation lengths 10⁻²–10² times the scenes'
-    /// (ℓ/λ from ~10⁻³ to ~10³: lobes from the whole hemisphere to far below a degree, whose
-    /// far exits need orders well past those built, and are redone), and `vσ` at the lanes' `g`
-    /// limit (f64: 64, `vσ` 7.5–8.5 at normal incidence, more at oblique exits).
+    /// (ℓ/λ from ~10⁻³ to ~10³: lobes from the whole hemisphere to far below a degree, where
+    /// far exits may need more orders than the call builds and are then redone one at a time;
+    /// how many are redone is not measured here), and `vσ` at the lanes' `g` limit (f64: 64,
+    /// `vσ` 7.5–8.5 at normal incidence, more at oblique exits).
     #[test]
     fn series_batch_at_extreme_scales_f64(
         sc in prop_oneof![scene_strategy(), interface_strategy()],
