@@ -203,7 +203,10 @@ where
 /// `4ε (4 + |ln L| + 2|ln S0|) max(L, L̂) + tol L + MIN_POSITIVE` (`L` the lobe's `S0` one at a
 /// time, `S0` the packet's, `L̂` of [`l_hat`], `tol` the roughness level's own sum tolerance, 0
 /// at first order), or bit for bit where `exact`; and valid Stokes vectors.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the kernel, the material and its interface, the packet and surface, the exits, the columns and the bound"
+)]
 pub(super) fn compare<T, Pol, Coh, Rough, P, Sp, Sc>(
     what: &str,
     kernel: &Kernel<Pol, Coh, Rough>,
