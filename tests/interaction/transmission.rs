@@ -7,7 +7,7 @@
 //! plane-wave and incoherent limits, the exitant packet in the new medium, and what a small
 //! absorption would change. The peer values (SCATMECH for all four cases, Mitsuba's Fresnel
 //! transmission) are in `tests/interaction/reference.rs`; the brute-force wave optics in
-//! `validation/tests/tracer.rs`.
+//! `validation/src/tests/tracer.rs`.
 //!
 //! Conventions of these tests: the interface is the plane z = 0 with n̂ = +ẑ; the medium above
 //! has index 1 and the one below `η` (1.5 unless said); a packet's wavelength is the one in the

@@ -7,9 +7,9 @@
 //!   `examples/path_tracer/`.
 //! - `cargo run --release -p gmueller-validation --bin accuracy`: the speed-versus-accuracy
 //!   harness (see `src/bin/accuracy/main.rs`).
-//! - `tests/tracer.rs`: a reduced, fixed-seed version of the tracer's comparison (part of
-//!   `cargo test --workspace`).
-//! - `tests/volume_tracer.rs`: the same for the tracer's volumetric configurations.
+//! - `src/tests/tracer.rs`: a reduced, fixed-seed version of the tracer's comparison (unit
+//!   tests of this library, part of `cargo test --workspace --tests`).
+//! - `src/tests/volume_tracer.rs`: the same for the tracer's volumetric configurations.
 //! - `peers/`: the scripts that measure the peer libraries and regenerate the library's
 //!   `tests/data/peer_values.json` (not part of CI).
 //!
@@ -24,6 +24,9 @@ pub mod brute_volume;
 pub mod kernel_side;
 pub mod kernel_side_volume;
 pub mod volume_cases;
+
+#[cfg(test)]
+mod tests;
 
 use std::path::PathBuf;
 

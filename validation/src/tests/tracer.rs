@@ -19,8 +19,8 @@
 //! the brute force against the full Beckmann–Kirchhoff series (the kernel's first-order term
 //! plus the higher orders built from the kernel with the PSDs of `Rⁿ`).
 
-use gmueller_validation::brute::{self, Matter, Scene};
-use gmueller_validation::kernel_side::{self, Order};
+use crate::brute::{self, Matter, Scene};
+use crate::kernel_side::{self, Order};
 
 /// An absolute and a relative tolerance (as in the library's `tests/common`).
 #[derive(Debug, Clone, Copy)]
