@@ -278,53 +278,71 @@ pub(super) fn compare<T, Pol, Coh, Rough, P, Sp, Sc>(
     }
 }
 
-/// The batch against one exit at a time within the documented bound, valid Stokes vectors,
-/// and the spectral batch of three wavelengths bit for bit; `make(stretch)` is the
-/// scene's material at `wavelength × stretch` and its interface (`None` in reflection).
-fn check<T, Pol, Coh, Sp, Sc>(
-    sc: &Scene,
-    what: &str,
-    make: impl Fn(f64) -> (RoughSurface<GaussianMixturePsd<T, 2>, Sp, Sc>, Option<T>),
-) where
-    T: Real,
-    Pol: PolarizationModel,
-    Coh: CoherenceModel + CoherenceWeights<T, GaussianMixturePsd<T, 2>> + Default + 'static,
-    Sp: Pbsdf<T> + Copy + 'static,
-    Sc: Pbsdf<T> + Copy + 'static,
-{
-    let kernel = Kernel::<Pol, Coh>::default();
-    let (packet, surface) = build::<T>(sc, 1.0);
-    let (material, interface) = make(1.0);
-    let n = sc.exits.len();
-    let d: [Vec<T>; 3] = core::array::from_fn(|k| sc.exits.iter().map(|e| T::lit(e[k])).collect());
-    let dirs = DirectionsSoa {
+/// The scene's exits as columns in `T`.
+pub(super) fn exit_columns<T: Real>(sc: &Scene) -> [Vec<T>; 3] {
+    core::array::from_fn(|k| sc.exits.iter().map(|e| T::lit(e[k])).collect())
+}
+
+/// The exit columns `d` as a [`DirectionsSoa`].
+fn directions<T>(d: &[Vec<T>; 3]) -> DirectionsSoa<'_, T> {
+    DirectionsSoa {
         x: &d[0],
         y: &d[1],
         z: &d[2],
-    };
-    let mut cols = columns::<T>(n);
+    }
+}
+
+/// `kernel.evaluate_batch` of `material` (with its interface) for `packet` over the exits `d`.
+pub(super) fn batch<T, Pol, Coh, Rough, P, Sp, Sc>(
+    kernel: &Kernel<Pol, Coh, Rough>,
+    (material, interface): (&RoughSurface<P, Sp, Sc>, Option<T>),
+    (packet, surface): (&WavePacket<T>, &Frame<T>),
+    d: &[Vec<T>; 3],
+) -> Columns<T>
+where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+{
+    let mut cols = columns::<T>(d[0].len());
     kernel
         .evaluate_batch(
-            &material,
-            &packet,
-            &surface,
+            material,
+            packet,
+            surface,
             interface,
-            dirs,
+            directions(d),
             &mut soa(&mut cols),
             None,
         )
         .unwrap();
-    compare(
-        what,
-        &kernel,
-        (&material, interface),
-        (&packet, &surface),
-        &d,
-        &cols,
-        0.0,
-        false,
-    );
-    // Three wavelengths of the same path through the spectral batch, against one call each.
+    cols
+}
+
+/// Three wavelengths of the scene's path (`stretch` 1, 1.1 and 1.25: the packet by [`build`],
+/// the material by `make`) through `evaluate_batch_spectral`, against one `evaluate_batch` per
+/// wavelength bit for bit; the exit frames against the geometry's `exit_sp` of the first.
+pub(super) fn check_spectral<T, Pol, Coh, Rough, P, Sp, Sc>(
+    sc: &Scene,
+    what: &str,
+    kernel: &Kernel<Pol, Coh, Rough>,
+    make: impl Fn(f64) -> (RoughSurface<P, Sp, Sc>, Option<T>),
+) where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
+    P: Psd<T, 2>,
+    Sp: Pbsdf<T>,
+    Sc: Pbsdf<T>,
+{
+    let d = exit_columns::<T>(sc);
+    let n = d[0].len();
+    let (packet, surface) = build::<T>(sc, 1.0);
     let built: Vec<_> = [1.0, 1.1, 1.25]
         .iter()
         .map(|&f| (make(f), build::<T>(sc, f).0))
@@ -346,14 +364,11 @@ fn check<T, Pol, Coh, Sp, Sc>(
         };
         let mut f = ExitFramesSoa { s: [fx, fy, fz] };
         kernel
-            .evaluate_batch_spectral(&ws, &surface, dirs, &mut outs, Some(&mut f))
+            .evaluate_batch_spectral(&ws, &surface, directions(&d), &mut outs, Some(&mut f))
             .unwrap();
     }
     for (w, ((m, interface), p)) in built.iter().enumerate() {
-        let mut one = columns::<T>(n);
-        kernel
-            .evaluate_batch(m, p, &surface, *interface, dirs, &mut soa(&mut one), None)
-            .unwrap();
+        let one = batch(kernel, (m, *interface), (p, &surface), &d);
         for (k, (a, b)) in spectral[w].iter().zip(&one).enumerate() {
             for i in 0..n {
                 assert_eq!(
@@ -364,6 +379,7 @@ fn check<T, Pol, Coh, Sp, Sc>(
             }
         }
     }
+    let interface = built[0].0.1;
     for (i, exit) in sc.exits.iter().enumerate() {
         let g = geometry(&packet, &surface, interface, exit.map(T::lit));
         let s = g.exit_sp().x();
@@ -371,6 +387,38 @@ fn check<T, Pol, Coh, Sp, Sc>(
             assert_eq!(frames[k][i], s[k], "{what}: frame of exit {i}");
         }
     }
+}
+
+/// The lane path against one exit at a time within the documented bound, with valid Stokes
+/// vectors ([`compare`]), and the spectral batch against one call per wavelength ([`check_spectral`]), at the level
+/// `Pol · Coh` on the material `make` builds.
+fn check<T, Pol, Coh, Sp, Sc>(
+    sc: &Scene,
+    what: &str,
+    make: impl Fn(f64) -> (RoughSurface<GaussianMixturePsd<T, 2>, Sp, Sc>, Option<T>),
+) where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, GaussianMixturePsd<T, 2>> + Default + 'static,
+    Sp: Pbsdf<T> + Copy + 'static,
+    Sc: Pbsdf<T> + Copy + 'static,
+{
+    let kernel = Kernel::<Pol, Coh>::default();
+    let (packet, surface) = build::<T>(sc, 1.0);
+    let (material, interface) = make(1.0);
+    let d = exit_columns::<T>(sc);
+    let cols = batch(&kernel, (&material, interface), (&packet, &surface), &d);
+    compare(
+        what,
+        &kernel,
+        (&material, interface),
+        (&packet, &surface),
+        &d,
+        &cols,
+        0.0,
+        false,
+    );
+    check_spectral(sc, what, &kernel, make);
 }
 
 /// [`check`] at the scene's level, on its material.

@@ -8,7 +8,9 @@
 //! component as a `GaussianPsd` whose rms height is scaled so that `vσ` at normal incidence,
 //! `4πσ/λ`, is 0.05–8 (the series' orders from one to ~90), at `Full`, `OneShape` and
 //! `Intensity` with `Partial` (the lanes, f64 to 10⁻¹⁰ and f32 to 10⁻⁶) and `Incoherent` (one
-//! exit at a time: bit for bit).
+//! exit at a time: bit for bit); and `Kernel::evaluate_batch_spectral` of three wavelengths of
+//! each scene (the PSD's heights fixed, the index dispersed) against one `evaluate_batch` per
+//! wavelength, bit for bit, at every scale the extreme-scale tests draw.
 //!
 //! Tolerance: the first-order lanes' documented bound (`lobes.rs`) plus `tol L`: each of the
 //! two sums is within `tol/2` of the whole series (the lanes stop where a falling term is below
@@ -19,12 +21,11 @@
 use crate::common;
 
 use super::lobes::{
-    Columns, Scene, build, columns, compare, interface_strategy, scene_strategy, soa,
+    Scene, batch, build, check_spectral, compare, exit_columns, interface_strategy, scene_strategy,
 };
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
-use gmueller::interaction::batch::DirectionsSoa;
 use gmueller::interaction::coherence::{CoherenceModel, CoherenceWeights};
 use gmueller::interaction::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf, RayleighRice};
 use gmueller::interaction::polarization::PolarizationModel;
@@ -43,13 +44,14 @@ fn psd<T: Real>(sc: &Scene, vs: f64) -> GaussianPsd<T, 2> {
     GaussianPsd::from_autocorrelation(T::lit(sigma * sigma), &corr).unwrap()
 }
 
-/// The batch against one exit at a time within the bound, for the material `material` and
-/// its interface.
+/// The batch against one exit at a time within the bound, and three wavelengths through the
+/// spectral batch bit for bit (`lobes.rs`'s [`check_spectral`]); `make(stretch)` is the
+/// material at `wavelength × stretch` and its interface.
 fn check<T, Pol, Coh, Sp, Sc>(
     sc: &Scene,
     what: &str,
     tol: f64,
-    (material, interface): (RoughSurface<GaussianPsd<T, 2>, Sp, Sc>, Option<T>),
+    make: impl Fn(f64) -> (RoughSurface<GaussianPsd<T, 2>, Sp, Sc>, Option<T>),
 ) where
     T: Real,
     Pol: PolarizationModel,
@@ -59,25 +61,9 @@ fn check<T, Pol, Coh, Sp, Sc>(
 {
     let kernel = Kernel::<Pol, Coh>::default().with_roughness(KirchhoffSeries::new(tol).unwrap());
     let (packet, surface): (WavePacket<T>, Frame<T>) = build::<T>(sc, 1.0);
-    let n = sc.exits.len();
-    let d: [Vec<T>; 3] = core::array::from_fn(|k| sc.exits.iter().map(|e| T::lit(e[k])).collect());
-    let dirs = DirectionsSoa {
-        x: &d[0],
-        y: &d[1],
-        z: &d[2],
-    };
-    let mut cols: Columns<T> = columns::<T>(n);
-    kernel
-        .evaluate_batch(
-            &material,
-            &packet,
-            &surface,
-            interface,
-            dirs,
-            &mut soa(&mut cols),
-            None,
-        )
-        .unwrap();
+    let (material, interface) = make(1.0);
+    let d = exit_columns::<T>(sc);
+    let cols = batch(&kernel, (&material, interface), (&packet, &surface), &d);
     let lanes = matches!(
         Coh::LEVEL,
         gmueller::interaction::coherence::CoherenceLevel::Partial
@@ -92,6 +78,7 @@ fn check<T, Pol, Coh, Sp, Sc>(
         tol,
         !lanes,
     );
+    check_spectral(sc, what, &kernel, make);
 }
 
 /// [`check`] at the scene's level (`level` 0–5 as in `lobes.rs`) on its conductor or glass.
@@ -113,23 +100,29 @@ fn check_scene<T: Real>(sc: &Scene, vs: f64, what: &str) {
             }
         };
     }
+    // At `wavelength × stretch`: the same heights, the index's real part scaled by `√stretch`
+    // (a dispersion, as in `lobes.rs`).
     let p = psd::<T>(sc, vs);
     if sc.interface {
-        let eta = T::lit(sc.eta.re);
-        let glass = RoughSurface {
-            psd: p,
-            specular: FresnelInterface::new(eta).unwrap(),
-            scatter: RayleighRice::new(Complex::new(eta, T::zero())).unwrap(),
-        };
-        level!((glass, Some(eta)));
+        level!(|stretch: f64| {
+            let eta = T::lit(sc.eta.re * stretch.sqrt());
+            let glass = RoughSurface {
+                psd: p,
+                specular: FresnelInterface::new(eta).unwrap(),
+                scatter: RayleighRice::new(Complex::new(eta, T::zero())).unwrap(),
+            };
+            (glass, Some(eta))
+        });
     } else {
-        let eta = Complex::new(T::lit(sc.eta.re), T::lit(sc.eta.im));
-        let metal = RoughSurface {
-            psd: p,
-            specular: FresnelReflection::new(eta).unwrap(),
-            scatter: RayleighRice::new(eta).unwrap(),
-        };
-        level!((metal, None));
+        level!(|stretch: f64| {
+            let eta = Complex::new(T::lit(sc.eta.re * stretch.sqrt()), T::lit(sc.eta.im));
+            let metal = RoughSurface {
+                psd: p,
+                specular: FresnelReflection::new(eta).unwrap(),
+                scatter: RayleighRice::new(eta).unwrap(),
+            };
+            (metal, None)
+        });
     }
 }
 
