@@ -335,7 +335,7 @@ fn configs(realizations: Option<usize>, quick: bool, raw_beam: bool, order: Orde
     // in the lobe's tails, which the ±5 rad/µm scan reaches: at v_t σ = 0.25 the kernel is
     // 22 % (into glass) and 39 % (out of it, where v grows 2.6× toward grazing exits) low at
     // the scan's ends — the orders n ≥ 2 of the Beckmann–Kirchhoff series, which the brute force
-    // holds and the kernel does not (validation/tests/tracer.rs sums them and agrees).
+    // holds and the kernel does not (validation/src/tests/tracer.rs sums them and agrees).
     let vt_sigma = 0.1;
     let glass = |eta: f64, lambda: f64, theta_i: f64| {
         let unit = Scene {
