@@ -207,7 +207,7 @@ where
     clippy::too_many_arguments,
     reason = "the kernel, the material and its interface, the packet and surface, the exits, the columns and the bound"
 )]
-pub(super) fn compare<T, Pol, Coh, Rough, P, Sp, Sc>(
+fn compare<T, Pol, Coh, Rough, P, Sp, Sc>(
     what: &str,
     kernel: &Kernel<Pol, Coh, Rough>,
     (material, interface): (&RoughSurface<P, Sp, Sc>, Option<T>),
@@ -279,7 +279,7 @@ pub(super) fn compare<T, Pol, Coh, Rough, P, Sp, Sc>(
 }
 
 /// The scene's exits as columns in `T`.
-pub(super) fn exit_columns<T: Real>(sc: &Scene) -> [Vec<T>; 3] {
+fn exit_columns<T: Real>(sc: &Scene) -> [Vec<T>; 3] {
     core::array::from_fn(|k| sc.exits.iter().map(|e| T::lit(e[k])).collect())
 }
 
@@ -293,7 +293,7 @@ fn directions<T>(d: &[Vec<T>; 3]) -> DirectionsSoa<'_, T> {
 }
 
 /// `kernel.evaluate_batch` of `material` (with its interface) for `packet` over the exits `d`.
-pub(super) fn batch<T, Pol, Coh, Rough, P, Sp, Sc>(
+fn batch<T, Pol, Coh, Rough, P, Sp, Sc>(
     kernel: &Kernel<Pol, Coh, Rough>,
     (material, interface): (&RoughSurface<P, Sp, Sc>, Option<T>),
     (packet, surface): (&WavePacket<T>, &Frame<T>),
@@ -326,7 +326,7 @@ where
 /// Three wavelengths of the scene's path (`stretch` 1, 1.1 and 1.25: the packet by [`build`],
 /// the material by `make`) through `evaluate_batch_spectral`, against one `evaluate_batch` per
 /// wavelength bit for bit; the exit frames against the geometry's `exit_sp` of the first.
-pub(super) fn check_spectral<T, Pol, Coh, Rough, P, Sp, Sc>(
+fn check_spectral<T, Pol, Coh, Rough, P, Sp, Sc>(
     sc: &Scene,
     what: &str,
     kernel: &Kernel<Pol, Coh, Rough>,
@@ -389,9 +389,43 @@ pub(super) fn check_spectral<T, Pol, Coh, Rough, P, Sp, Sc>(
     }
 }
 
-/// The lane path against one exit at a time within the documented bound, with valid Stokes
-/// vectors ([`compare`]), and the spectral batch against one call per wavelength ([`check_spectral`]), at the level
-/// `Pol · Coh` on the material `make` builds.
+/// `kernel`'s batch against one exit at a time ([`compare`]: within the documented bound plus
+/// `tol L`, or bit for bit when `exact`; valid Stokes vectors), and the spectral batch against
+/// one call per wavelength ([`check_spectral`]), on the material `make` builds (at
+/// `wavelength × stretch`, with its interface).
+pub(super) fn check_kernel<T, Pol, Coh, Rough, P, Sp, Sc>(
+    sc: &Scene,
+    what: &str,
+    kernel: &Kernel<Pol, Coh, Rough>,
+    make: impl Fn(f64) -> (RoughSurface<P, Sp, Sc>, Option<T>),
+    (tol, exact): (f64, bool),
+) where
+    T: Real,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, P>,
+    Rough: RoughnessWeights<T, P, Coh>,
+    P: Psd<T, 2> + Clone,
+    Sp: Pbsdf<T> + Copy,
+    Sc: Pbsdf<T> + Copy,
+{
+    let (packet, surface) = build::<T>(sc, 1.0);
+    let (material, interface) = make(1.0);
+    let d = exit_columns::<T>(sc);
+    let cols = batch(kernel, (&material, interface), (&packet, &surface), &d);
+    compare(
+        what,
+        kernel,
+        (&material, interface),
+        (&packet, &surface),
+        &d,
+        &cols,
+        tol,
+        exact,
+    );
+    check_spectral(sc, what, kernel, make);
+}
+
+/// [`check_kernel`] at first order, at the level `Pol · Coh`.
 fn check<T, Pol, Coh, Sp, Sc>(
     sc: &Scene,
     what: &str,
@@ -403,22 +437,7 @@ fn check<T, Pol, Coh, Sp, Sc>(
     Sp: Pbsdf<T> + Copy + 'static,
     Sc: Pbsdf<T> + Copy + 'static,
 {
-    let kernel = Kernel::<Pol, Coh>::default();
-    let (packet, surface) = build::<T>(sc, 1.0);
-    let (material, interface) = make(1.0);
-    let d = exit_columns::<T>(sc);
-    let cols = batch(&kernel, (&material, interface), (&packet, &surface), &d);
-    compare(
-        what,
-        &kernel,
-        (&material, interface),
-        (&packet, &surface),
-        &d,
-        &cols,
-        0.0,
-        false,
-    );
-    check_spectral(sc, what, &kernel, make);
+    check_kernel(sc, what, &Kernel::<Pol, Coh>::default(), make, (0.0, false));
 }
 
 /// [`check`] at the scene's level, on its material.

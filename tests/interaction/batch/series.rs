@@ -20,18 +20,14 @@
 
 use crate::common;
 
-use super::lobes::{
-    Scene, batch, build, check_spectral, compare, exit_columns, interface_strategy, scene_strategy,
-};
+use super::lobes::{Scene, check_kernel, interface_strategy, scene_strategy};
 use gmueller::Real;
-use gmueller::frame::Frame;
 use gmueller::gaussian::Gaussian;
 use gmueller::interaction::coherence::{CoherenceModel, CoherenceWeights};
 use gmueller::interaction::pbsdf::{FresnelInterface, FresnelReflection, Pbsdf, RayleighRice};
 use gmueller::interaction::polarization::PolarizationModel;
 use gmueller::interaction::roughness::KirchhoffSeries;
 use gmueller::interaction::{Full, Incoherent, Intensity, Kernel, OneShape, Partial, RoughSurface};
-use gmueller::packet::WavePacket;
 use gmueller::psd::GaussianPsd;
 use num_complex::Complex;
 use proptest::prelude::*;
@@ -44,9 +40,10 @@ fn psd<T: Real>(sc: &Scene, vs: f64) -> GaussianPsd<T, 2> {
     GaussianPsd::from_autocorrelation(T::lit(sigma * sigma), &corr).unwrap()
 }
 
-/// The batch against one exit at a time within the bound, and three wavelengths through the
-/// spectral batch bit for bit (`lobes.rs`'s [`check_spectral`]); `make(stretch)` is the
-/// material at `wavelength × stretch` and its interface.
+/// `lobes.rs`'s [`check_kernel`] with the series of tolerance `tol`: the lanes (`Partial`)
+/// within the bound plus `tol L`, one exit at a time (`Incoherent`) bit for bit; the spectral
+/// batch bit for bit. `make(stretch)` is the material at `wavelength × stretch` and its
+/// interface.
 fn check<T, Pol, Coh, Sp, Sc>(
     sc: &Scene,
     what: &str,
@@ -60,25 +57,11 @@ fn check<T, Pol, Coh, Sp, Sc>(
     Sc: Pbsdf<T> + Copy + 'static,
 {
     let kernel = Kernel::<Pol, Coh>::default().with_roughness(KirchhoffSeries::new(tol).unwrap());
-    let (packet, surface): (WavePacket<T>, Frame<T>) = build::<T>(sc, 1.0);
-    let (material, interface) = make(1.0);
-    let d = exit_columns::<T>(sc);
-    let cols = batch(&kernel, (&material, interface), (&packet, &surface), &d);
     let lanes = matches!(
         Coh::LEVEL,
         gmueller::interaction::coherence::CoherenceLevel::Partial
     );
-    compare(
-        what,
-        &kernel,
-        (&material, interface),
-        (&packet, &surface),
-        &d,
-        &cols,
-        tol,
-        !lanes,
-    );
-    check_spectral(sc, what, &kernel, make);
+    check_kernel(sc, what, &kernel, make, (tol, !lanes));
 }
 
 /// [`check`] at the scene's level (`level` 0–5 as in `lobes.rs`) on its conductor or glass.
