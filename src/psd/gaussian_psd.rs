@@ -283,15 +283,31 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
     #[inline]
     #[must_use]
     pub fn normalized_blur_value(&self, cov: &Gaussian<T, N>, h: &SVector<T, N>) -> T {
+        self.normalized_blur_forms(cov, h).0
+    }
+
+    /// [`Self::normalized_blur_value`] with, where that value came from the log-space form,
+    /// the logarithm it exponentiated: bit for bit [`Self::log_normalized_blur`], from the same
+    /// Cholesky factor (`None` where the value is the linear form). The kernel's scalar path
+    /// reads the logarithm when the linear weight is out of its range, rather than factoring
+    /// `Λ⁻¹ + Σ` a second time.
+    #[inline]
+    pub(crate) fn normalized_blur_forms(
+        &self,
+        cov: &Gaussian<T, N>,
+        h: &SVector<T, N>,
+    ) -> (T, Option<T>) {
         let Some((l, m)) = self.blur_parts(cov, h) else {
-            return T::zero();
+            // As `log_normalized_blur` answers an overflowing sum.
+            return (T::zero(), Some(T::min_value().unwrap_or(T::zero())));
         };
         let prod = (0..N).fold(T::one(), |p, i| p * l[(i, i)]);
         let v = self.variance;
         if in_normal_range(prod) && in_normal_range(v) && m <= T::lit(100.0) {
-            v / prod * (T::lit(-0.5) * m).exp()
+            (v / prod * (T::lit(-0.5) * m).exp(), None)
         } else {
-            self.log_normalized_from_parts(&l, m).exp()
+            let ln = self.log_normalized_from_parts(&l, m);
+            (ln.exp(), Some(ln))
         }
     }
 }

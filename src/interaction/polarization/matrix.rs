@@ -59,14 +59,16 @@ where
     Coh: CoherenceWeights<T, P>,
     Rough: RoughnessWeights<T, P, Coh>,
 {
-    let xi = prepared.sections[2].as_ref();
+    let xi = super::psd_xi(g, prepared.sections[2].as_ref());
     let (attenuation, ln_front) = front.scatter::<Rough>();
-    let kd = roughness.scatter_weight(coherence, psd, super::psd_xi(g, xi).as_ref(), g);
+    let (kd, ln_kd) = super::scatter_weight_forms(coherence, roughness, psd, xi.as_ref(), g);
     match prepared.unit_linear_scale(kd, attenuation, g.eta) {
         Some(e) => flush_to_normal(u() * e),
         None => {
             let ld = ln_front
-                + roughness.log_scatter_weight(coherence, psd, super::psd_xi(g, xi).as_ref(), g);
+                + ln_kd.unwrap_or_else(|| {
+                    roughness.log_scatter_weight(coherence, psd, xi.as_ref(), g)
+                });
             if is_dark(ld) {
                 nalgebra::SMatrix::zeros()
             } else {

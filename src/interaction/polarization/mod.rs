@@ -29,16 +29,16 @@ use core::fmt::Debug;
 
 use nalgebra::Vector4;
 
-use super::coherence::CoherenceWeights;
+use super::coherence::{CoherenceLevel, CoherenceWeights, ln_two_pi};
 use super::geometry::Geometry;
 use super::material::Surface;
 use super::pbsdf::Pbsdf;
 use super::prepared::{Plan, PreparedPacket};
-use super::roughness::{RoughnessModel, RoughnessWeights};
+use super::roughness::{RoughnessLevel, RoughnessModel, RoughnessWeights};
 use crate::gaussian::Gaussian;
 use crate::mueller::Mueller;
 use crate::packet::WavePacket;
-use crate::psd::Psd;
+use crate::psd::{Psd, Shape};
 use crate::real::Real;
 use crate::stokes::Stokes;
 
@@ -218,6 +218,46 @@ pub(crate) fn psd_xi<T: Real>(
     xi.map(|x| if g.from_below { x.mirrored_y() } else { *x })
 }
 
+/// The scattered weight `K̃` of the one-weight levels in its linear form, with `ln K̃` where
+/// computing the linear form already gave it (`None` otherwise: the caller that needs it then
+/// asks [`RoughnessWeights::log_scatter_weight`]). `xi` is the section as the PSD sees it
+/// ([`psd_xi`]).
+///
+/// Bit for bit `(roughness.scatter_weight(..), roughness.log_scatter_weight(..))`. The one
+/// case that returns the logarithm is first order, partially coherent, a closed-form blur and
+/// an exact Gaussian PSD with a section: there [`crate::psd::GaussianPsd::normalized_blur_forms`]
+/// hands back the logarithm it exponentiated, where the weight is far in the lobe's tail (off
+/// the lobe, most of the hemisphere in `f32`), instead of factoring `Λ⁻¹ + Ξ` a second time
+/// (`src/interaction/polarization/tests.rs` checks the equality).
+#[inline]
+pub(crate) fn scatter_weight_forms<T, P, Coh, R>(
+    coherence: &Coh,
+    roughness: &R,
+    psd: &P,
+    xi: Option<&Gaussian<T, 2>>,
+    g: &Geometry<T>,
+) -> (T, Option<T>)
+where
+    T: Real,
+    P: Psd<T, 2>,
+    Coh: CoherenceWeights<T, P>,
+    R: RoughnessWeights<T, P, Coh>,
+{
+    if R::LEVEL == RoughnessLevel::FirstOrder
+        && Coh::LEVEL == CoherenceLevel::Partial
+        && coherence.closed_form_gaussian()
+    {
+        let form = psd.form();
+        if let (Some(xi), true, Shape::Gaussian(gaussian)) = (xi, form.is_exact(), form.shape()) {
+            // K = 2π ∫ p 𝒩_Ξ(h_t − ·) and ln K = ln 2π + ln ∫ p 𝒩_Ξ(h_t − ·), as
+            // `Partial::scatter_weight` and `Partial::log_scatter_weight` compute them.
+            let (v, ln) = gaussian.normalized_blur_forms(xi, &g.psd_h());
+            return (T::two_pi() * v, ln.map(|l| ln_two_pi::<T>() + l));
+        }
+    }
+    (roughness.scatter_weight(coherence, psd, xi, g), None)
+}
+
 /// The scattered part at the one-weight levels, `u · S0 α K/λ²` (`u · S0 K̃/λ²` at the
 /// roughness levels whose weight `K̃` carries `α`): the linear weight (one exponential) where it
 /// and the whole scale are safely normal, the log form otherwise.
@@ -237,14 +277,16 @@ where
     Coh: CoherenceWeights<T, P>,
     R: RoughnessWeights<T, P, Coh>,
 {
-    let xi = prepared.sections[2].as_ref();
+    let xi = psd_xi(g, prepared.sections[2].as_ref());
     let (attenuation, ln_front) = front.scatter::<R>();
-    let kd = roughness.scatter_weight(coherence, psd, psd_xi(g, xi).as_ref(), g);
+    let (kd, ln_kd) = scatter_weight_forms(coherence, roughness, psd, xi.as_ref(), g);
     match prepared.linear_scale(kd, attenuation, g.eta) {
         Some(e) => crate::interaction::prepared::subnormal_onto_cone(u * e),
         None => {
-            let ld =
-                ln_front + roughness.log_scatter_weight(coherence, psd, psd_xi(g, xi).as_ref(), g);
+            let ld = ln_front
+                + ln_kd.unwrap_or_else(|| {
+                    roughness.log_scatter_weight(coherence, psd, xi.as_ref(), g)
+                });
             if prepared.is_dark(ld) {
                 Vector4::zeros()
             } else {
@@ -513,3 +555,6 @@ impl PolarizationModel for Full {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;
