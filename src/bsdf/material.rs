@@ -3,12 +3,13 @@
 //!
 //! [`super::Bsdf`] is generic over the PSD, the two pBSDFs and the three model levels, so a
 //! scene with several material kinds needs generic vertex code with the layer's trait bounds.
-//! A [`Material`] owns its [`RoughSurface`] and the kernel of its [`Level`] (and roughness
-//! level), monomorphised once when it is built ([`Level::dispatch`], [`Level::dispatch_rough`]);
-//! a call costs one dynamic dispatch and then runs the static [`super::Bsdf`] of that choice, so
-//! the answers are those of the static form bit for bit (`tests/bsdf/material.rs`). Every
-//! throughput is a [`Mueller`] matrix: at the intensity level the matrix with `M₀₀` alone
-//! ([`Throughput::to_mueller`]), which acts on `S0` and leaves the light unpolarized.
+//! A [`Material`] owns its [`RoughSurface`](crate::interaction::RoughSurface) and the kernel
+//! of its [`Level`] (and roughness level), monomorphised once when it is built
+//! ([`Level::dispatch`], [`Level::dispatch_rough`]); a call costs one dynamic dispatch and then
+//! runs the static [`super::Bsdf`] of that choice, so the answers are those of the static form
+//! bit for bit (`tests/bsdf/material.rs`). Every throughput is a [`Mueller`] matrix: at the
+//! intensity level the matrix with `M₀₀` alone ([`Throughput::to_mueller`]), which acts on `S0`
+//! and leaves the light unpolarized.
 //!
 //! A call takes the shading point ([`ShadingPoint`]: frame and wavelength) and builds the
 //! static [`super::Bsdf`] there (a few comparisons; no allocation). The methods are those of a

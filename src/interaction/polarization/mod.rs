@@ -223,12 +223,16 @@ pub(crate) fn psd_xi<T: Real>(
 /// asks [`RoughnessWeights::log_scatter_weight`]). `xi` is the section as the PSD sees it
 /// ([`psd_xi`]).
 ///
-/// Bit for bit `(roughness.scatter_weight(..), roughness.log_scatter_weight(..))`. The one
-/// case that returns the logarithm is first order, partially coherent, a closed-form blur and
-/// an exact Gaussian PSD with a section: there [`crate::psd::GaussianPsd::normalized_blur_forms`]
-/// hands back the logarithm it exponentiated, where the weight is far in the lobe's tail (off
-/// the lobe, most of the hemisphere in `f32`), instead of factoring `Λ⁻¹ + Ξ` a second time
-/// (`src/interaction/polarization/tests.rs` checks the equality).
+/// The one case that returns the logarithm is first order, partially coherent, a closed-form
+/// blur and a PSD whose form is exactly a Gaussian, with a section: there
+/// [`crate::psd::GaussianPsd::normalized_blur_forms`] hands back the logarithm it
+/// exponentiated, where the weight is far in the lobe's tail (off a narrow lobe, most of the
+/// hemisphere), instead of factoring `Λ⁻¹ + Ξ` a second time. For [`crate::psd::GaussianPsd`]
+/// (the crate's one PSD of that form) both values are bit for bit
+/// `(roughness.scatter_weight(..), roughness.log_scatter_weight(..))`
+/// (`src/interaction/polarization/tests.rs`); another PSD type reporting an exact Gaussian form
+/// gets that Gaussian's closed form, equal to its own up to rounding. Every other case is the
+/// trait call itself.
 #[inline]
 pub(crate) fn scatter_weight_forms<T, P, Coh, R>(
     coherence: &Coh,
