@@ -1,7 +1,8 @@
 //! A fixed workload for counting the instructions of one scalar bounce of the renderer layer
 //! with callgrind: `Bsdf::sample_incident` (a backward bounce: build the sampler, draw, weigh),
-//! `Bsdf::sample_exit` (a forward bounce) or `Bsdf::eval` (of a prepared light), on rough glass
-//! (Gaussian PSD σ = 10 nm, ℓ = 2 µm, η = 1.5, a tilted shading frame) at `Full · Partial` or
+//! `Bsdf::sample_exit` (a forward bounce), `Bsdf::eval` (of a prepared light) or
+//! `Bsdf::eval_stokes` (its Stokes form), on rough glass (Gaussian PSD σ = 10 nm, ℓ = 2 µm,
+//! η = 1.5, a tilted shading frame) at `Full · Partial`, `OneShape · Partial` or
 //! `Intensity · Partial`, `f32`, over 20 000 seeded configurations (exits 0–69° on either side,
 //! 3–30 µm of surface coherence): the scene of the `bsdf` bench. The cost of one call is the
 //! difference of two runs over 20 000 × (the difference of their `reps`):
@@ -12,15 +13,15 @@
 //! valgrind --tool=callgrind target/release/examples/bounce_count incident full 2
 //! ```
 //!
-//! (`incident | exit | eval`, `full | intensity`, passes). It prints a checksum so that the
-//! work is not optimised away.
+//! (`incident | exit | eval | stokes`, `full | oneshape | intensity`, passes). It prints a
+//! checksum so that the work is not optimised away.
 
 use std::hint::black_box;
 
 use gmueller::bsdf::{Bsdf, BsdfKernel, SurfaceCoherence};
 use gmueller::frame::Frame;
-use gmueller::interaction::polarization::Throughput;
-use gmueller::interaction::{Full, Intensity, Kernel, Partial, RoughDielectric};
+use gmueller::interaction::polarization::{KernelOutput, Throughput};
+use gmueller::interaction::{Full, Intensity, Kernel, OneShape, Partial, RoughDielectric};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
 use gmueller::verify::rng::SplitMix64;
@@ -78,6 +79,9 @@ fn run<K: BsdfKernel<f32, GaussianPsd<f32, 2>>>(
                     .ok()
                     .flatten()
                     .map_or(0.0, |s| s.weight.to_mueller().matrix()[(0, 0)]),
+                "stokes" => b
+                    .eval_stokes(black_box(light), *exit)
+                    .map_or(0.0, |v| v.total_intensity()),
                 _ => b
                     .eval(black_box(light), *exit)
                     .map_or(0.0, |v| v.response.total().to_mueller().matrix()[(0, 0)]),
@@ -94,7 +98,9 @@ fn main() {
     let level = args.get(2).map_or("full", String::as_str);
     let reps = args.get(3).and_then(|r| r.parse().ok()).unwrap_or(1);
     let glass = RoughDielectric::new(GaussianPsd::isotropic(0.01, 2.0).unwrap(), 1.5).unwrap();
-    let sum = if level == "intensity" {
+    let sum = if level == "oneshape" {
+        run(&glass, Kernel::<OneShape, Partial>::default(), call, reps)
+    } else if level == "intensity" {
         run(&glass, Kernel::<Intensity, Partial>::default(), call, reps)
     } else {
         run(&glass, Kernel::<Full, Partial>::default(), call, reps)
