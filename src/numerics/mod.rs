@@ -84,6 +84,13 @@ pub(crate) fn log_sum_exp<T: Real>(terms: impl Iterator<Item = T> + Clone) -> T 
     m + terms.fold(T::zero(), |acc, x| acc + (x - m).exp()).ln()
 }
 
+/// `a` and `b` with the same bits (NaN allowed only on both sides): the tests' bit-for-bit
+/// comparison.
+#[cfg(test)]
+pub(crate) fn same<F: Real>(a: F, b: F) -> bool {
+    a.to_f64().to_bits() == b.to_f64().to_bits()
+}
+
 /// `SplitMix64`'s next 64 bits, for the library's own unit tests (`verify::rng`, which the
 /// integration tests use, is behind the `verify` feature).
 #[cfg(test)]

@@ -78,6 +78,7 @@ pub(crate) mod fixture {
     use crate::frame::Frame;
     use crate::interaction::Geometry;
     use crate::interaction::pbsdf::RayleighRice;
+    pub(crate) use crate::numerics::same;
     use crate::packet::{CoherenceShape, WavePacket};
     use crate::psd::GaussianPsd;
     use crate::real::Real;
@@ -239,10 +240,5 @@ pub(crate) mod fixture {
             f(i, len);
             i += len;
         }
-    }
-
-    /// `a` and `b` with the same bits (NaN allowed only on both sides).
-    pub(crate) fn same<F: Real>(a: F, b: F) -> bool {
-        a.to_f64().to_bits() == b.to_f64().to_bits()
     }
 }
