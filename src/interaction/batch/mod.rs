@@ -36,12 +36,15 @@ use crate::simd::{Soa, SoaMut};
 
 mod lobes;
 mod outputs;
+mod pairs;
 mod partial;
+mod per_lane;
 mod prep;
 mod spectral;
 mod stages;
 
 pub use outputs::{ExitFramesSoa, LobesSoa};
+pub use pairs::PairsSoa;
 pub(crate) use prep::PlaneWavePrep;
 pub use spectral::{MAX_WAVELENGTHS, Wavelength};
 use stages::validity::{clearly_valid, clearly_valid_lanes};

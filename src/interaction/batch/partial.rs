@@ -45,6 +45,7 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa};
+use super::per_lane::LaneConsts;
 use super::prep::{Incidence, LobePrep, SERIES_MIN_EXITS, SeriesPrep, TransmissionPrep};
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
@@ -66,32 +67,32 @@ use crate::real::Real;
 pub(crate) type ScalarExit<F> = ([F; 4], [F; 4], [F; 3]);
 
 /// The lanes of one vector of exits.
-struct LobeLanes<S: Simd, F: Real> {
-    specular: [F::V<S>; 4],
-    scattered: [F::V<S>; 4],
+pub(super) struct LobeLanes<S: Simd, F: Real> {
+    pub(super) specular: [F::V<S>; 4],
+    pub(super) scattered: [F::V<S>; 4],
     /// The lanes the per-direction kernel must redo.
-    redo: F::M<S>,
+    pub(super) redo: F::M<S>,
 }
 
 /// The wavelength-independent part of one vector of exits: r̂, `cos θ_o` and the exit frame.
-struct ExitLanes<S: Simd, F: Real> {
+pub(super) struct ExitLanes<S: Simd, F: Real> {
     r: [F::V<S>; 3],
     cos_o: F::V<S>,
-    frame: stages::azimuth::ExitFrame<S, F>,
+    pub(super) frame: stages::azimuth::ExitFrame<S, F>,
 }
 
 /// [`ExitLanes`] of one vector of (validated) exits `(x, y, z)`: the incidence `inc` of any
 /// of the wavelengths (their directions and surface are the same).
 #[inline(always)]
-fn exit_lanes<S: Simd, F: Real>(
+pub(super) fn exit_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
     s: S,
-    inc: &Incidence<F>,
+    (inc, q): (&Incidence<F>, &Q),
     x: F::V<S>,
     y: F::V<S>,
     z: F::V<S>,
 ) -> ExitLanes<S, F> {
     let (r, cos_o) = stages::geometry::exit_direction::<S, F>(s, inc, x, y, z);
-    let frame = stages::azimuth::exit_frame::<S, F>(s, inc, r);
+    let frame = stages::azimuth::exit_frame_with::<S, F>(s, inc, q.azimuth_axes(s), r);
     ExitLanes { r, cos_o, frame }
 }
 
@@ -101,9 +102,9 @@ fn exit_lanes<S: Simd, F: Real>(
 /// the Fresnel transmission and `ln η²` in the scale). Lanes on the other side carry values
 /// the caller discards.
 #[inline(always)]
-fn lobe_lanes<S: Simd, F: Real>(
+pub(super) fn lobe_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
     s: S,
-    p: &LobePrep<F>,
+    (p, q): (&LobePrep<F>, &Q),
     series: Option<&SeriesPrep<F>>,
     e: &ExitLanes<S, F>,
     below: Option<&TransmissionPrep<F>>,
@@ -113,7 +114,7 @@ fn lobe_lanes<S: Simd, F: Real>(
     let inc = &p.inc;
     let (r, frame) = (e.r, &e.frame);
     let azimuth = (frame.cos_phi, frame.sin_phi);
-    let (sv, kk) = (stages::splat3::<S, F>(s, inc.s), c(inc.k));
+    let (sv, kk) = (q.to_source(s), c(inc.k));
     // cos θ_o, the Rayleigh–Rice factors, h_t = k (ŝ + η r̂) (Geometry::h_t: η = 1 in
     // reflection), v (the phase factor: ln α = −v² σ²), the constant exponents and the
     // specular pBSDF's per-packet part (None: no specular lobe on this side).
@@ -121,15 +122,20 @@ fn lobe_lanes<S: Simd, F: Real>(
         None => {
             let cos_o = e.cos_o;
             let (so2, qo) = stages::fresnel::exit_q::<S, F>(s, inc, cos_o);
-            let factors = stages::rayleigh_rice::factors::<S, F>(s, inc, cos_o, so2, qo, azimuth);
+            let factors = stages::rayleigh_rice::factors_with::<S, F>(
+                s,
+                inc,
+                &q.terms(s),
+                (cos_o, so2, qo),
+                azimuth,
+            );
             let h = [
                 mul(s, add(s, r[0], sv[0]), kk),
                 mul(s, add(s, r[1], sv[1]), kk),
                 mul(s, add(s, r[2], sv[2]), kk),
             ];
-            let v = mul(s, kk, add(s, c(inc.cos_i), cos_o));
-            let spec = Some((&p.fresnel, &p.spec_frame, p.flip_tol));
-            (cos_o, factors, h, v, (p.ln_spec, p.ln_scat), spec)
+            let v = mul(s, kk, add(s, q.cos_i(s), cos_o));
+            (cos_o, factors, h, v, (c(p.ln_spec), q.ln_scat(s)), Some(None))
         }
         Some(t) => {
             let cos_o = F::vabs(s, e.cos_o);
@@ -142,15 +148,16 @@ fn lobe_lanes<S: Simd, F: Real>(
                 mul(s, add(s, sv[1], mul(s, r[1], eta)), kk),
                 mul(s, add(s, sv[2], mul(s, r[2], eta)), kk),
             ];
-            let v = mul(s, kk, sub(s, c(inc.cos_i), mul(s, eta, cos_o)));
-            let spec = (!t.tir).then_some((&t.fresnel, &t.spec_frame, p.flip_tol));
-            (cos_o, factors, h, v, (t.ln_spec, t.ln_scat), spec)
+            let v = mul(s, kk, sub(s, q.cos_i(s), mul(s, eta, cos_o)));
+            let spec = (!t.tir).then_some(Some(t));
+            (cos_o, factors, h, v, (c(t.ln_spec), c(t.ln_scat)), spec)
         }
     };
     let h0 = stages::dot3::<S, F>(s, h, stages::splat3::<S, F>(s, inc.t1));
     let h1 = stages::dot3::<S, F>(s, h, stages::splat3::<S, F>(s, inc.t2));
     let ln_alpha = F::vneg_mul_add(s, mul(s, v, v), c(p.variance), c(F::zero()));
     let lg = stages::channels::log_gaussian::<S, F>;
+    let lgw = stages::channels::log_gaussian_with::<S, F>;
     let (ml, nc) = (stages::channels::mixture_log::<S, F>, p.components);
     // The scattered channels' log weights: `ln α + ln K_α` at first order (α added below),
     // the series' `ln Σ (w_n/g) K_α[p_n]`, which carries it.
@@ -173,7 +180,11 @@ fn lobe_lanes<S: Simd, F: Real>(
             F::vlt(s, c(F::zero()), c(F::zero())),
         ),
         (None, false) => {
-            let half = ml(s, &p.scat[2][..nc], h0, h1);
+            let half = if nc == 1 {
+                lgw(s, &q.scat_half(s), h0, h1)
+            } else {
+                ml(s, &p.scat[2][..nc], h0, h1)
+            };
             ([half; 3], F::vlt(s, c(F::zero()), c(F::zero())))
         }
     };
@@ -191,15 +202,15 @@ fn lobe_lanes<S: Simd, F: Real>(
     } else {
         let t = p.t_stokes;
         let tv = [c(t[0]), c(t[1]), c(t[2]), c(t[3])];
-        ((tv, lg(s, &p.spec[2], h0, h1)), (tv, scat_logs[2]))
+        ((tv, lgw(s, &q.spec_half(s), h0, h1)), (tv, scat_logs[2]))
     };
     let zero = c(F::zero());
     let ln_scat = if series.is_some() {
-        add(s, m_scat, c(ln_scat0))
+        add(s, m_scat, ln_scat0)
     } else {
-        add(s, add(s, ln_alpha, m_scat), c(ln_scat0))
+        add(s, add(s, ln_alpha, m_scat), ln_scat0)
     };
-    let ln_spec = add(s, add(s, ln_alpha, m_spec), c(ln_spec0));
+    let ln_spec = add(s, add(s, ln_alpha, m_spec), ln_spec0);
     if p.intensity {
         // S0 only, of the effective vector (1, 0, 0, 0): the scattered M₀₀ cos θ_o (the S0 of
         // `assemble_vector`, bit for bit), the specular M₀₀ cos θ_o (the frame change keeps
@@ -209,8 +220,9 @@ fn lobe_lanes<S: Simd, F: Real>(
         let u_scat = s0(stages::stokes::assemble_s0::<S, F>(s, factors, cos_o));
         let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
         let (specular, redo_spec) = match spec {
-            Some((fresnel, _, _)) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
-                let u = s0(mul(s, c(fresnel[(0, 0)]), cos_o));
+            Some(side) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
+                let m00 = side.map_or_else(|| q.fresnel_m00(s), |t| c(t.fresnel[(0, 0)]));
+                let u = s0(mul(s, m00, cos_o));
                 stages::channels::scaled::<S, F>(s, p, u, ln_spec)
             }
             _ => ([zero; 4], F::vlt(s, zero, zero)),
@@ -234,19 +246,23 @@ fn lobe_lanes<S: Simd, F: Real>(
     let u_scat = stages::channels::onto_cone::<S, F>(s, raw_scat);
     let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
     let (specular, redo_spec) = match spec {
-        Some(consts) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
-            let u = stages::specular::fresnel_stokes::<S, F>(
-                s,
-                consts,
-                r,
-                frame.s_out,
-                [
-                    mul(s, v_spec[0], cos_o),
-                    mul(s, v_spec[1], cos_o),
-                    mul(s, v_spec[2], cos_o),
-                    mul(s, v_spec[3], cos_o),
-                ],
-            );
+        Some(side) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
+            let v = [
+                mul(s, v_spec[0], cos_o),
+                mul(s, v_spec[1], cos_o),
+                mul(s, v_spec[2], cos_o),
+                mul(s, v_spec[3], cos_o),
+            ];
+            let u = match side {
+                None => q.fresnel_stokes(s, r, frame.s_out, v),
+                Some(t) => stages::specular::fresnel_stokes::<S, F>(
+                    s,
+                    (&t.fresnel, &t.spec_frame, p.flip_tol),
+                    r,
+                    frame.s_out,
+                    v,
+                ),
+            };
             let u = stages::channels::onto_cone::<S, F>(s, u);
             stages::channels::scaled::<S, F>(s, p, u, ln_spec)
         }
@@ -273,20 +289,18 @@ fn lobe_lanes_either_side<S: Simd, F: Real>(
     series: Option<&SeriesPrep<F>>,
     e: &ExitLanes<S, F>,
 ) -> LobeLanes<S, F> {
+    let lobe_lanes = |below| lobe_lanes::<S, F, LobePrep<F>>(s, (p, p), series, e, below);
     let Some(t) = p.transmission.as_ref() else {
-        return lobe_lanes::<S, F>(s, p, series, e, None);
+        return lobe_lanes(None);
     };
     let below = F::vlt(s, e.cos_o, F::vsplat(s, F::zero()));
     if !F::vany(s, below) {
-        return lobe_lanes::<S, F>(s, p, series, e, None);
+        return lobe_lanes(None);
     }
     if !F::vany(s, F::vnot(s, below)) {
-        return lobe_lanes::<S, F>(s, p, series, e, Some(t));
+        return lobe_lanes(Some(t));
     }
-    let (up, down) = (
-        lobe_lanes::<S, F>(s, p, series, e, None),
-        lobe_lanes::<S, F>(s, p, series, e, Some(t)),
-    );
+    let (up, down) = (lobe_lanes(None), lobe_lanes(Some(t)));
     let and = F::vand::<S>;
     LobeLanes {
         specular: pick::<S, F>(s, below, down.specular, up.specular),
@@ -337,7 +351,7 @@ pub(crate) type ScalarRedo<'r, F> = &'r mut dyn FnMut(usize, usize) -> Result<Sc
 /// The exits `start..start + count` of `v` as one vector: a whole vector when `count` is the
 /// width, else padded with `v[0]` (through `b`).
 #[inline(always)]
-fn load<S: Simd, F: Real>(v: &[F], b: &mut [F; MAX_LANES], start: usize, count: usize) -> F::V<S> {
+pub(super) fn load<S: Simd, F: Real>(v: &[F], b: &mut [F; MAX_LANES], start: usize, count: usize) -> F::V<S> {
     let lanes = F::width::<S>();
     if count == lanes {
         F::vsplit::<S>(&v[start..start + lanes]).0[0]
@@ -350,7 +364,7 @@ fn load<S: Simd, F: Real>(v: &[F], b: &mut [F; MAX_LANES], start: usize, count: 
 
 /// The first `count` lanes of `v` into `o[start..start + count]`.
 #[inline(always)]
-fn store<S: Simd, F: Real>(s: S, o: &mut [F], v: F::V<S>, start: usize, count: usize) {
+pub(super) fn store<S: Simd, F: Real>(s: S, o: &mut [F], v: F::V<S>, start: usize, count: usize) {
     let t = &mut o[start..start + count];
     if count == F::width::<S>() {
         F::vsplit_mut::<S>(t).0[0] = v;
@@ -360,7 +374,7 @@ fn store<S: Simd, F: Real>(s: S, o: &mut [F], v: F::V<S>, start: usize, count: u
 }
 
 /// At most this many lanes in a vector (`f32` under AVX-512).
-const MAX_LANES: usize = 16;
+pub(super) const MAX_LANES: usize = 16;
 
 impl<F: Real> WithSimd for PartialLobes<'_, '_, '_, '_, F> {
     type Output = Result<(), Error>;
@@ -446,7 +460,7 @@ fn lobe_loop<S: Simd, F: Real>(
         let x = load::<S, F>(xs, bx, start, count);
         let y = load::<S, F>(ys, by, start, count);
         let z = load::<S, F>(zs, bz, start, count);
-        let e = exit_lanes::<S, F>(s, prep, x, y, z);
+        let e = exit_lanes::<S, F, LobePrep<F>>(s, (prep, prep), x, y, z);
         if let Some(f) = frames.as_deref_mut() {
             for k in 0..3 {
                 store::<S, F>(s, f.s[k], e.frame.s_out[k], start, count);
@@ -505,6 +519,26 @@ where
     Coh: CoherenceWeights<T, S::Psd>,
     Rough: RoughnessModel,
 {
+    let to_source = -packet.direction();
+    lane_prep_at(kernel, material, prepared, to_source, surface, interface)
+}
+
+/// [`lane_prep`] for the prepared packet arriving from `to_source` (`−k̂`, any length).
+pub(crate) fn lane_prep_at<T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
+    material: &S,
+    prepared: &PreparedPacket<T, Pol, Coh>,
+    to_source: Vector3<T>,
+    surface: &Frame<T>,
+    interface: Option<T>,
+) -> Option<LobePrep<T>>
+where
+    T: Real,
+    S: Surface<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessModel,
+{
     // First order, or the Kirchhoff series (its weights from `series_prep`, partially coherent
     // only: the incoherent series is a closed form the lanes do not have).
     let series = match (Rough::LEVEL, kernel.roughness().lane_series()) {
@@ -531,7 +565,7 @@ where
     }
     // At an interface lit from below, the frame facing the source (t̂₂ and n̂ negated) and the
     // indices seen from the source, as `Geometry::at_interface` and the pBSDFs have them.
-    let below = interface.is_some() && packet.direction().dot(&surface.k()) > T::zero();
+    let below = interface.is_some() && (-to_source).dot(&surface.k()) > T::zero();
     let facing = if below { surface.reversed() } else { *surface };
     let (index, permittivity) = match (below, parts.dielectric) {
         (true, Some(d)) => (
@@ -540,12 +574,11 @@ where
         ),
         _ => (parts.index, parts.scatter.permittivity()),
     };
-    let prep = LobePrep::new(
+    let prep = LobePrep::from_direction(
         prepared,
-        parts.components,
-        parts.variance,
+        (parts.components, parts.variance),
         (index, permittivity),
-        packet,
+        to_source,
         (&facing, below),
         full,
     )?;

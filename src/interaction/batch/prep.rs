@@ -99,7 +99,19 @@ impl<T: Real> Incidence<T> {
         packet: &WavePacket<T>,
         surface: &Frame<T>,
     ) -> Result<Self, Error> {
-        let s = unit_direction(&-packet.direction(), "direction to the source")?.into_inner();
+        Self::from_direction(epsilon, -packet.direction(), packet.wavenumber(), surface)
+    }
+
+    /// [`Incidence::new`] of light of wavenumber `k` arriving from `to_source` (`−k̂`, any
+    /// length).
+    #[inline]
+    pub(crate) fn from_direction(
+        epsilon: Complex<T>,
+        to_source: Vector3<T>,
+        k: T,
+        surface: &Frame<T>,
+    ) -> Result<Self, Error> {
+        let s = unit_direction(&to_source, "direction to the source")?.into_inner();
         let n = surface.k();
         let (cos_i, incident_sp) = geometry::incidence(&s, surface)?;
         let u_az = n.cross(&incident_sp.x());
@@ -121,14 +133,14 @@ impl<T: Real> Incidence<T> {
         let plain = e.im.abs() >= lo && e.im.abs() <= hi && e.re.abs() + T::one() <= hi;
         Ok(Self {
             surface: *surface,
-            to_source_raw: -packet.direction(),
+            to_source_raw: to_source,
             s,
             n,
             t1: surface.x(),
             t2: surface.y(),
             u_az,
             v_az,
-            k: packet.wavenumber(),
+            k,
             cos_i,
             si2,
             e,
@@ -348,19 +360,34 @@ impl<T: Real> LobePrep<T> {
     /// PSD blurred with the mirrored section `D Ξ D` at `(h₁, −h₂)`, as the per-direction
     /// kernel has it (`psd_xi`, `Geometry::psd_h`) — the Cholesky factor of `Λ⁻¹ + D Ξ D` with
     /// `ℓ₁₀` negated, which gives the same `|L⁻¹ D h|²` at `h` exactly.
+    #[cfg(test)]
     pub(crate) fn new<Pol, Coh>(
         prepared: &crate::interaction::PreparedPacket<T, Pol, Coh>,
         psd: &[GaussianPsd<T, 2>],
         variance: T,
-        (fresnel_eta, epsilon): (Complex<T>, Complex<T>),
+        indices: (Complex<T>, Complex<T>),
         packet: &WavePacket<T>,
+        surface: (&Frame<T>, bool),
+        full: bool,
+    ) -> Option<Self> {
+        let to_source = -packet.direction();
+        Self::from_direction(prepared, (psd, variance), indices, to_source, surface, full)
+    }
+
+    /// [`LobePrep::new`] for light arriving from `to_source` (`−k̂`, any length) at the
+    /// prepared packet's wavenumber.
+    pub(crate) fn from_direction<Pol, Coh>(
+        prepared: &crate::interaction::PreparedPacket<T, Pol, Coh>,
+        (psd, variance): (&[GaussianPsd<T, 2>], T),
+        (fresnel_eta, epsilon): (Complex<T>, Complex<T>),
+        to_source: Vector3<T>,
         (surface, mirrored): (&Frame<T>, bool),
         full: bool,
     ) -> Option<Self> {
         if psd.is_empty() || psd.len() > MAX_COMPONENTS {
             return None;
         }
-        let inc = Incidence::new(epsilon, packet, surface).ok()?;
+        let inc = Incidence::from_direction(epsilon, to_source, prepared.k, surface).ok()?;
         let three = full && !prepared.single_shape;
         let ln2pi = crate::interaction::coherence::ln_two_pi::<T>();
         let zero = Vector2::zeros();

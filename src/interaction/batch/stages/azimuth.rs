@@ -29,6 +29,20 @@ pub(crate) fn exit_frame<S: Simd, F: Real>(
     p: &Incidence<F>,
     r: [F::V<S>; 3],
 ) -> ExitFrame<S, F> {
+    let axes = (splat3::<S, F>(s, p.u_az), splat3::<S, F>(s, p.v_az));
+    exit_frame_with::<S, F>(s, p, axes, r)
+}
+
+/// [`exit_frame`] with the azimuth axes `(n̂ × ŝ_in, n̂ × (n̂ × ŝ_in))` given per lane (the
+/// per-lane pass, `batch::per_lane`: each lane its own incident direction); the normal and
+/// `√ε` are `p`'s.
+#[inline(always)]
+pub(crate) fn exit_frame_with<S: Simd, F: Real>(
+    s: S,
+    p: &Incidence<F>,
+    (u_az, v_az): ([F::V<S>; 3], [F::V<S>; 3]),
+    r: [F::V<S>; 3],
+) -> ExitFrame<S, F> {
     let c = |v: F| F::vsplat(s, v);
     let (sub, mul) = (F::vsub::<S>, F::vmul::<S>);
     let zero = c(F::zero());
@@ -48,8 +62,8 @@ pub(crate) fn exit_frame<S: Simd, F: Real>(
             s_out[j] = F::vselect(s, near, o[j], s_out[j]);
         }
     }
-    let cos_phi = sub(s, zero, dot3::<S, F>(s, s_out, splat3::<S, F>(s, p.v_az)));
-    let sin_phi = dot3::<S, F>(s, s_out, splat3::<S, F>(s, p.u_az));
+    let cos_phi = sub(s, zero, dot3::<S, F>(s, s_out, v_az));
+    let sin_phi = dot3::<S, F>(s, s_out, u_az);
     let normal = F::vlt(s, rho, c(p.parallel_tol));
     ExitFrame {
         s_out,

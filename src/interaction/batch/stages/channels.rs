@@ -26,11 +26,46 @@ pub(crate) fn log_gaussian<S: Simd, F: Real>(
     h0: F::V<S>,
     h1: F::V<S>,
 ) -> F::V<S> {
+    log_gaussian_with::<S, F>(s, &log_gaussian_lanes::<S, F>(s, g), h0, h1)
+}
+
+/// The constants of a [`LogGaussian`] as vectors (`c`, `ℓ₀₀`, `ℓ₁₀`, `1/ℓ₁₁`): splatted
+/// ([`log_gaussian_lanes`]), or one per lane (the per-lane pass, `batch::per_lane`).
+#[derive(Clone, Copy)]
+pub(crate) struct LogGaussianLanes<V> {
+    pub(crate) c: V,
+    pub(crate) l00: V,
+    pub(crate) l10: V,
+    pub(crate) inv_l11: V,
+}
+
+/// `g`'s constants on every lane.
+#[inline(always)]
+pub(crate) fn log_gaussian_lanes<S: Simd, F: Real>(
+    s: S,
+    g: &LogGaussian<F>,
+) -> LogGaussianLanes<F::V<S>> {
     let c = |v: F| F::vsplat(s, v);
-    let y0 = F::vdiv(s, h0, c(g.l00));
-    let y1 = F::vmul(s, F::vsub(s, h1, F::vmul(s, c(g.l10), y0)), c(g.inv_l11));
+    LogGaussianLanes {
+        c: c(g.c),
+        l00: c(g.l00),
+        l10: c(g.l10),
+        inv_l11: c(g.inv_l11),
+    }
+}
+
+/// [`log_gaussian`] of constants given per lane.
+#[inline(always)]
+pub(crate) fn log_gaussian_with<S: Simd, F: Real>(
+    s: S,
+    g: &LogGaussianLanes<F::V<S>>,
+    h0: F::V<S>,
+    h1: F::V<S>,
+) -> F::V<S> {
+    let y0 = F::vdiv(s, h0, g.l00);
+    let y1 = F::vmul(s, F::vsub(s, h1, F::vmul(s, g.l10, y0)), g.inv_l11);
     let m = F::vmul_add(s, y0, y0, F::vmul(s, y1, y1));
-    F::vneg_mul_add(s, c(F::lit(0.5)), m, c(g.c))
+    F::vneg_mul_add(s, F::vsplat(s, F::lit(0.5)), m, g.c)
 }
 
 /// `ln f` for `1 ≤ f ≤ MAX_COMPONENTS` (8): the series `2 atanh z`, `z = (f − 1)/(f + 1)`, to
@@ -142,28 +177,34 @@ pub(crate) fn mat_vec<S: Simd, F: Real>(
     m: &nalgebra::Matrix4<F>,
     v: [F::V<S>; 4],
 ) -> [F::V<S>; 4] {
+    let c = |i: usize| core::array::from_fn(|j| F::vsplat(s, m[(i, j)]));
+    let row = |i: usize| row::<S, F>(s, c(i), v);
+    [row(0), row(1), row(2), row(3)]
+}
+
+/// `M v` for a 4×4 matrix given per lane (`m[i][j]` the lanes of `M_ij`).
+#[inline(always)]
+pub(crate) fn mat_vec_with<S: Simd, F: Real>(
+    s: S,
+    m: &[[F::V<S>; 4]; 4],
+    v: [F::V<S>; 4],
+) -> [F::V<S>; 4] {
     [
-        row::<S, F>(s, m, 0, v),
-        row::<S, F>(s, m, 1, v),
-        row::<S, F>(s, m, 2, v),
-        row::<S, F>(s, m, 3, v),
+        row::<S, F>(s, m[0], v),
+        row::<S, F>(s, m[1], v),
+        row::<S, F>(s, m[2], v),
+        row::<S, F>(s, m[3], v),
     ]
 }
 
-/// Row `i` of `M v`.
+/// One row `m` of `M v`.
 #[inline(always)]
-fn row<S: Simd, F: Real>(s: S, m: &nalgebra::Matrix4<F>, i: usize, v: [F::V<S>; 4]) -> F::V<S> {
-    let c = |x: F| F::vsplat(s, x);
+fn row<S: Simd, F: Real>(s: S, m: [F::V<S>; 4], v: [F::V<S>; 4]) -> F::V<S> {
     F::vmul_add(
         s,
-        c(m[(i, 0)]),
+        m[0],
         v[0],
-        F::vmul_add(
-            s,
-            c(m[(i, 1)]),
-            v[1],
-            F::vmul_add(s, c(m[(i, 2)]), v[2], F::vmul(s, c(m[(i, 3)]), v[3])),
-        ),
+        F::vmul_add(s, m[1], v[1], F::vmul_add(s, m[2], v[2], F::vmul(s, m[3], v[3]))),
     )
 }
 

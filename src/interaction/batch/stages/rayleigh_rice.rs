@@ -9,6 +9,35 @@ use super::super::prep::{Incidence, TransmissionConsts};
 use crate::real::Real;
 use crate::simd::complex::{C, Cx};
 
+/// The per-packet terms of the reflection factors that depend on the incident direction
+/// (`sin²θ_i`, `q_i`, `D₁/t`, `D₃/t²`, `−(ε − 1)/t² · q_i/t` of [`Incidence`]), as vectors:
+/// splatted from one incidence ([`incident_terms`]), or one per lane (the per-lane pass,
+/// `batch::per_lane`).
+#[derive(Clone, Copy)]
+pub(crate) struct IncidentTerms<V> {
+    pub(crate) si2: V,
+    pub(crate) qi: C<V>,
+    pub(crate) d1s: C<V>,
+    pub(crate) d3s: C<V>,
+    pub(crate) neg_em1s_qis: C<V>,
+}
+
+/// The [`IncidentTerms`] of `p` on every lane.
+#[inline(always)]
+pub(crate) fn incident_terms<S: Simd, F: Real>(
+    s: S,
+    p: &Incidence<F>,
+) -> IncidentTerms<F::V<S>> {
+    let cx = Cx(s);
+    IncidentTerms {
+        si2: F::vsplat(s, p.si2),
+        qi: cx.splat::<F>(p.qi),
+        d1s: cx.splat::<F>(p.d1s),
+        d3s: cx.splat::<F>(p.d3s),
+        neg_em1s_qis: cx.splat::<F>(p.neg_em1s_qis),
+    }
+}
+
 /// `[ss, ps, sp, pp]` at `cos θ_o`, `sin²θ_o`, `q_o` and the azimuth `(cos φ, sin φ)`.
 #[inline(always)]
 pub(crate) fn factors<S: Simd, F: Real>(
@@ -17,6 +46,20 @@ pub(crate) fn factors<S: Simd, F: Real>(
     cos_o: F::V<S>,
     so2: F::V<S>,
     qo: C<F::V<S>>,
+    azimuth: (F::V<S>, F::V<S>),
+) -> [C<F::V<S>>; 4] {
+    let terms = incident_terms::<S, F>(s, p);
+    factors_with::<S, F>(s, p, &terms, (cos_o, so2, qo), azimuth)
+}
+
+/// [`factors`] with the incident direction's terms given per lane (`terms`); `ε` and the scale
+/// are `p`'s.
+#[inline(always)]
+pub(crate) fn factors_with<S: Simd, F: Real>(
+    s: S,
+    p: &Incidence<F>,
+    terms: &IncidentTerms<F::V<S>>,
+    (cos_o, so2, qo): (F::V<S>, F::V<S>, C<F::V<S>>),
     (cos_phi, sin_phi): (F::V<S>, F::V<S>),
 ) -> [C<F::V<S>>; 4] {
     let c = |v: F| F::vsplat(s, v);
@@ -24,7 +67,7 @@ pub(crate) fn factors<S: Simd, F: Real>(
     let cx = Cx(s);
     let e = cx.splat::<F>(p.e);
     let (inv, inv2) = (c(p.scale.inv), c(p.scale.inv2));
-    let (d1s, d3s) = (cx.splat::<F>(p.d1s), cx.splat::<F>(p.d3s));
+    let (d1s, d3s) = (terms.d1s, terms.d3s);
     let d2 = C {
         re: add(s, qo.re, cos_o),
         im: qo.im,
@@ -39,8 +82,8 @@ pub(crate) fn factors<S: Simd, F: Real>(
     let both = cx.mul::<F>(inv_ss, inv_pp);
     let em1s = cx.splat::<F>(p.em1s);
     let ss = cx.scale::<F>(cx.mul::<F>(em1s, inv_ss), cos_phi);
-    let sq = F::vsqrt(s, mul(s, c(p.si2), so2));
-    let qoqi = cx.scale::<F>(cx.mul::<F>(qo, cx.splat::<F>(p.qi)), cos_phi);
+    let sq = F::vsqrt(s, mul(s, terms.si2, so2));
+    let qoqi = cx.scale::<F>(cx.mul::<F>(qo, terms.qi), cos_phi);
     let es = cx.scale::<F>(e, sq);
     let inner = C {
         re: sub(s, es.re, qoqi.re),
@@ -49,7 +92,7 @@ pub(crate) fn factors<S: Simd, F: Real>(
     let pp = cx.mul::<F>(cx.mul::<F>(em1s, cx.scale::<F>(inner, inv2)), inv_pp);
     let ps = cx.scale::<F>(
         cx.mul::<F>(
-            cx.splat::<F>(p.neg_em1s_qis),
+            terms.neg_em1s_qis,
             cx.mul::<F>(cx.mul::<F>(d1s, d4s), both),
         ),
         sin_phi,

@@ -5,7 +5,7 @@
 
 use pulp::Simd;
 
-use super::channels::mat_vec;
+use super::channels::{mat_vec, mat_vec_with};
 use super::{dot3, splat3};
 use crate::frame::Frame;
 use crate::real::Real;
@@ -22,20 +22,48 @@ pub(crate) fn fresnel_stokes<S: Simd, F: Real>(
     s_out: [F::V<S>; 3],
     v: [F::V<S>; 4],
 ) -> [F::V<S>; 4] {
+    let w = mat_vec::<S, F>(s, fresnel, v);
+    let axes = [
+        splat3::<S, F>(s, spec_frame.x()),
+        splat3::<S, F>(s, spec_frame.y()),
+        splat3::<S, F>(s, spec_frame.k()),
+    ];
+    frame_change::<S, F>(s, (&axes, flip_tol), r, s_out, w)
+}
+
+/// [`fresnel_stokes`] with the Fresnel matrix and the specular frame's axes (ŝ, p̂, r̂_spec)
+/// given per lane (the per-lane pass, `batch::per_lane`).
+#[inline(always)]
+pub(crate) fn fresnel_stokes_with<S: Simd, F: Real>(
+    s: S,
+    (fresnel, axes, flip_tol): (&[[F::V<S>; 4]; 4], &[[F::V<S>; 3]; 3], F),
+    r: [F::V<S>; 3],
+    s_out: [F::V<S>; 3],
+    v: [F::V<S>; 4],
+) -> [F::V<S>; 4] {
+    let w = mat_vec_with::<S, F>(s, fresnel, v);
+    frame_change::<S, F>(s, (axes, flip_tol), r, s_out, w)
+}
+
+/// `T(F_spec → F_exit) w`: the frame change of [`fresnel_stokes`] from the specular frame of
+/// axes `[ŝ, p̂, r̂_spec]` to each exit's.
+#[inline(always)]
+fn frame_change<S: Simd, F: Real>(
+    s: S,
+    (axes, flip_tol): (&[[F::V<S>; 3]; 3], F),
+    r: [F::V<S>; 3],
+    s_out: [F::V<S>; 3],
+    w: [F::V<S>; 4],
+) -> [F::V<S>; 4] {
     let c = |x: F| F::vsplat(s, x);
     let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
-    let w = mat_vec::<S, F>(s, fresnel, v);
     // p̂_out = r̂ × ŝ_out (Frame::sp_unit).
     let p_out = [
         sub(s, mul(s, r[1], s_out[2]), mul(s, r[2], s_out[1])),
         sub(s, mul(s, r[2], s_out[0]), mul(s, r[0], s_out[2])),
         sub(s, mul(s, r[0], s_out[1]), mul(s, r[1], s_out[0])),
     ];
-    let (fs, fp, fk) = (
-        splat3::<S, F>(s, spec_frame.x()),
-        splat3::<S, F>(s, spec_frame.y()),
-        splat3::<S, F>(s, spec_frame.k()),
-    );
+    let [fs, fp, fk] = *axes;
     let a = dot3::<S, F>(s, s_out, fs);
     let b = dot3::<S, F>(s, s_out, fp);
     let cc = dot3::<S, F>(s, p_out, fs);

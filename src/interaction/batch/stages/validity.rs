@@ -19,10 +19,21 @@ fn size_range<F: Real>() -> (F, F) {
 /// `true` when `(x, y, z)` is certainly an accepted exit direction.
 #[inline]
 pub(crate) fn clearly_valid<F: Real>(p: &Incidence<F>, x: F, y: F, z: F) -> bool {
+    clearly_valid_about(&p.n, p.interface.is_some(), [x, y, z])
+}
+
+/// [`clearly_valid`] about the unit normal `n` (either side of it when `either_side`): also the
+/// test of a direction to the source, which `Geometry::new` accepts on the same terms.
+#[inline]
+pub(crate) fn clearly_valid_about<F: Real>(
+    n: &nalgebra::Vector3<F>,
+    either_side: bool,
+    [x, y, z]: [F; 3],
+) -> bool {
     let (lo, hi) = size_range::<F>();
     let m = x.abs().max(y.abs()).max(z.abs());
-    let d = x * p.n.x + y * p.n.y + z * p.n.z;
-    let d = if p.interface.is_some() { d.abs() } else { d };
+    let d = x * n.x + y * n.y + z * n.z;
+    let d = if either_side { d.abs() } else { d };
     x.is_finite()
         && y.is_finite()
         && z.is_finite()

@@ -1,0 +1,333 @@
+//! The kernel for a batch of (incident, exit) pairs: [`Kernel::evaluate_pairs`], every lane
+//! its own direction to the source, its own exit and its own coherence width — what a
+//! wavefront renderer's lanes are (each path at its own vertex), for the light its backward
+//! weights and its next-event estimation evaluate: unpolarized, of unit `S0`, with the
+//! isotropic section `Ξ = I/w²` on the surface ([`crate::bsdf::SurfaceCoherence`]'s packet, in
+//! the closed form of `PreparedPacket::unpolarized_isotropic`).
+//!
+//! # Lanes
+//! Per vector of pairs, each pair's per-packet constants (its [`super::prep::LobePrep`], from
+//! the closed-form preparation) are built one at a time and gathered into vectors
+//! ([`super::per_lane::Gathered`]); then the lobe stages of `super::partial` run on the vector,
+//! with the same operations as the batch over exits of one packet. A lane is therefore
+//! bit for bit what [`Kernel::evaluate_batch`]'s lanes give for that pair's prepared packet
+//! and exit (the `pairs_equal_the_batch_lanes_bit_for_bit` test), and within the bound of
+//! [`Kernel::evaluate_batch`] of the per-direction kernel. The lanes cover the partially coherent
+//! (closed-form blur) and incoherent first-order kernel at every polarization level, on a
+//! [`super::super::RoughConductor`] or a [`super::super::RoughDielectric`] in reflection, with
+//! a [`crate::psd::GaussianPsd`]; any other case (a mixture PSD, the Kirchhoff series, a
+//! quadrature blur, a plane wave) goes pair by pair through the per-direction kernel, as do
+//! the lanes the batch over exits redoes (within `√ε` of the normal, a scale outside the
+//! normal range).
+
+use nalgebra::Vector3;
+use pulp::{Simd, WithSimd};
+
+use super::DirectionsSoa;
+use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
+use super::partial::{MAX_LANES, ScalarExit, exit_lanes, lane_prep_at, load, lobe_lanes, store};
+use super::per_lane::Gathered;
+use super::prep::LobePrep;
+use super::stages::validity::clearly_valid_about;
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
+use crate::interaction::polarization::{KernelOutput, PolarizationModel};
+use crate::interaction::roughness::{RoughnessModel, RoughnessWeights};
+use crate::interaction::{Geometry, Kernel, Surface};
+use crate::real::Real;
+
+/// A batch of pairs for [`Kernel::evaluate_pairs`], three views of equal length: element `i`
+/// is unpolarized light of unit `S0` arriving from `to_source[i]` (any length) with the
+/// isotropic coherence section `I/wᵢ²` on the surface, `inverse_width[i] = 1/wᵢ` (µm⁻¹),
+/// leaving along `exit[i]` (any length).
+#[derive(Debug, Clone, Copy)]
+pub struct PairsSoa<'a, T> {
+    /// The directions to the source (`−k̂`), world coordinates.
+    pub to_source: DirectionsSoa<'a, T>,
+    /// The exit directions, world coordinates.
+    pub exit: DirectionsSoa<'a, T>,
+    /// `1/w` of each pair's coherence width `w` on the surface (µm⁻¹).
+    pub inverse_width: &'a [T],
+}
+
+impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<Pol, Coh, Rough> {
+    /// Evaluates S2.20 for every pair of `pairs` at the wavenumber `k` (rad/µm, in the medium
+    /// above `surface`), in reflection: both lobes into `out` and, when given, the exit s/p
+    /// frames into `frames`, as [`Kernel::evaluate_batch`] writes them (at the
+    /// [`super::super::Intensity`] level `S0` only).
+    ///
+    /// Entry `i` is the kernel for unpolarized light of unit `S0` arriving from
+    /// `to_source[i]` whose coherence section on the surface is `I/wᵢ²` — the packet
+    /// [`crate::bsdf::SurfaceCoherence::packet`] builds for the width `wᵢ` (shape
+    /// `diag(w², w² cos²θ_i)` in the incident s/p frame), in the closed form of
+    /// [`crate::bsdf::Bsdf::prepare_surface`], which equals that packet's preparation up to
+    /// rounding — leaving along `exit[i]`, with the geometry of [`Geometry::new`]. A
+    /// wavefront renderer's lanes are such pairs: each path at its own vertex, its light
+    /// unpolarized (module docs of `interaction::batch::pairs`).
+    ///
+    /// # Lanes
+    /// With the levels, coherence, PSD and materials of [`Kernel::evaluate_batch`]'s lanes at
+    /// first order (a [`crate::psd::GaussianPsd`], not a mixture), the pairs run in SIMD lanes,
+    /// each lane its own pair, with the same bound against the per-direction kernel as
+    /// [`Kernel::evaluate_batch`] (a lane is bit for bit the batch's lane for that pair's
+    /// prepared packet and exit); elsewhere pair by pair through the per-direction kernel.
+    /// Allocates nothing.
+    ///
+    /// # Errors
+    /// - [`Error::OutOfRange`] when a slice of `pairs`, `out` or `frames` is shorter than
+    ///   `pairs.exit.x`, when `k` is not positive and finite, or when an inverse width is not
+    ///   positive and finite (nothing is written).
+    /// - The error of [`Geometry::new`] for the first pair it rejects (nothing is written: every
+    ///   pair is validated first).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::batch::{DirectionsSoa, LobesSoa, PairsSoa, StokesSoa};
+    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughConductor};
+    /// use gmueller::bsdf::SurfaceCoherence;
+    /// use gmueller::psd::GaussianPsd;
+    /// use gmueller::stokes::Stokes;
+    /// use nalgebra::Vector3;
+    /// use num_complex::Complex;
+    ///
+    /// let gold = RoughConductor::new(GaussianPsd::<f64, 2>::isotropic(0.02, 1.0)?,
+    ///     Complex::new(0.47, 2.4))?;
+    /// let surface = Frame::from_normal(Vector3::z())?;
+    /// let (lambda, w) = (0.55, 5.0);
+    /// // Two pairs: each its own light direction and exit.
+    /// let (sx, sy, sz) = ([0.4, -0.2], [0.0, 0.3], [0.9, 0.8]);
+    /// let (rx, ry, rz) = ([-0.4, 0.1], [0.05, -0.3], [0.9, 0.9]);
+    /// let inverse_width = [1.0 / w; 2];
+    /// let pairs = PairsSoa {
+    ///     to_source: DirectionsSoa { x: &sx, y: &sy, z: &sz },
+    ///     exit: DirectionsSoa { x: &rx, y: &ry, z: &rz },
+    ///     inverse_width: &inverse_width,
+    /// };
+    /// let mut buf = [[0.0; 2]; 8];
+    /// let [a, b, c, d, e, f, g, h] = &mut buf;
+    /// let mut out = LobesSoa {
+    ///     specular: StokesSoa { s: [a, b, c, d] },
+    ///     scattered: StokesSoa { s: [e, f, g, h] },
+    /// };
+    /// let kernel = Kernel::<Full, Partial>::default();
+    /// let k = 2.0 * std::f64::consts::PI / lambda;
+    /// kernel.evaluate_pairs(&gold, k, &surface, pairs, &mut out, None)?;
+    /// // Pair 1 against its packet evaluated alone (the same light up to rounding).
+    /// let to_source = Vector3::new(sx[1], sy[1], sz[1]);
+    /// let packet = SurfaceCoherence::fixed(w)?
+    ///     .packet(Stokes::unpolarized(1.0)?, to_source, &surface, lambda)?;
+    /// let g = Geometry::new(k, &surface, to_source, Vector3::new(rx[1], ry[1], rz[1]))?;
+    /// let one = kernel.evaluate(&gold, &packet, &g).scattered.vector();
+    /// assert!((out.scattered.s[0][1] - one[0]).abs() <= 1e-12 * one[0]);
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    pub fn evaluate_pairs<T, S>(
+        &self,
+        material: &S,
+        k: T,
+        surface: &Frame<T>,
+        pairs: PairsSoa<'_, T>,
+        out: &mut LobesSoa<'_, T>,
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error>
+    where
+        T: Real,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
+    {
+        let PairsSoa {
+            to_source,
+            exit,
+            inverse_width,
+        } = pairs;
+        let n = exit.len();
+        check_lengths(&exit, core::slice::from_ref(out), frames.as_deref())?;
+        if to_source.x.len() < n
+            || to_source.y.len() < n
+            || to_source.z.len() < n
+            || inverse_width.len() < n
+        {
+            return Err(Error::OutOfRange {
+                what: "pairs slice length",
+                value: n as f64,
+                expected: "to_source and inverse_width at least as long as exit.x",
+            });
+        }
+        if !(k > T::zero() && k.is_finite()) {
+            return Err(Error::OutOfRange {
+                what: "wavenumber k (rad/µm)",
+                value: k.to_f64(),
+                expected: "positive and finite",
+            });
+        }
+        if let Some(w) = inverse_width[..n]
+            .iter()
+            .find(|w| !(**w > T::zero() && w.is_finite()))
+        {
+            return Err(Error::OutOfRange {
+                what: "inverse coherence width 1/w (1/µm)",
+                value: w.to_f64(),
+                expected: "positive and finite",
+            });
+        }
+        let at = |d: &DirectionsSoa<'_, T>, i: usize| Vector3::new(d.x[i], d.y[i], d.z[i]);
+        let normal = surface.k();
+        for i in 0..n {
+            let (s, r) = (at(&to_source, i), at(&exit, i));
+            let clear = |v: Vector3<T>| clearly_valid_about(&normal, false, v.into());
+            if !(clear(s) && clear(r)) {
+                Geometry::new(k, surface, s, r)?;
+            }
+        }
+        let prepared = |i: usize| self.prepare_unpolarized_isotropic(k, inverse_width[i]);
+        let mut prep = |i: usize| {
+            lane_prep_at(self, material, &prepared(i), at(&to_source, i), surface, None)
+                .filter(|_| Rough::LEVEL == crate::interaction::roughness::RoughnessLevel::FirstOrder)
+        };
+        let scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
+            let g = Geometry::new(k, surface, at(&to_source, i), at(&exit, i))?;
+            let r = self.evaluate_prepared(material, &prepared(i), &g);
+            let z = T::zero();
+            let (sp, sc) = match r.stokes() {
+                Some((sp, sc)) => (sp.0.into(), sc.0.into()),
+                None => (
+                    [r.specular_intensity(), z, z, z],
+                    [r.scattered_intensity(), z, z, z],
+                ),
+            };
+            Ok((sp, sc, g.exit_sp().x().into()))
+        };
+        let mut calls = 0;
+        let mut counted = |i: usize| {
+            calls += 1;
+            scalar(i)
+        };
+        let done = crate::simd::dispatch(PairLobes {
+            exits: exit,
+            n,
+            intensity: Pol::LEVEL == crate::interaction::polarization::PolarizationLevel::Intensity,
+            out,
+            frames,
+            prep: &mut prep,
+            scalar: &mut counted,
+        });
+        #[cfg(test)]
+        tests::PER_DIRECTION.with(|c| c.set(c.get() + calls));
+        let _ = calls;
+        done
+    }
+}
+
+/// The SIMD loop of [`Kernel::evaluate_pairs`] over vectors of (validated) pairs, one type
+/// per float type (the material and kernel behind the two callbacks, as `PartialLobes`).
+struct PairLobes<'r, 'e, 'o, 'f, F: Real> {
+    exits: DirectionsSoa<'e, F>,
+    n: usize,
+    intensity: bool,
+    out: &'r mut LobesSoa<'o, F>,
+    frames: Option<&'r mut ExitFramesSoa<'f, F>>,
+    /// Pair `i`'s lane constants, `None` where the lanes do not reproduce its kernel.
+    prep: &'r mut dyn FnMut(usize) -> Option<LobePrep<F>>,
+    /// Pair `i` by the per-direction kernel.
+    scalar: &'r mut dyn FnMut(usize) -> Result<ScalarExit<F>, Error>,
+}
+
+impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
+    type Output = Result<(), Error>;
+
+    // `inline(always)`: the body must be compiled inside pulp's `#[target_feature]` function.
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, s: S) -> Result<(), Error> {
+        let Self {
+            exits,
+            n,
+            intensity,
+            out,
+            mut frames,
+            prep,
+            scalar,
+        } = self;
+        let lanes = F::width::<S>();
+        let (xs, ys, zs) = (&exits.x[..n], &exits.y[..n], &exits.z[..n]);
+        let stokes_len = if intensity { 1 } else { 4 };
+        let write = |i: usize,
+                     (sp, sc, so): ScalarExit<F>,
+                     out: &mut LobesSoa<'_, F>,
+                     frames: Option<&mut ExitFramesSoa<'_, F>>| {
+            for k in 0..stokes_len {
+                out.specular.s[k][i] = sp[k];
+                out.scattered.s[k][i] = sc[k];
+            }
+            if let Some(f) = frames {
+                for (col, v) in f.s.iter_mut().zip(so) {
+                    col[i] = v;
+                }
+            }
+        };
+        let mut buf = [[F::zero(); MAX_LANES]; 3];
+        let mut preps: [Option<LobePrep<F>>; MAX_LANES] = [None; MAX_LANES];
+        // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` pairs (overlapping
+        // the vector before it), or, for a batch shorter than one vector, padded with pair 0.
+        for chunk in 0..n.div_ceil(lanes) {
+            let (start, count) = if n >= lanes {
+                ((chunk * lanes).min(n - lanes), lanes)
+            } else {
+                (0, n)
+            };
+            for (j, p) in preps[..count].iter_mut().enumerate() {
+                *p = prep(start + j);
+            }
+            let built = preps[..count].iter().all(Option::is_some);
+            let gathered = match &preps[0] {
+                Some(p0) if built => {
+                    let refs: [&LobePrep<F>; MAX_LANES] =
+                        core::array::from_fn(|j| preps[j].as_ref().filter(|_| j < count).unwrap_or(p0));
+                    Gathered::<S, F>::new(&refs[..count]).map(|g| (p0, g))
+                }
+                _ => None,
+            };
+            // The tail vector's first lanes were written by the vector before it.
+            let fresh = chunk * lanes;
+            let Some((p, g)) = gathered else {
+                for i in fresh.max(start)..start + count {
+                    write(i, scalar(i)?, out, frames.as_deref_mut());
+                }
+                continue;
+            };
+            let [bx, by, bz] = &mut buf;
+            let x = load::<S, F>(xs, bx, start, count);
+            let y = load::<S, F>(ys, by, start, count);
+            let z = load::<S, F>(zs, bz, start, count);
+            let e = exit_lanes::<S, F, Gathered<S, F>>(s, (&p.inc, &g), x, y, z);
+            let l = lobe_lanes::<S, F, Gathered<S, F>>(s, (p, &g), None, &e, None);
+            for k in 0..stokes_len {
+                store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
+                store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
+            }
+            if let Some(f) = frames.as_deref_mut() {
+                for k in 0..3 {
+                    store::<S, F>(s, f.s[k], e.frame.s_out[k], start, count);
+                }
+            }
+            if F::vany(s, l.redo) {
+                let mut flags = [F::zero(); MAX_LANES];
+                let redo = F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
+                F::store_partial(s, &mut flags[..lanes], redo);
+                // (The tail vector's lanes before `fresh` were stored again above: a lane to
+                // redo there is redone again.)
+                for (j, flag) in flags[..count].iter().enumerate() {
+                    if *flag != F::zero() {
+                        write(start + j, scalar(start + j)?, out, frames.as_deref_mut());
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;

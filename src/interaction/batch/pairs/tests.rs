@@ -1,0 +1,301 @@
+//! [`Kernel::evaluate_pairs`] against two oracles, per pair: the batch over exits of that
+//! pair's own prepared packet (its lanes, `PartialLobes` with one packet and one exit: bit for
+//! bit), and the per-direction kernel on that packet (within `evaluate_batch`'s documented
+//! bound). Random pairs — every lane its own incidence (0–89°), exit (near the mirror direction
+//! or anywhere above), coherence width (0.3–300 µm) — in `f64` and `f32`, at the three
+//! polarization levels, partially coherent and incoherent, on gold (isotropic and anisotropic
+//! PSDs) and on glass in reflection.
+
+use std::cell::Cell;
+
+use nalgebra::{Matrix2, Vector3};
+use num_complex::Complex;
+
+use super::super::partial::{PartialLobes, ScalarExit, lane_prep_at};
+use super::super::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
+use super::PairsSoa;
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::gaussian::Gaussian;
+use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
+use crate::interaction::polarization::{KernelOutput, PolarizationModel};
+use crate::interaction::roughness::{RoughnessLevel, RoughnessModel, RoughnessWeights};
+use crate::interaction::{
+    Full, Geometry, Incoherent, Intensity, Kernel, OneShape, Partial, RoughConductor,
+    RoughDielectric, Surface,
+};
+use crate::numerics::{same, splitmix64};
+use crate::psd::GaussianPsd;
+use crate::real::Real;
+
+thread_local! {
+    /// The pairs `evaluate_pairs` sent to the per-direction kernel on this thread.
+    pub(super) static PER_DIRECTION: Cell<usize> = const { Cell::new(0) };
+}
+
+/// Uniform in `[0, 1)`.
+fn uniform(state: &mut u64) -> f64 {
+    (splitmix64(state) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// A unit direction at polar angle `theta` and azimuth `phi` about `+z`.
+fn direction(theta: f64, phi: f64) -> Vector3<f64> {
+    Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+}
+
+/// `n` random pairs: (to_source, exit, 1/w), the exits a third near the mirror direction
+/// (within 0.05 rad), a third within 0.3 rad, a third anywhere above the surface.
+fn pairs(seed: u64, n: usize) -> Vec<(Vector3<f64>, Vector3<f64>, f64)> {
+    let mut st = seed;
+    (0..n)
+        .map(|i| {
+            let theta_i = 89f64.to_radians() * uniform(&mut st).sqrt();
+            let phi_i = std::f64::consts::TAU * uniform(&mut st);
+            let s = direction(theta_i, phi_i);
+            let spread = [0.05, 0.3, 1.5][i % 3];
+            let theta_o = (theta_i + spread * (2.0 * uniform(&mut st) - 1.0)).clamp(0.0, 1.55);
+            let phi_o = phi_i + std::f64::consts::PI + spread * (2.0 * uniform(&mut st) - 1.0);
+            let r = direction(theta_o.abs(), phi_o) * (0.5 + 2.0 * uniform(&mut st));
+            let w = 0.3 * 1000f64.powf(uniform(&mut st));
+            (s * (0.2 + 3.0 * uniform(&mut st)), r, 1.0 / w)
+        })
+        .collect()
+}
+
+/// The Stokes columns (specular, scattered) and the exit s vectors of a batch of `n`.
+struct Columns<T> {
+    lobes: [Vec<T>; 8],
+    frames: [Vec<T>; 3],
+}
+
+impl<T: Real> Columns<T> {
+    fn new(n: usize) -> Self {
+        Self {
+            lobes: core::array::from_fn(|_| vec![T::lit(-7.0); n]),
+            frames: core::array::from_fn(|_| vec![T::lit(-7.0); n]),
+        }
+    }
+
+    /// `f` with the columns as the batch outputs.
+    fn write(&mut self, f: impl FnOnce(&mut LobesSoa<'_, T>, &mut ExitFramesSoa<'_, T>)) {
+        let [a, b, c, d, e, g, h, k] = &mut self.lobes;
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, c, d] },
+            scattered: StokesSoa { s: [e, g, h, k] },
+        };
+        let [x, y, z] = &mut self.frames;
+        let mut frames = ExitFramesSoa { s: [x, y, z] };
+        f(&mut out, &mut frames);
+    }
+}
+
+/// Checks every pair of `pairs(seed, n)` at wavelength `lambda`; returns how many pairs the
+/// pass sent to the per-direction kernel.
+fn check<T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
+    material: &S,
+    (seed, n, lambda): (u64, usize, f64),
+    what: &str,
+) -> usize
+where
+    T: Real,
+    S: Surface<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessModel + RoughnessWeights<T, S::Psd, Coh>,
+{
+    let surface = Frame::from_normal(Vector3::new(T::zero(), T::zero(), T::one())).unwrap();
+    let k = T::lit(std::f64::consts::TAU / lambda);
+    let ps = pairs(seed, n);
+    let col = |f: &dyn Fn(&(Vector3<f64>, Vector3<f64>, f64)) -> f64| -> Vec<T> {
+        ps.iter().map(|p| T::lit(f(p))).collect()
+    };
+    let (sx, sy, sz) = (col(&|p| p.0.x), col(&|p| p.0.y), col(&|p| p.0.z));
+    let (rx, ry, rz) = (col(&|p| p.1.x), col(&|p| p.1.y), col(&|p| p.1.z));
+    let inv_w = col(&|p| p.2);
+    let mut got = Columns::<T>::new(n);
+    let before = PER_DIRECTION.with(Cell::get);
+    got.write(|out, frames| {
+        let pairs = PairsSoa {
+            to_source: DirectionsSoa {
+                x: &sx,
+                y: &sy,
+                z: &sz,
+            },
+            exit: DirectionsSoa {
+                x: &rx,
+                y: &ry,
+                z: &rz,
+            },
+            inverse_width: &inv_w,
+        };
+        kernel
+            .evaluate_pairs(material, k, &surface, pairs, out, Some(frames))
+            .unwrap();
+    });
+    let redone = PER_DIRECTION.with(Cell::get) - before;
+    let stokes_len = if got.lobes[1][0] == T::lit(-7.0) { 1 } else { 4 };
+    let eps = T::EPSILON.to_f64();
+    for i in 0..n {
+        let s = Vector3::new(sx[i], sy[i], sz[i]);
+        let r = Vector3::new(rx[i], ry[i], rz[i]);
+        let prepared = kernel.prepare_unpolarized_isotropic(k, inv_w[i]);
+        let g = Geometry::new(k, &surface, s, r).unwrap();
+        let one = kernel.evaluate_prepared(material, &prepared, &g);
+        let (sp, sc) = match one.stokes() {
+            Some((sp, sc)) => (sp.0, sc.0),
+            None => {
+                let z = T::zero();
+                let v = |x: T| nalgebra::Vector4::new(x, z, z, z);
+                (v(one.specular_intensity()), v(one.scattered_intensity()))
+            }
+        };
+        if Rough::LEVEL != RoughnessLevel::FirstOrder {
+            // Not in lanes: the per-direction kernel itself.
+            for c in 0..stokes_len {
+                assert!(same(got.lobes[c][i], sp[c]) && same(got.lobes[4 + c][i], sc[c]));
+            }
+            continue;
+        }
+        // Oracle 1: the batch over exits of this pair's own packet, bit for bit.
+        let prep = lane_prep_at(kernel, material, &prepared, s, &surface, None)
+            .expect("a pair the lanes take");
+        let mut want = Columns::<T>::new(1);
+        let mut scalar = |_: usize, _: usize| -> Result<ScalarExit<T>, Error> {
+            Ok((sp.into(), sc.into(), g.exit_sp().x().into()))
+        };
+        want.write(|out, frames| {
+            crate::simd::dispatch(PartialLobes {
+                preps: core::slice::from_ref(&prep),
+                series: &[],
+                exits: DirectionsSoa {
+                    x: &rx[i..=i],
+                    y: &ry[i..=i],
+                    z: &rz[i..=i],
+                },
+                outs: core::slice::from_mut(out),
+                frames: Some(frames),
+                scalar: &mut scalar,
+            })
+            .unwrap();
+        });
+        for c in (0..stokes_len).chain(4..4 + stokes_len) {
+            let (a, b) = (got.lobes[c][i], want.lobes[c][0]);
+            assert!(same(a, b), "{what}: pair {i}, column {c}: {:e} vs {:e}", a.to_f64(), b.to_f64());
+        }
+        for c in 0..3 {
+            assert!(same(got.frames[c][i], want.frames[c][0]), "{what}: pair {i} frame");
+        }
+        // Oracle 2: the per-direction kernel, within evaluate_batch's bound (S0 = 1 and an
+        // unpolarized one-shape packet: L̂ = (1 + √3) L).
+        for (lobe, v) in [(0, sp), (4, sc)] {
+            let l = v[0].to_f64();
+            let bound =
+                4.0 * eps * (4.0 + l.abs().max(f64::MIN_POSITIVE).ln().abs()) * (1.0 + 3f64.sqrt()) * l.abs()
+                    + T::MIN_POSITIVE.to_f64();
+            for c in 0..stokes_len {
+                let d = (got.lobes[lobe + c][i].to_f64() - v[c].to_f64()).abs();
+                assert!(
+                    d <= bound,
+                    "{what}: pair {i}, lobe {lobe}, S{c}: {:e} vs {:e} (bound {bound:e})",
+                    got.lobes[lobe + c][i].to_f64(),
+                    v[c].to_f64()
+                );
+            }
+        }
+    }
+    redone
+}
+
+/// Every combination, `n` pairs each, in type `T`; the pairs redone one at a time stay few.
+fn every_case<T: Real>(seed: u64, n: usize) {
+    let t = |x: f64| T::lit(x);
+    let iso = GaussianPsd::<T, 2>::isotropic(t(0.02), t(1.0)).unwrap();
+    let aniso = GaussianPsd::<T, 2>::from_autocorrelation(
+        t(4e-4),
+        &Gaussian::new(Matrix2::new(t(2.0), t(0.6), t(0.6), t(0.5))).unwrap(),
+    )
+    .unwrap();
+    let gold = Complex::new(t(0.47), t(2.4));
+    let gold_iso = RoughConductor::new(iso, gold).unwrap();
+    let gold_aniso = RoughConductor::new(aniso, gold).unwrap();
+    let glass = RoughDielectric::new(iso, t(1.5)).unwrap();
+    let mut redone = 0;
+    let mut total = 0;
+    let mut run = |r: usize| {
+        redone += r;
+        total += n;
+    };
+    for (m, name) in [(&gold_iso, "gold"), (&gold_aniso, "gold, anisotropic")] {
+        let case = |i: u64| (seed ^ (i << 32), n, 0.38 + 0.4 * (i as f64 / 6.0));
+        run(check(&Kernel::<Full, Partial>::default(), m, case(0), name));
+        run(check(&Kernel::<OneShape, Partial>::default(), m, case(1), name));
+        run(check(&Kernel::<Intensity, Partial>::default(), m, case(2), name));
+        run(check(&Kernel::<Full, Incoherent>::default(), m, case(3), name));
+        run(check(&Kernel::<Intensity, Incoherent>::default(), m, case(4), name));
+    }
+    let case = (seed ^ (9 << 32), n, 0.55);
+    run(check(&Kernel::<Full, Partial>::default(), &glass, case, "glass"));
+    run(check(&Kernel::<Intensity, Partial>::default(), &glass, case, "glass"));
+    // The lanes ran: most pairs were not sent to the per-direction kernel.
+    assert!(redone * 10 < total, "{redone} of {total} pairs redone one at a time");
+}
+
+#[test]
+fn pairs_equal_the_batch_lanes_bit_for_bit() {
+    every_case::<f64>(0x5eed_0001, 203);
+    every_case::<f32>(0x5eed_0002, 203);
+}
+
+/// A pair the lanes cannot take (the Kirchhoff series) goes to the per-direction kernel, and
+/// bad input is an error before anything is written.
+#[test]
+fn other_levels_and_bad_input() {
+    use crate::interaction::roughness::KirchhoffSeries;
+    let psd = GaussianPsd::<f64, 2>::isotropic(0.05, 1.0).unwrap();
+    let gold = RoughConductor::new(psd, Complex::new(0.47, 2.4)).unwrap();
+    let series = Kernel::<Full, Partial, KirchhoffSeries>::default();
+    let before = PER_DIRECTION.with(Cell::get);
+    let redone = check(&series, &gold, (7, 17, 0.55), "series");
+    assert_eq!(redone, 17);
+    assert_eq!(PER_DIRECTION.with(Cell::get) - before, 17);
+    let surface = Frame::from_normal(Vector3::z()).unwrap();
+    let kernel = Kernel::<Full, Partial>::default();
+    let one = [0.5, 0.5];
+    let (x, z) = ([0.1, 0.2], [1.0, 0.9]);
+    let d = DirectionsSoa {
+        x: &x,
+        y: &x,
+        z: &z,
+    };
+    let below_z = [1.0, -0.9];
+    let below = DirectionsSoa {
+        x: &x,
+        y: &x,
+        z: &below_z,
+    };
+    let cols = std::cell::RefCell::new(Columns::<f64>::new(2));
+    let run = |pairs: PairsSoa<'_, f64>, k: f64| {
+        let mut r = Ok(());
+        cols.borrow_mut()
+            .write(|out, _| r = kernel.evaluate_pairs(&gold, k, &surface, pairs, out, None));
+        r
+    };
+    let pairs = |to_source, exit, inverse_width| PairsSoa {
+        to_source,
+        exit,
+        inverse_width,
+    };
+    assert!(run(pairs(d, d, &one), 11.4).is_ok());
+    assert!(run(pairs(d, d, &one), f64::NAN).is_err());
+    assert!(run(pairs(d, d, &one), -1.0).is_err());
+    assert!(run(pairs(d, d, &[0.5, f64::NAN]), 11.4).is_err());
+    assert!(run(pairs(d, d, &[0.5, 0.0]), 11.4).is_err());
+    assert!(run(pairs(d, d, &[0.5]), 11.4).is_err());
+    assert!(run(pairs(d, below, &one), 11.4).is_err());
+    assert!(run(pairs(below, d, &one), 11.4).is_err());
+    // A failed call writes nothing.
+    let first = cols.borrow().lobes.clone();
+    assert!(run(pairs(d, below, &one), 11.4).is_err());
+    assert_eq!(first, cols.borrow().lobes);
+}
