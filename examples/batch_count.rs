@@ -93,13 +93,88 @@ fn run<T: Real>(reps: usize) -> f64 {
     out.scattered.s[0].iter().map(|v| v.to_f64()).sum::<f64>()
 }
 
+/// `reps` passes over `M` (incident, exit) pairs of the renderer's light (unpolarized, the
+/// surface coherence of sunlight, 37.6 µm) on rough gold at 0.55 µm (the wavefront example's
+/// material), Full · Partial: `Kernel::evaluate_pairs` (`scalar = false`) or, pair by pair,
+/// what the renderer layer does for one such light (`Bsdf::prepare_surface`, then
+/// `Bsdf::eval_stokes`); half the exits within 0.3 rad of the mirror direction, half anywhere
+/// above. The sum of the last pass's scattered `S0`.
+fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
+    use gmueller::bsdf::{Bsdf, SurfaceCoherence};
+    use gmueller::interaction::RoughConductor;
+    use gmueller::interaction::batch::PairsSoa;
+    use gmueller::spectral::Metal;
+    let lambda = T::lit(0.55);
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.0438), T::lit(0.619)).unwrap();
+    let gold = RoughConductor::new(psd, Metal::Au.index(lambda)).unwrap();
+    let kernel = Kernel::<Full, Partial>::default();
+    let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let sun = SurfaceCoherence::fixed(T::lit(37.6)).unwrap();
+    let bsdf = Bsdf::new(&gold, kernel, surface, lambda).unwrap();
+    let mut rng = Lcg(0x9a1e);
+    let mut cols = vec![Vec::with_capacity(M); 7];
+    for i in 0..M {
+        let ti = rng.uniform().sqrt().asin().min(1.5);
+        let pi = std::f64::consts::TAU * rng.uniform();
+        let (to, po) = if i % 2 == 0 {
+            let to = (ti + (rng.uniform() - 0.5) * 0.6).abs().min(1.5);
+            (to, pi + std::f64::consts::PI + (rng.uniform() - 0.5) * 0.6)
+        } else {
+            (rng.uniform().acos().min(1.5), std::f64::consts::TAU * rng.uniform())
+        };
+        let v = [
+            ti.sin() * pi.cos(),
+            ti.sin() * pi.sin(),
+            ti.cos(),
+            to.sin() * po.cos(),
+            to.sin() * po.sin(),
+            to.cos(),
+        ];
+        for (c, x) in cols.iter_mut().zip(v) {
+            c.push(T::lit(x));
+        }
+        cols[6].push(bsdf.surface_width(&Vector3::new(v[0], v[1], v[2]).map(T::lit), &sun).unwrap().recip());
+    }
+    let k = T::two_pi() / lambda;
+    let mut buf = vec![vec![T::zero(); M]; 8];
+    let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
+        unreachable!()
+    };
+    let mut out = LobesSoa {
+        specular: StokesSoa { s: [a, b, c, d] },
+        scattered: StokesSoa { s: [e, f, g, h] },
+    };
+    for _ in 0..reps {
+        if scalar {
+            for i in 0..M {
+                let s = Vector3::new(cols[0][i], cols[1][i], cols[2][i]);
+                let light = bsdf.prepare_surface(s, &sun).unwrap();
+                let r = Vector3::new(cols[3][i], cols[4][i], cols[5][i]);
+                let v = bsdf.eval_stokes(&light, r).unwrap();
+                out.scattered.s[0][i] = v.scattered.s0();
+            }
+        } else {
+            let pairs = PairsSoa {
+                to_source: DirectionsSoa { x: &cols[0], y: &cols[1], z: &cols[2] },
+                exit: DirectionsSoa { x: &cols[3], y: &cols[4], z: &cols[5] },
+                inverse_width: &cols[6],
+            };
+            kernel.evaluate_pairs(&gold, k, &surface, pairs, &mut out, None).unwrap();
+        }
+    }
+    out.scattered.s[0].iter().map(|v| v.to_f64()).sum::<f64>()
+}
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let precision = args.next().unwrap_or_else(|| "f32".into());
     let reps = args.next().and_then(|r| r.parse().ok()).unwrap_or(1);
-    let sum = match precision.as_str() {
-        "f64" => run::<f64>(reps),
-        _ => run::<f32>(reps),
+    let what = args.next().unwrap_or_else(|| "exits".into());
+    let sum = match (precision.as_str(), what.as_str()) {
+        ("f64", "exits") => run::<f64>(reps),
+        (_, "exits") => run::<f32>(reps),
+        ("f64", w) => run_pairs::<f64>(reps, w == "pairs-scalar"),
+        (_, w) => run_pairs::<f32>(reps, w == "pairs-scalar"),
     };
-    println!("{precision}, {reps} passes of {M} exits: sum of scattered S0 = {sum:e}");
+    println!("{precision} {what}, {reps} passes of {M}: sum of scattered S0 = {sum:e}");
 }

@@ -45,7 +45,7 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa};
-use super::per_lane::LaneConsts;
+use super::per_lane::{LaneConsts, MAX_LANES};
 use super::prep::{Incidence, LobePrep, SERIES_MIN_EXITS, SeriesPrep, TransmissionPrep};
 use super::stages;
 use super::stages::validity::{clearly_valid, clearly_valid_lanes};
@@ -373,8 +373,6 @@ pub(super) fn store<S: Simd, F: Real>(s: S, o: &mut [F], v: F::V<S>, start: usiz
     }
 }
 
-/// At most this many lanes in a vector (`f32` under AVX-512).
-pub(super) const MAX_LANES: usize = 16;
 
 impl<F: Real> WithSimd for PartialLobes<'_, '_, '_, '_, F> {
     type Output = Result<(), Error>;
@@ -595,6 +593,47 @@ where
         prep.intensity_only()
     } else {
         prep
+    })
+}
+
+/// What the per-pair constants of [`super::pairs`] need besides each pair's prepared packet
+/// and direction ([`LobePrep::lane_row_of`]): the PSD's one Gaussian component, the Fresnel
+/// index and the Rayleigh–Rice permittivity, and the PSD's integral at the incoherent level.
+pub(crate) struct RowMaker<'a, T: Real> {
+    pub(crate) psd: &'a GaussianPsd<T, 2>,
+    pub(crate) indices: (num_complex::Complex<T>, num_complex::Complex<T>),
+    pub(crate) incoherent: Option<T>,
+}
+
+/// The [`RowMaker`] of a first-order kernel on a material whose lanes [`lane_prep_at`] builds
+/// in reflection, with a PSD of one Gaussian component; `None` otherwise.
+pub(crate) fn row_maker<'a, T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
+    material: &'a S,
+) -> Option<RowMaker<'a, T>>
+where
+    T: Real,
+    S: Surface<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessModel,
+{
+    if Rough::LEVEL != RoughnessLevel::FirstOrder {
+        return None;
+    }
+    let incoherent = match Coh::LEVEL {
+        CoherenceLevel::Incoherent => true,
+        CoherenceLevel::Partial if kernel.coherence().closed_form_gaussian() => false,
+        _ => return None,
+    };
+    let parts: LaneMaterial<'a, T> = LaneMaterial::of(material)?;
+    let [psd] = parts.components else {
+        return None;
+    };
+    Some(RowMaker {
+        psd,
+        indices: (parts.index, parts.scatter.permittivity()),
+        incoherent: incoherent.then_some(parts.integral),
     })
 }
 

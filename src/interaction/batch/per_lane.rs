@@ -11,15 +11,14 @@
 //! What a per-lane pass may vary is listed by the trait: the direction to the source, the
 //! azimuth axes, `cos θ_i`, the Rayleigh–Rice factors' incident terms, the specular and
 //! scattered channel weights' constants of the `½` channel, the scattered part's constant
-//! exponent and the Fresnel matrix with the specular frame. Everything else (the wavenumber,
-//! the permittivity and its scale, the PSD's variance, the level, the mixture's size, the
-//! effective vector) is read from the first lane's `LobePrep`, and [`Gathered::new`] refuses
-//! lanes on which it differs.
+//! exponent and the Fresnel matrix with the specular frame (a `prep::lane_row` per lane).
+//! Everything else (the wavenumber, the permittivity and its scale, the PSD's variance, the
+//! level, the effective vector) is read from one `LobePrep` of the same kernel, material,
+//! wavenumber and surface, the same for every pair of a call.
 
 use pulp::Simd;
 
-use super::partial::MAX_LANES;
-use super::prep::LobePrep;
+use super::prep::{LANE_FIELDS, LobePrep};
 use super::stages;
 use super::stages::channels::{LogGaussianLanes, log_gaussian_lanes};
 use super::stages::rayleigh_rice::{IncidentTerms, incident_terms};
@@ -128,63 +127,30 @@ pub(crate) struct Gathered<S: Simd, F: Real> {
 }
 
 
-/// The number of per-lane constants ([`flat`]).
-const FIELDS: usize = 53;
-
-/// One lane's per-lane constants in the order [`Gathered::new`] reads them.
-#[inline(always)]
-fn flat<F: Real>(q: &LobePrep<F>) -> [F; FIELDS] {
-    let i = &q.inc;
-    let (sp, sc) = (&q.spec[2], &q.scat[2][0]);
-    let m = &q.fresnel;
-    let (fs, fp, fk) = (q.spec_frame.x(), q.spec_frame.y(), q.spec_frame.k());
-    [
-        i.s.x, i.s.y, i.s.z, i.u_az.x, i.u_az.y, i.u_az.z, i.v_az.x, i.v_az.y, i.v_az.z,
-        i.cos_i, i.si2, i.qi.re, i.qi.im, i.d1s.re, i.d1s.im, i.d3s.re, i.d3s.im,
-        i.neg_em1s_qis.re, i.neg_em1s_qis.im, sp.c, sp.l00, sp.l10, sp.inv_l11, sc.c, sc.l00,
-        sc.l10, sc.inv_l11, q.ln_scat, m[(0, 0)], m[(0, 1)], m[(0, 2)], m[(0, 3)], m[(1, 0)],
-        m[(1, 1)], m[(1, 2)], m[(1, 3)], m[(2, 0)], m[(2, 1)], m[(2, 2)], m[(2, 3)], m[(3, 0)],
-        m[(3, 1)], m[(3, 2)], m[(3, 3)], fs.x, fs.y, fs.z, fp.x, fp.y, fp.z, fk.x, fk.y, fk.z,
-    ]
-}
+/// At most this many lanes in a vector (`f32` under AVX-512).
+pub(crate) const MAX_LANES: usize = 16;
 
 impl<S: Simd, F: Real> Gathered<S, F> {
-    /// The constants of `preps` (at least one, at most one vector's worth), or `None` where a
-    /// lane's constants differ from the first lane's in what the lanes read from the first
-    /// (module docs), or the first is outside what the per-lane pass runs (three channels, a
-    /// mixture PSD, a transmission side, a mirrored PSD).
+    /// The constants of the lanes' rows (`prep::lane_row`, at least one, at most one vector's
+    /// worth; a shorter slice repeats its first row on the remaining lanes), the constants the
+    /// lanes share being `head`'s: a `LobePrep` of the same kernel, material, wavenumber and
+    /// surface, of one shape and one PSD component, in reflection (not mirrored).
     #[inline(always)]
-    pub(crate) fn new(preps: &[&LobePrep<F>]) -> Option<Self> {
-        let p = *preps.first()?;
+    pub(crate) fn new(head: &LobePrep<F>, rows: &[[F; LANE_FIELDS]]) -> Self {
+        debug_assert!(
+            !head.three
+                && head.components == 1
+                && head.transmission.is_none()
+                && !head.mirrored
+                && !rows.is_empty()
+                && rows.len() <= F::width::<S>()
+        );
         let lanes = F::width::<S>();
-        let uniform = |q: &&LobePrep<F>| {
-            let (a, b) = (&p.inc, &q.inc);
-            a.k == b.k
-                && a.e == b.e
-                && a.n == b.n
-                && a.t1 == b.t1
-                && a.t2 == b.t2
-                && q.three == p.three
-                && q.intensity == p.intensity
-                && q.components == p.components
-                && q.variance == p.variance
-                && q.ln_spec == p.ln_spec
-                && q.t_stokes == p.t_stokes
-                && q.transmission.is_none()
-                && !q.mirrored
-        };
-        if p.three || p.components != 1 || preps.len() > lanes || !preps.iter().all(uniform) {
-            return None;
-        }
-        let mut rows = [[F::zero(); FIELDS]; MAX_LANES];
-        for (j, row) in rows[..lanes].iter_mut().enumerate() {
-            *row = flat(preps.get(j).unwrap_or(&p));
-        }
         let mut k = 0;
         let mut next = || {
             let mut b = [F::zero(); MAX_LANES];
-            for (v, row) in b[..lanes].iter_mut().zip(&rows) {
-                *v = row[k];
+            for (j, v) in b[..lanes].iter_mut().enumerate() {
+                *v = rows.get(j).unwrap_or(&rows[0])[k];
             }
             k += 1;
             F::vsplit::<S>(&b[..lanes]).0[0]
@@ -213,8 +179,8 @@ impl<S: Simd, F: Real> Gathered<S, F> {
         let ln_scat = next();
         let fresnel = [0; 4].map(|_| [next(), next(), next(), next()]);
         let spec_frame = [0; 3].map(|_| [next(), next(), next()]);
-        debug_assert_eq!(k, FIELDS);
-        Some(Self {
+        debug_assert_eq!(k, LANE_FIELDS);
+        Self {
             to_source,
             u_az,
             v_az,
@@ -225,9 +191,16 @@ impl<S: Simd, F: Real> Gathered<S, F> {
             ln_scat,
             fresnel,
             spec_frame,
-            flip_tol: p.flip_tol,
-        })
+            flip_tol: head.flip_tol,
+        }
     }
+}
+
+/// `p`'s per-lane constants (`prep::lane_row`), for a `LobePrep` built whole.
+#[cfg(test)]
+pub(crate) fn row_of<F: Real>(p: &LobePrep<F>) -> [F; LANE_FIELDS] {
+    let (spec, scat) = (&p.spec[2], &p.scat[2][0]);
+    super::prep::lane_row(&p.inc, (spec, scat), p.ln_scat, &p.fresnel, &p.spec_frame)
 }
 
 impl<S: Simd, F: Real> LaneConsts<S, F> for Gathered<S, F> {

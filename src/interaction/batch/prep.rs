@@ -339,6 +339,86 @@ pub(crate) struct TransmissionPrep<T: Real> {
     pub(crate) tir: bool,
 }
 
+/// `ln K^spec` of the section `xi`: `ln 2π − ½ ln|Ξ|` and `Ξ`'s Cholesky factor.
+#[inline]
+fn spec_channel<T: Real>(xi: &crate::gaussian::Gaussian<T, 2>) -> LogGaussian<T> {
+    let ln2pi = crate::interaction::coherence::ln_two_pi::<T>();
+    LogGaussian::new(ln2pi - T::lit(0.5) * xi.log_det(), xi.cholesky_factor())
+}
+
+/// `ln K` of the PSD component `c` blurred by the section `xi_psd` (mirrored already where
+/// `mirrored`, whose `ℓ₁₀` is then negated: [`LobePrep::new`]).
+#[inline]
+fn scat_channel<T: Real>(
+    c: &GaussianPsd<T, 2>,
+    xi_psd: &crate::gaussian::Gaussian<T, 2>,
+    mirrored: bool,
+) -> Option<LogGaussian<T>> {
+    let ln2pi = crate::interaction::coherence::ln_two_pi::<T>();
+    let l = crate::gaussian::cholesky_of_sum(c.spectral_shape(), xi_psd)?;
+    let mut out = LogGaussian::new(ln2pi + c.log_normalized_blur(xi_psd, &Vector2::zeros()), &l);
+    if mirrored {
+        out.l10 = -out.l10;
+    }
+    Some(out)
+}
+
+/// `ln ∫p − ln 2π`: the incoherent limit's scattered weight over the specular one
+/// ([`LobePrep::incoherent`]).
+#[inline]
+fn incoherent_shift<T: Real>(integral: T) -> T {
+    integral.ln() - crate::interaction::coherence::ln_two_pi::<T>()
+}
+
+/// `ln_spec + ln (2k cos θ_i)²`: the scattered part's constant exponent in reflection.
+#[inline]
+fn scat_exponent<T: Real>(ln_spec: T, inc: &Incidence<T>) -> T {
+    let jones_scale = T::lit(2.0) * inc.k * inc.cos_i;
+    ln_spec + (jones_scale * jones_scale).ln()
+}
+
+/// The Fresnel reflection's Mueller matrix at `cos θ_i` for the index `eta`.
+#[inline]
+fn fresnel_mueller<T: Real>(inc: &Incidence<T>, eta: Complex<T>) -> Matrix4<T> {
+    crate::mueller::Mueller::from_jones(&crate::fresnel::reflection(inc.cos_i, eta)).0
+}
+
+/// The specular s/p frame of the incidence.
+#[inline]
+fn specular_frame<T: Real>(inc: &Incidence<T>) -> Frame<T> {
+    let r_spec = inc.n * (inc.cos_i + inc.cos_i) - inc.s;
+    Frame::sp_unit(r_spec, inc.n)
+}
+
+/// The per-lane constants of a pair in lanes (`super::per_lane`), in [`lane_row`]'s order.
+pub(crate) const LANE_FIELDS: usize = 53;
+
+/// One lane's per-lane constants (those `super::per_lane::LaneConsts` reads) in order: ŝ,
+/// the azimuth axes `u`, `v`, `cos θ_i`, `sin²θ_i`, `q_i`, `D₁/t`, `D₃/t²`,
+/// `−(ε − 1)/t² · q_i/t` (complex: re, im), the `½` channel's `LogGaussian` constants `c`,
+/// `ℓ₀₀`, `ℓ₁₀`, `1/ℓ₁₁` of the specular and of the scattered weight, the scattered part's
+/// exponent, the Fresnel matrix by rows, and the specular frame's ŝ, p̂, r̂.
+#[inline]
+pub(crate) fn lane_row<T: Real>(
+    inc: &Incidence<T>,
+    (spec, scat): (&LogGaussian<T>, &LogGaussian<T>),
+    ln_scat: T,
+    fresnel: &Matrix4<T>,
+    spec_frame: &Frame<T>,
+) -> [T; LANE_FIELDS] {
+    let i = inc;
+    let (sp, sc, m) = (spec, scat, fresnel);
+    let (fs, fp, fk) = (spec_frame.x(), spec_frame.y(), spec_frame.k());
+    [
+        i.s.x, i.s.y, i.s.z, i.u_az.x, i.u_az.y, i.u_az.z, i.v_az.x, i.v_az.y, i.v_az.z,
+        i.cos_i, i.si2, i.qi.re, i.qi.im, i.d1s.re, i.d1s.im, i.d3s.re, i.d3s.im,
+        i.neg_em1s_qis.re, i.neg_em1s_qis.im, sp.c, sp.l00, sp.l10, sp.inv_l11, sc.c, sc.l00,
+        sc.l10, sc.inv_l11, ln_scat, m[(0, 0)], m[(0, 1)], m[(0, 2)], m[(0, 3)], m[(1, 0)],
+        m[(1, 1)], m[(1, 2)], m[(1, 3)], m[(2, 0)], m[(2, 1)], m[(2, 2)], m[(2, 3)], m[(3, 0)],
+        m[(3, 1)], m[(3, 2)], m[(3, 3)], fs.x, fs.y, fs.z, fp.x, fp.y, fp.z, fk.x, fk.y, fk.z,
+    ]
+}
+
 impl<T: Real> core::ops::Deref for LobePrep<T> {
     type Target = Incidence<T>;
     #[inline(always)]
@@ -389,18 +469,12 @@ impl<T: Real> LobePrep<T> {
         }
         let inc = Incidence::from_direction(epsilon, to_source, prepared.k, surface).ok()?;
         let three = full && !prepared.single_shape;
-        let ln2pi = crate::interaction::coherence::ln_two_pi::<T>();
-        let zero = Vector2::zeros();
         let channel = |xi: &crate::gaussian::Gaussian<T, 2>| -> Option<_> {
-            let spec = LogGaussian::new(ln2pi - T::lit(0.5) * xi.log_det(), xi.cholesky_factor());
+            let spec = spec_channel(xi);
             let mut scat = [spec; MAX_COMPONENTS];
             let xi_psd = if mirrored { xi.mirrored_y() } else { *xi };
             for (out, c) in scat.iter_mut().zip(psd) {
-                let l = crate::gaussian::cholesky_of_sum(c.spectral_shape(), &xi_psd)?;
-                *out = LogGaussian::new(ln2pi + c.log_normalized_blur(&xi_psd, &zero), &l);
-                if mirrored {
-                    out.l10 = -out.l10;
-                }
+                *out = scat_channel(c, &xi_psd, mirrored)?;
             }
             Some((spec, scat))
         };
@@ -414,10 +488,8 @@ impl<T: Real> LobePrep<T> {
             (half, half)
         };
         let ln_s0 = prepared.ln_s0;
-        let jones_scale = T::lit(2.0) * inc.k * inc.cos_i;
         let ln_spec = prepared.two_ln_k_over_2pi + ln_s0;
-        let ln_scat = ln_spec + (jones_scale * jones_scale).ln();
-        let r_spec = inc.n * (inc.cos_i + inc.cos_i) - inc.s;
+        let ln_scat = scat_exponent(ln_spec, &inc);
         let out = Self {
             three,
             mirrored,
@@ -435,12 +507,8 @@ impl<T: Real> LobePrep<T> {
             ln_spec,
             ln_scat,
             ln_dark: T::lit(crate::interaction::coherence::ln_smallest_subnormal::<T>()),
-            fresnel: crate::mueller::Mueller::from_jones(&crate::fresnel::reflection(
-                inc.cos_i,
-                fresnel_eta,
-            ))
-            .0,
-            spec_frame: Frame::sp_unit(r_spec, inc.n),
+            fresnel: fresnel_mueller(&inc, fresnel_eta),
+            spec_frame: specular_frame(&inc),
             flip_tol: T::lit(Frame::<T>::TOLERANCE_ULPS) * T::EPSILON,
             intensity: false,
             transmission: None,
@@ -455,6 +523,45 @@ impl<T: Real> LobePrep<T> {
             && ln_scat.is_finite()
             && out.fresnel.iter().all(|v| v.is_finite());
         (out.inc.plain_q && finite && ln_s0.is_finite()).then_some(out)
+    }
+
+    /// This prepared packet's per-lane constants ([`lane_row`]) arriving from `to_source` in
+    /// reflection, without the rest of the `LobePrep`: the same operations as
+    /// [`LobePrep::from_direction`] (one shape, one PSD component `psd`, not mirrored; then
+    /// [`LobePrep::incoherent`] for the PSD's integral `incoherent`) for those fields, so the
+    /// same values; `None` where they return `None`.
+    pub(crate) fn lane_row_of<Pol, Coh>(
+        prepared: &crate::interaction::PreparedPacket<T, Pol, Coh>,
+        psd: &GaussianPsd<T, 2>,
+        (fresnel_eta, epsilon): (Complex<T>, Complex<T>),
+        to_source: Vector3<T>,
+        surface: &Frame<T>,
+        incoherent: Option<T>,
+    ) -> Option<[T; LANE_FIELDS]> {
+        let inc = Incidence::from_direction(epsilon, to_source, prepared.k, surface).ok()?;
+        let xi = prepared.sections[2].as_ref()?;
+        let (spec, scat) = (spec_channel(xi), scat_channel(psd, xi, false)?);
+        let scat = match incoherent {
+            // LobePrep::incoherent's scattered weight.
+            Some(integral) => LogGaussian {
+                c: spec.c + incoherent_shift(integral),
+                ..spec
+            },
+            None => scat,
+        };
+        let ln_spec = prepared.two_ln_k_over_2pi + prepared.ln_s0;
+        let ln_scat = scat_exponent(ln_spec, &inc);
+        let fresnel = fresnel_mueller(&inc, fresnel_eta);
+        let finite = spec.is_finite()
+            && scat.is_finite()
+            && ln_spec.is_finite()
+            && ln_scat.is_finite()
+            && fresnel.iter().all(|v| v.is_finite())
+            && inc.plain_q
+            && prepared.ln_s0.is_finite();
+        let shift_finite = incoherent.is_none_or(|i| incoherent_shift(i).is_finite());
+        (finite && shift_finite)
+            .then(|| lane_row(&inc, (&spec, &scat), ln_scat, &fresnel, &specular_frame(&inc)))
     }
 
     /// The constants at a dielectric interface of relative index `eta` (the geometry's, as
@@ -516,7 +623,7 @@ impl<T: Real> LobePrep<T> {
     /// `ln K_α = ln K^spec_α + ln ∫p − ln 2π` (`|Σ|^{1/2} g^Ξ(h_t) ∫p`), the covariance of the
     /// smooth-surface lobe; `None` where `ln ∫p` is not finite.
     pub(crate) fn incoherent(mut self, integral: T) -> Option<Self> {
-        let shift = integral.ln() - crate::interaction::coherence::ln_two_pi::<T>();
+        let shift = incoherent_shift(integral);
         for (scat, spec) in self.scat.iter_mut().zip(&self.spec) {
             scat[0] = LogGaussian {
                 c: spec.c + shift,

@@ -25,9 +25,9 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
-use super::partial::{MAX_LANES, ScalarExit, exit_lanes, lane_prep_at, load, lobe_lanes, store};
-use super::per_lane::Gathered;
-use super::prep::LobePrep;
+use super::partial::{ScalarExit, exit_lanes, lane_prep_at, load, lobe_lanes, row_maker, store};
+use super::per_lane::{Gathered, MAX_LANES};
+use super::prep::{LANE_FIELDS, LobePrep};
 use super::stages::validity::clearly_valid_about;
 use crate::error::Error;
 use crate::frame::Frame;
@@ -183,9 +183,18 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             }
         }
         let prepared = |i: usize| self.prepare_unpolarized_isotropic(k, inverse_width[i]);
-        let mut prep = |i: usize| {
-            lane_prep_at(self, material, &prepared(i), at(&to_source, i), surface, None)
-                .filter(|_| Rough::LEVEL == crate::interaction::roughness::RoughnessLevel::FirstOrder)
+        // The constants every pair shares, from the first pair (of the first four) the lanes
+        // take; each pair's own from its row.
+        let maker = row_maker(self, material);
+        let head = maker.as_ref().and_then(|_| {
+            (0..n.min(4)).find_map(|i| {
+                lane_prep_at(self, material, &prepared(i), at(&to_source, i), surface, None)
+            })
+        });
+        let mut row = |i: usize| {
+            let m = maker.as_ref()?;
+            let s = at(&to_source, i);
+            LobePrep::lane_row_of(&prepared(i), m.psd, m.indices, s, surface, m.incoherent)
         };
         let scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
             let g = Geometry::new(k, surface, at(&to_source, i), at(&exit, i))?;
@@ -211,7 +220,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             intensity: Pol::LEVEL == crate::interaction::polarization::PolarizationLevel::Intensity,
             out,
             frames,
-            prep: &mut prep,
+            head: head.as_ref(),
+            row: &mut row,
             scalar: &mut counted,
         });
         #[cfg(test)]
@@ -229,8 +239,10 @@ struct PairLobes<'r, 'e, 'o, 'f, F: Real> {
     intensity: bool,
     out: &'r mut LobesSoa<'o, F>,
     frames: Option<&'r mut ExitFramesSoa<'f, F>>,
-    /// Pair `i`'s lane constants, `None` where the lanes do not reproduce its kernel.
-    prep: &'r mut dyn FnMut(usize) -> Option<LobePrep<F>>,
+    /// The constants the pairs share (`None`: no pair in lanes).
+    head: Option<&'r LobePrep<F>>,
+    /// Pair `i`'s own constants, `None` where the lanes do not reproduce its kernel.
+    row: &'r mut dyn FnMut(usize) -> Option<[F; LANE_FIELDS]>,
     /// Pair `i` by the per-direction kernel.
     scalar: &'r mut dyn FnMut(usize) -> Result<ScalarExit<F>, Error>,
 }
@@ -247,7 +259,8 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             intensity,
             out,
             mut frames,
-            prep,
+            head,
+            row,
             scalar,
         } = self;
         let lanes = F::width::<S>();
@@ -268,7 +281,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             }
         };
         let mut buf = [[F::zero(); MAX_LANES]; 3];
-        let mut preps: [Option<LobePrep<F>>; MAX_LANES] = [None; MAX_LANES];
+        let mut rows = [[F::zero(); LANE_FIELDS]; MAX_LANES];
         // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` pairs (overlapping
         // the vector before it), or, for a batch shorter than one vector, padded with pair 0.
         for chunk in 0..n.div_ceil(lanes) {
@@ -277,26 +290,25 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             } else {
                 (0, n)
             };
-            for (j, p) in preps[..count].iter_mut().enumerate() {
-                *p = prep(start + j);
-            }
-            let built = preps[..count].iter().all(Option::is_some);
-            let gathered = match &preps[0] {
-                Some(p0) if built => {
-                    let refs: [&LobePrep<F>; MAX_LANES] =
-                        core::array::from_fn(|j| preps[j].as_ref().filter(|_| j < count).unwrap_or(p0));
-                    Gathered::<S, F>::new(&refs[..count]).map(|g| (p0, g))
+            let mut built = head.is_some();
+            for (j, r) in rows[..count].iter_mut().enumerate() {
+                match row(start + j) {
+                    Some(v) if built => *r = v,
+                    _ => {
+                        built = false;
+                        break;
+                    }
                 }
-                _ => None,
-            };
+            }
             // The tail vector's first lanes were written by the vector before it.
             let fresh = chunk * lanes;
-            let Some((p, g)) = gathered else {
+            let (Some(p), true) = (head, built) else {
                 for i in fresh.max(start)..start + count {
                     write(i, scalar(i)?, out, frames.as_deref_mut());
                 }
                 continue;
             };
+            let g = Gathered::<S, F>::new(p, &rows[..count]);
             let [bx, by, bz] = &mut buf;
             let x = load::<S, F>(xs, bx, start, count);
             let y = load::<S, F>(ys, by, start, count);

@@ -11,7 +11,9 @@ use std::cell::Cell;
 use nalgebra::{Matrix2, Vector3};
 use num_complex::Complex;
 
-use super::super::partial::{PartialLobes, ScalarExit, lane_prep_at};
+use super::super::partial::{PartialLobes, ScalarExit, lane_prep_at, row_maker};
+use super::super::per_lane::row_of;
+use super::super::prep::LobePrep;
 use super::super::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
 use super::PairsSoa;
 use crate::error::Error;
@@ -160,6 +162,13 @@ where
         // Oracle 1: the batch over exits of this pair's own packet, bit for bit.
         let prep = lane_prep_at(kernel, material, &prepared, s, &surface, None)
             .expect("a pair the lanes take");
+        // The pass's lean per-pair constants are the whole LobePrep's, bit for bit.
+        let m = row_maker(kernel, material).expect("a kernel the lanes take");
+        let lean = LobePrep::lane_row_of(&prepared, m.psd, m.indices, s, &surface, m.incoherent)
+            .expect("the pair's constants");
+        for (a, b) in lean.iter().zip(row_of(&prep)) {
+            assert!(same(*a, b), "{what}: pair {i}: lane constants");
+        }
         let mut want = Columns::<T>::new(1);
         let mut scalar = |_: usize, _: usize| -> Result<ScalarExit<T>, Error> {
             Ok((sp.into(), sc.into(), g.exit_sp().x().into()))
