@@ -130,67 +130,49 @@ pub(crate) struct Gathered<S: Simd, F: Real> {
 /// At most this many lanes in a vector (`f32` under AVX-512).
 pub(crate) const MAX_LANES: usize = 16;
 
+// The indices of `Gathered::new` are those of `prep::lane_row`'s 53 constants.
+const _: () = assert!(LANE_FIELDS == 53);
+
 impl<S: Simd, F: Real> Gathered<S, F> {
-    /// The constants of the lanes' rows (`prep::lane_row`, at least one, at most one vector's
-    /// worth; a shorter slice repeats its first row on the remaining lanes), the constants the
-    /// lanes share being `head`'s: a `LobePrep` of the same kernel, material, wavenumber and
-    /// surface, of one shape and one PSD component, in reflection (not mirrored).
+    /// The lanes' constants from their rows transposed, `cols[k][j]` constant `k` of
+    /// `prep::lane_row` for lane `j` (every lane of the vector set), the constants the lanes
+    /// share being `head`'s: a `LobePrep` of the same kernel, material, wavenumber and surface,
+    /// of one shape and one PSD component, in reflection (not mirrored).
     #[inline(always)]
-    pub(crate) fn new(head: &LobePrep<F>, rows: &[[F; LANE_FIELDS]]) -> Self {
+    pub(crate) fn new(head: &LobePrep<F>, cols: &[[F; MAX_LANES]; LANE_FIELDS]) -> Self {
         debug_assert!(
-            !head.three
-                && head.components == 1
-                && head.transmission.is_none()
-                && !head.mirrored
-                && !rows.is_empty()
-                && rows.len() <= F::width::<S>()
+            !head.three && head.components == 1 && head.transmission.is_none() && !head.mirrored
         );
         let lanes = F::width::<S>();
-        let mut k = 0;
-        let mut next = || {
-            let mut b = [F::zero(); MAX_LANES];
-            for (j, v) in b[..lanes].iter_mut().enumerate() {
-                *v = rows.get(j).unwrap_or(&rows[0])[k];
-            }
-            k += 1;
-            F::vsplit::<S>(&b[..lanes]).0[0]
+        let v = |k: usize| F::vsplit::<S>(&cols[k][..lanes]).0[0];
+        let v3 = |k: usize| [v(k), v(k + 1), v(k + 2)];
+        let c = |k: usize| C {
+            re: v(k),
+            im: v(k + 1),
         };
-        let mut v3 = || [next(), next(), next()];
-        let (to_source, u_az, v_az) = (v3(), v3(), v3());
-        let (cos_i, si2) = (next(), next());
-        let mut c = || C {
-            re: next(),
-            im: next(),
+        let lg = |k: usize| LogGaussianLanes {
+            c: v(k),
+            l00: v(k + 1),
+            l10: v(k + 2),
+            inv_l11: v(k + 3),
         };
-        let terms = IncidentTerms {
-            si2,
-            qi: c(),
-            d1s: c(),
-            d3s: c(),
-            neg_em1s_qis: c(),
-        };
-        let mut lg = || LogGaussianLanes {
-            c: next(),
-            l00: next(),
-            l10: next(),
-            inv_l11: next(),
-        };
-        let (spec, scat) = (lg(), lg());
-        let ln_scat = next();
-        let fresnel = [0; 4].map(|_| [next(), next(), next(), next()]);
-        let spec_frame = [0; 3].map(|_| [next(), next(), next()]);
-        debug_assert_eq!(k, LANE_FIELDS);
         Self {
-            to_source,
-            u_az,
-            v_az,
-            cos_i,
-            terms,
-            spec,
-            scat,
-            ln_scat,
-            fresnel,
-            spec_frame,
+            to_source: v3(0),
+            u_az: v3(3),
+            v_az: v3(6),
+            cos_i: v(9),
+            terms: IncidentTerms {
+                si2: v(10),
+                qi: c(11),
+                d1s: c(13),
+                d3s: c(15),
+                neg_em1s_qis: c(17),
+            },
+            spec: lg(19),
+            scat: lg(23),
+            ln_scat: v(27),
+            fresnel: [28, 32, 36, 40].map(|k| [v(k), v(k + 1), v(k + 2), v(k + 3)]),
+            spec_frame: [v3(44), v3(47), v3(50)],
             flip_tol: head.flip_tol,
         }
     }

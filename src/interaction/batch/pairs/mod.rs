@@ -281,7 +281,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             }
         };
         let mut buf = [[F::zero(); MAX_LANES]; 3];
-        let mut rows = [[F::zero(); LANE_FIELDS]; MAX_LANES];
+        let mut cols = [[F::zero(); MAX_LANES]; LANE_FIELDS];
         // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` pairs (overlapping
         // the vector before it), or, for a batch shorter than one vector, padded with pair 0.
         for chunk in 0..n.div_ceil(lanes) {
@@ -290,14 +290,22 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             } else {
                 (0, n)
             };
+            // Each pair's constants into lane j of every column (a short batch's other lanes
+            // repeat pair 0's).
             let mut built = head.is_some();
-            for (j, r) in rows[..count].iter_mut().enumerate() {
-                match row(start + j) {
-                    Some(v) if built => *r = v,
-                    _ => {
-                        built = false;
-                        break;
-                    }
+            for j in 0..count {
+                let Some(r) = row(start + j).filter(|_| built) else {
+                    built = false;
+                    break;
+                };
+                for (col, v) in cols.iter_mut().zip(r) {
+                    col[j] = v;
+                }
+            }
+            if built {
+                for col in &mut cols {
+                    let first = col[0];
+                    col[count..lanes].fill(first);
                 }
             }
             // The tail vector's first lanes were written by the vector before it.
@@ -308,7 +316,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
                 }
                 continue;
             };
-            let g = Gathered::<S, F>::new(p, &rows[..count]);
+            let g = Gathered::<S, F>::new(p, &cols);
             let [bx, by, bz] = &mut buf;
             let x = load::<S, F>(xs, bx, start, count);
             let y = load::<S, F>(ys, by, start, count);
