@@ -19,6 +19,8 @@
 //! `kernel_batch_spectral/{f64,f32}`: `evaluate_batch_spectral` on 4 wavelengths × the same
 //! 1024 exits against 4 `evaluate_batch` calls, at first order and (`-series`) with the
 //! Kirchhoff series at `vσ ≈ 1`.
+//! `kernel_pairs/{f64,f32}`: `evaluate_pairs` on 1024 (light, exit) pairs against the same
+//! pairs one at a time (renderer layer, kernel).
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -1006,6 +1008,105 @@ fn interface_for<T: Real>(c: &mut Criterion, prec: &str) {
     }
 }
 
+/// The batch of pairs (issue 39, the wavefront case): `Kernel::<Full, Partial>::evaluate_pairs`
+/// on 1024 pairs, every one its own direction to the light and exit (half the exits within
+/// 0.3 rad of the mirror direction, half anywhere above) with the surface coherence of
+/// sunlight (37.6 µm), on rough gold at 0.55 µm (the wavefront example's material), against
+/// the same pairs one at a time through the renderer layer (`Bsdf::prepare_surface` then
+/// `Bsdf::eval_stokes`, which also computes the coherent lobe's mass) and through the kernel
+/// (`Kernel::prepare` of each pair's `SurfaceCoherence` packet, built outside the timing, then
+/// `evaluate_prepared`).
+fn pairs_for<T: Real>(c: &mut Criterion, prec: &str) {
+    use gmueller::bsdf::{Bsdf, SurfaceCoherence};
+    use gmueller::interaction::RoughConductor;
+    use gmueller::interaction::batch::PairsSoa;
+    use gmueller::spectral::Metal;
+    use gmueller::stokes::Stokes;
+    const M: usize = 1024;
+    let lambda = T::lit(0.55);
+    let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.0438), T::lit(0.619)).unwrap();
+    let gold = RoughConductor::new(psd, Metal::Au.index(lambda)).unwrap();
+    let kernel = Kernel::<Full, Partial>::default();
+    let surf = surface::<T>();
+    let sun = SurfaceCoherence::fixed(T::lit(37.6)).unwrap();
+    let bsdf = Bsdf::new(&gold, kernel, surf, lambda).unwrap();
+    let mut rng = Lcg(0x9a1e);
+    let mut cols: Vec<Vec<T>> = vec![Vec::new(); 7];
+    let mut packets = Vec::with_capacity(M);
+    for i in 0..M {
+        let ti = rng.uniform().sqrt().asin().min(1.5);
+        let pi = std::f64::consts::TAU * rng.uniform();
+        let (to, po) = if i % 2 == 0 {
+            let to = (ti + (rng.uniform() - 0.5) * 0.6).abs().min(1.5);
+            (to, pi + std::f64::consts::PI + (rng.uniform() - 0.5) * 0.6)
+        } else {
+            let to = rng.uniform().acos().min(1.5);
+            (to, std::f64::consts::TAU * rng.uniform())
+        };
+        let s = Vector3::new(ti.sin() * pi.cos(), ti.sin() * pi.sin(), ti.cos()).map(T::lit);
+        let r = Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(T::lit);
+        for (col, v) in cols.iter_mut().zip([s.x, s.y, s.z, r.x, r.y, r.z]) {
+            col.push(v);
+        }
+        let w = bsdf.surface_width(&s, &sun).unwrap();
+        cols[6].push(w.recip());
+        let packet = SurfaceCoherence::fixed(w)
+            .unwrap()
+            .packet(Stokes::unpolarized(T::one()).unwrap(), s, &surf, lambda)
+            .unwrap();
+        packets.push((packet, s, r));
+    }
+    let k = T::two_pi() / lambda;
+    let mut buf = vec![vec![T::zero(); M]; 8];
+    let mut g = c.benchmark_group(format!("kernel_pairs/{prec}"));
+    g.throughput(criterion::Throughput::Elements(M as u64));
+    g.bench_function("evaluate_pairs-1024", |bch| {
+        let [a, b, cc, d, e, f, gg, h] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, cc, d] },
+            scattered: StokesSoa { s: [e, f, gg, h] },
+        };
+        bch.iter(|| {
+            let pairs = PairsSoa {
+                to_source: DirectionsSoa {
+                    x: &cols[0],
+                    y: &cols[1],
+                    z: &cols[2],
+                },
+                exit: DirectionsSoa {
+                    x: &cols[3],
+                    y: &cols[4],
+                    z: &cols[5],
+                },
+                inverse_width: &cols[6],
+            };
+            kernel
+                .evaluate_pairs(black_box(&gold), k, &surf, pairs, &mut out, None)
+                .unwrap();
+        });
+    });
+    g.bench_function("bsdf-prepare_surface-eval_stokes-1024", |bch| {
+        bch.iter(|| {
+            for (_, s, r) in &packets {
+                let light = bsdf.prepare_surface(black_box(*s), &sun).unwrap();
+                black_box(bsdf.eval_stokes(&light, *r).unwrap());
+            }
+        });
+    });
+    g.bench_function("kernel-prepare-evaluate-1024", |bch| {
+        bch.iter(|| {
+            for (packet, s, r) in &packets {
+                let prepared = kernel.prepare(black_box(packet), &surf).unwrap();
+                let geo = Geometry::new(k, &surf, *s, *r).unwrap();
+                black_box(kernel.evaluate_prepared(&gold, &prepared, &geo));
+            }
+        });
+    });
+    g.finish();
+}
+
 fn benches(c: &mut Criterion) {
     interface_for::<f64>(c, "f64");
     interface_for::<f32>(c, "f32");
@@ -1029,6 +1130,8 @@ fn benches(c: &mut Criterion) {
     batch_spectral_for::<f32>(c, "f32");
     batch_series_for::<f64>(c, "f64");
     batch_series_for::<f32>(c, "f32");
+    pairs_for::<f64>(c, "f64");
+    pairs_for::<f32>(c, "f32");
 }
 
 criterion_group!(kernel, benches);

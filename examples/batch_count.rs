@@ -112,7 +112,7 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
     let sun = SurfaceCoherence::fixed(T::lit(37.6)).unwrap();
     let bsdf = Bsdf::new(&gold, kernel, surface, lambda).unwrap();
     let mut rng = Lcg(0x9a1e);
-    let mut cols = vec![Vec::with_capacity(M); 7];
+    let mut cols = vec![Vec::new(); 7];
     for i in 0..M {
         let ti = rng.uniform().sqrt().asin().min(1.5);
         let pi = std::f64::consts::TAU * rng.uniform();
@@ -120,7 +120,10 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
             let to = (ti + (rng.uniform() - 0.5) * 0.6).abs().min(1.5);
             (to, pi + std::f64::consts::PI + (rng.uniform() - 0.5) * 0.6)
         } else {
-            (rng.uniform().acos().min(1.5), std::f64::consts::TAU * rng.uniform())
+            (
+                rng.uniform().acos().min(1.5),
+                std::f64::consts::TAU * rng.uniform(),
+            )
         };
         let v = [
             ti.sin() * pi.cos(),
@@ -133,7 +136,11 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
         for (c, x) in cols.iter_mut().zip(v) {
             c.push(T::lit(x));
         }
-        cols[6].push(bsdf.surface_width(&Vector3::new(v[0], v[1], v[2]).map(T::lit), &sun).unwrap().recip());
+        cols[6].push(
+            bsdf.surface_width(&Vector3::new(v[0], v[1], v[2]).map(T::lit), &sun)
+                .unwrap()
+                .recip(),
+        );
     }
     let k = T::two_pi() / lambda;
     let mut buf = vec![vec![T::zero(); M]; 8];
@@ -146,20 +153,29 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
     };
     for _ in 0..reps {
         if scalar {
-            for i in 0..M {
+            for (i, o) in out.scattered.s[0].iter_mut().enumerate() {
                 let s = Vector3::new(cols[0][i], cols[1][i], cols[2][i]);
                 let light = bsdf.prepare_surface(s, &sun).unwrap();
                 let r = Vector3::new(cols[3][i], cols[4][i], cols[5][i]);
-                let v = bsdf.eval_stokes(&light, r).unwrap();
-                out.scattered.s[0][i] = v.scattered.s0();
+                *o = bsdf.eval_stokes(&light, r).unwrap().scattered.s0();
             }
         } else {
             let pairs = PairsSoa {
-                to_source: DirectionsSoa { x: &cols[0], y: &cols[1], z: &cols[2] },
-                exit: DirectionsSoa { x: &cols[3], y: &cols[4], z: &cols[5] },
+                to_source: DirectionsSoa {
+                    x: &cols[0],
+                    y: &cols[1],
+                    z: &cols[2],
+                },
+                exit: DirectionsSoa {
+                    x: &cols[3],
+                    y: &cols[4],
+                    z: &cols[5],
+                },
                 inverse_width: &cols[6],
             };
-            kernel.evaluate_pairs(&gold, k, &surface, pairs, &mut out, None).unwrap();
+            kernel
+                .evaluate_pairs(&gold, k, &surface, pairs, &mut out, None)
+                .unwrap();
         }
     }
     out.scattered.s[0].iter().map(|v| v.to_f64()).sum::<f64>()

@@ -126,7 +126,9 @@ pub(super) fn lobe_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
                 s,
                 inc,
                 &q.terms(s),
-                (cos_o, so2, qo),
+                cos_o,
+                so2,
+                qo,
                 azimuth,
             );
             let h = [
@@ -135,7 +137,14 @@ pub(super) fn lobe_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
                 mul(s, add(s, r[2], sv[2]), kk),
             ];
             let v = mul(s, kk, add(s, q.cos_i(s), cos_o));
-            (cos_o, factors, h, v, (c(p.ln_spec), q.ln_scat(s)), Some(None))
+            (
+                cos_o,
+                factors,
+                h,
+                v,
+                (c(p.ln_spec), q.ln_scat(s)),
+                Some(None),
+            )
         }
         Some(t) => {
             let cos_o = F::vabs(s, e.cos_o);
@@ -351,7 +360,12 @@ pub(crate) type ScalarRedo<'r, F> = &'r mut dyn FnMut(usize, usize) -> Result<Sc
 /// The exits `start..start + count` of `v` as one vector: a whole vector when `count` is the
 /// width, else padded with `v[0]` (through `b`).
 #[inline(always)]
-pub(super) fn load<S: Simd, F: Real>(v: &[F], b: &mut [F; MAX_LANES], start: usize, count: usize) -> F::V<S> {
+pub(super) fn load<S: Simd, F: Real>(
+    v: &[F],
+    b: &mut [F; MAX_LANES],
+    start: usize,
+    count: usize,
+) -> F::V<S> {
     let lanes = F::width::<S>();
     if count == lanes {
         F::vsplit::<S>(&v[start..start + lanes]).0[0]
@@ -372,7 +386,6 @@ pub(super) fn store<S: Simd, F: Real>(s: S, o: &mut [F], v: F::V<S>, start: usiz
         F::store_partial(s, t, v);
     }
 }
-
 
 impl<F: Real> WithSimd for PartialLobes<'_, '_, '_, '_, F> {
     type Output = Result<(), Error>;

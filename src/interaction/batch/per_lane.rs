@@ -20,8 +20,10 @@ use pulp::Simd;
 
 use super::prep::{LANE_FIELDS, LobePrep};
 use super::stages;
+use super::stages::azimuth::AzimuthAxes;
 use super::stages::channels::{LogGaussianLanes, log_gaussian_lanes};
 use super::stages::rayleigh_rice::{IncidentTerms, incident_terms};
+use super::stages::specular::SpecularLanes;
 use crate::real::Real;
 use crate::simd::complex::C;
 
@@ -30,7 +32,7 @@ pub(crate) trait LaneConsts<S: Simd, F: Real> {
     /// ŝ, the unit direction to the source.
     fn to_source(&self, s: S) -> [F::V<S>; 3];
     /// `(n̂ × ŝ_in, n̂ × (n̂ × ŝ_in))`, the azimuth axes.
-    fn azimuth_axes(&self, s: S) -> ([F::V<S>; 3], [F::V<S>; 3]);
+    fn azimuth_axes(&self, s: S) -> AzimuthAxes<F::V<S>>;
     /// `cos θ_i`.
     fn cos_i(&self, s: S) -> F::V<S>;
     /// The incident terms of the reflection factors.
@@ -61,7 +63,7 @@ impl<S: Simd, F: Real> LaneConsts<S, F> for LobePrep<F> {
         stages::splat3::<S, F>(s, self.inc.s)
     }
     #[inline(always)]
-    fn azimuth_axes(&self, s: S) -> ([F::V<S>; 3], [F::V<S>; 3]) {
+    fn azimuth_axes(&self, s: S) -> AzimuthAxes<F::V<S>> {
         (
             stages::splat3::<S, F>(s, self.inc.u_az),
             stages::splat3::<S, F>(s, self.inc.v_az),
@@ -99,13 +101,8 @@ impl<S: Simd, F: Real> LaneConsts<S, F> for LobePrep<F> {
         s_out: [F::V<S>; 3],
         v: [F::V<S>; 4],
     ) -> [F::V<S>; 4] {
-        stages::specular::fresnel_stokes::<S, F>(
-            s,
-            (&self.fresnel, &self.spec_frame, self.flip_tol),
-            r,
-            s_out,
-            v,
-        )
+        let consts = (&self.fresnel, &self.spec_frame, self.flip_tol);
+        stages::specular::fresnel_stokes::<S, F>(s, consts, r, s_out, v)
     }
 }
 
@@ -120,12 +117,9 @@ pub(crate) struct Gathered<S: Simd, F: Real> {
     spec: LogGaussianLanes<F::V<S>>,
     scat: LogGaussianLanes<F::V<S>>,
     ln_scat: F::V<S>,
-    fresnel: [[F::V<S>; 4]; 4],
-    /// ŝ, p̂ and r̂ of the specular frame.
-    spec_frame: [[F::V<S>; 3]; 3],
+    specular: SpecularLanes<F::V<S>>,
     flip_tol: F,
 }
-
 
 /// At most this many lanes in a vector (`f32` under AVX-512).
 pub(crate) const MAX_LANES: usize = 16;
@@ -171,8 +165,10 @@ impl<S: Simd, F: Real> Gathered<S, F> {
             spec: lg(19),
             scat: lg(23),
             ln_scat: v(27),
-            fresnel: [28, 32, 36, 40].map(|k| [v(k), v(k + 1), v(k + 2), v(k + 3)]),
-            spec_frame: [v3(44), v3(47), v3(50)],
+            specular: SpecularLanes {
+                fresnel: [28, 32, 36, 40].map(|k| [v(k), v(k + 1), v(k + 2), v(k + 3)]),
+                axes: [v3(44), v3(47), v3(50)],
+            },
             flip_tol: head.flip_tol,
         }
     }
@@ -191,7 +187,7 @@ impl<S: Simd, F: Real> LaneConsts<S, F> for Gathered<S, F> {
         self.to_source
     }
     #[inline(always)]
-    fn azimuth_axes(&self, _: S) -> ([F::V<S>; 3], [F::V<S>; 3]) {
+    fn azimuth_axes(&self, _: S) -> AzimuthAxes<F::V<S>> {
         (self.u_az, self.v_az)
     }
     #[inline(always)]
@@ -216,7 +212,7 @@ impl<S: Simd, F: Real> LaneConsts<S, F> for Gathered<S, F> {
     }
     #[inline(always)]
     fn fresnel_m00(&self, _: S) -> F::V<S> {
-        self.fresnel[0][0]
+        self.specular.fresnel[0][0]
     }
     #[inline(always)]
     fn fresnel_stokes(
@@ -228,7 +224,7 @@ impl<S: Simd, F: Real> LaneConsts<S, F> for Gathered<S, F> {
     ) -> [F::V<S>; 4] {
         stages::specular::fresnel_stokes_with::<S, F>(
             s,
-            (&self.fresnel, &self.spec_frame, self.flip_tol),
+            (&self.specular, self.flip_tol),
             r,
             s_out,
             v,

@@ -410,12 +410,59 @@ pub(crate) fn lane_row<T: Real>(
     let (sp, sc, m) = (spec, scat, fresnel);
     let (fs, fp, fk) = (spec_frame.x(), spec_frame.y(), spec_frame.k());
     [
-        i.s.x, i.s.y, i.s.z, i.u_az.x, i.u_az.y, i.u_az.z, i.v_az.x, i.v_az.y, i.v_az.z,
-        i.cos_i, i.si2, i.qi.re, i.qi.im, i.d1s.re, i.d1s.im, i.d3s.re, i.d3s.im,
-        i.neg_em1s_qis.re, i.neg_em1s_qis.im, sp.c, sp.l00, sp.l10, sp.inv_l11, sc.c, sc.l00,
-        sc.l10, sc.inv_l11, ln_scat, m[(0, 0)], m[(0, 1)], m[(0, 2)], m[(0, 3)], m[(1, 0)],
-        m[(1, 1)], m[(1, 2)], m[(1, 3)], m[(2, 0)], m[(2, 1)], m[(2, 2)], m[(2, 3)], m[(3, 0)],
-        m[(3, 1)], m[(3, 2)], m[(3, 3)], fs.x, fs.y, fs.z, fp.x, fp.y, fp.z, fk.x, fk.y, fk.z,
+        i.s.x,
+        i.s.y,
+        i.s.z,
+        i.u_az.x,
+        i.u_az.y,
+        i.u_az.z,
+        i.v_az.x,
+        i.v_az.y,
+        i.v_az.z,
+        i.cos_i,
+        i.si2,
+        i.qi.re,
+        i.qi.im,
+        i.d1s.re,
+        i.d1s.im,
+        i.d3s.re,
+        i.d3s.im,
+        i.neg_em1s_qis.re,
+        i.neg_em1s_qis.im,
+        sp.c,
+        sp.l00,
+        sp.l10,
+        sp.inv_l11,
+        sc.c,
+        sc.l00,
+        sc.l10,
+        sc.inv_l11,
+        ln_scat,
+        m[(0, 0)],
+        m[(0, 1)],
+        m[(0, 2)],
+        m[(0, 3)],
+        m[(1, 0)],
+        m[(1, 1)],
+        m[(1, 2)],
+        m[(1, 3)],
+        m[(2, 0)],
+        m[(2, 1)],
+        m[(2, 2)],
+        m[(2, 3)],
+        m[(3, 0)],
+        m[(3, 1)],
+        m[(3, 2)],
+        m[(3, 3)],
+        fs.x,
+        fs.y,
+        fs.z,
+        fp.x,
+        fp.y,
+        fp.z,
+        fk.x,
+        fk.y,
+        fk.z,
     ]
 }
 
@@ -560,8 +607,15 @@ impl<T: Real> LobePrep<T> {
             && inc.plain_q
             && prepared.ln_s0.is_finite();
         let shift_finite = incoherent.is_none_or(|i| incoherent_shift(i).is_finite());
-        (finite && shift_finite)
-            .then(|| lane_row(&inc, (&spec, &scat), ln_scat, &fresnel, &specular_frame(&inc)))
+        (finite && shift_finite).then(|| {
+            lane_row(
+                &inc,
+                (&spec, &scat),
+                ln_scat,
+                &fresnel,
+                &specular_frame(&inc),
+            )
+        })
     }
 
     /// The constants at a dielectric interface of relative index `eta` (the geometry's, as

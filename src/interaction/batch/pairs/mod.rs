@@ -188,7 +188,14 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
         let maker = row_maker(self, material);
         let head = maker.as_ref().and_then(|_| {
             (0..n.min(4)).find_map(|i| {
-                lane_prep_at(self, material, &prepared(i), at(&to_source, i), surface, None)
+                lane_prep_at(
+                    self,
+                    material,
+                    &prepared(i),
+                    at(&to_source, i),
+                    surface,
+                    None,
+                )
             })
         });
         let mut row = |i: usize| {

@@ -35,6 +35,9 @@ thread_local! {
     pub(super) static PER_DIRECTION: Cell<usize> = const { Cell::new(0) };
 }
 
+/// One pair: the direction to the source, the exit and `1/w`.
+type Pair = (Vector3<f64>, Vector3<f64>, f64);
+
 /// Uniform in `[0, 1)`.
 fn uniform(state: &mut u64) -> f64 {
     (splitmix64(state) >> 11) as f64 / (1u64 << 53) as f64
@@ -42,12 +45,16 @@ fn uniform(state: &mut u64) -> f64 {
 
 /// A unit direction at polar angle `theta` and azimuth `phi` about `+z`.
 fn direction(theta: f64, phi: f64) -> Vector3<f64> {
-    Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+    Vector3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    )
 }
 
-/// `n` random pairs: (to_source, exit, 1/w), the exits a third near the mirror direction
+/// `n` random pairs `(to_source, exit, 1/w)`, the exits a third near the mirror direction
 /// (within 0.05 rad), a third within 0.3 rad, a third anywhere above the surface.
-fn pairs(seed: u64, n: usize) -> Vec<(Vector3<f64>, Vector3<f64>, f64)> {
+fn pairs(seed: u64, n: usize) -> Vec<Pair> {
     let mut st = seed;
     (0..n)
         .map(|i| {
@@ -109,9 +116,7 @@ where
     let surface = Frame::from_normal(Vector3::new(T::zero(), T::zero(), T::one())).unwrap();
     let k = T::lit(std::f64::consts::TAU / lambda);
     let ps = pairs(seed, n);
-    let col = |f: &dyn Fn(&(Vector3<f64>, Vector3<f64>, f64)) -> f64| -> Vec<T> {
-        ps.iter().map(|p| T::lit(f(p))).collect()
-    };
+    let col = |f: &dyn Fn(&Pair) -> f64| -> Vec<T> { ps.iter().map(|p| T::lit(f(p))).collect() };
     let (sx, sy, sz) = (col(&|p| p.0.x), col(&|p| p.0.y), col(&|p| p.0.z));
     let (rx, ry, rz) = (col(&|p| p.1.x), col(&|p| p.1.y), col(&|p| p.1.z));
     let inv_w = col(&|p| p.2);
@@ -136,7 +141,11 @@ where
             .unwrap();
     });
     let redone = PER_DIRECTION.with(Cell::get) - before;
-    let stokes_len = if got.lobes[1][0] == T::lit(-7.0) { 1 } else { 4 };
+    let stokes_len = if got.lobes[1][0] == T::lit(-7.0) {
+        1
+    } else {
+        4
+    };
     let eps = T::EPSILON.to_f64();
     for i in 0..n {
         let s = Vector3::new(sx[i], sy[i], sz[i]);
@@ -190,18 +199,29 @@ where
         });
         for c in (0..stokes_len).chain(4..4 + stokes_len) {
             let (a, b) = (got.lobes[c][i], want.lobes[c][0]);
-            assert!(same(a, b), "{what}: pair {i}, column {c}: {:e} vs {:e}", a.to_f64(), b.to_f64());
+            assert!(
+                same(a, b),
+                "{what}: pair {i}, column {c}: {:e} vs {:e}",
+                a.to_f64(),
+                b.to_f64()
+            );
         }
         for c in 0..3 {
-            assert!(same(got.frames[c][i], want.frames[c][0]), "{what}: pair {i} frame");
+            assert!(
+                same(got.frames[c][i], want.frames[c][0]),
+                "{what}: pair {i} frame"
+            );
         }
         // Oracle 2: the per-direction kernel, within evaluate_batch's bound (S0 = 1 and an
         // unpolarized one-shape packet: L̂ = (1 + √3) L).
         for (lobe, v) in [(0, sp), (4, sc)] {
             let l = v[0].to_f64();
-            let bound =
-                4.0 * eps * (4.0 + l.abs().max(f64::MIN_POSITIVE).ln().abs()) * (1.0 + 3f64.sqrt()) * l.abs()
-                    + T::MIN_POSITIVE.to_f64();
+            let bound = 4.0
+                * eps
+                * (4.0 + l.abs().max(f64::MIN_POSITIVE).ln().abs())
+                * (1.0 + 3f64.sqrt())
+                * l.abs()
+                + T::MIN_POSITIVE.to_f64();
             for c in 0..stokes_len {
                 let d = (got.lobes[lobe + c][i].to_f64() - v[c].to_f64()).abs();
                 assert!(
@@ -238,16 +258,49 @@ fn every_case<T: Real>(seed: u64, n: usize) {
     for (m, name) in [(&gold_iso, "gold"), (&gold_aniso, "gold, anisotropic")] {
         let case = |i: u64| (seed ^ (i << 32), n, 0.38 + 0.4 * (i as f64 / 6.0));
         run(check(&Kernel::<Full, Partial>::default(), m, case(0), name));
-        run(check(&Kernel::<OneShape, Partial>::default(), m, case(1), name));
-        run(check(&Kernel::<Intensity, Partial>::default(), m, case(2), name));
-        run(check(&Kernel::<Full, Incoherent>::default(), m, case(3), name));
-        run(check(&Kernel::<Intensity, Incoherent>::default(), m, case(4), name));
+        run(check(
+            &Kernel::<OneShape, Partial>::default(),
+            m,
+            case(1),
+            name,
+        ));
+        run(check(
+            &Kernel::<Intensity, Partial>::default(),
+            m,
+            case(2),
+            name,
+        ));
+        run(check(
+            &Kernel::<Full, Incoherent>::default(),
+            m,
+            case(3),
+            name,
+        ));
+        run(check(
+            &Kernel::<Intensity, Incoherent>::default(),
+            m,
+            case(4),
+            name,
+        ));
     }
     let case = (seed ^ (9 << 32), n, 0.55);
-    run(check(&Kernel::<Full, Partial>::default(), &glass, case, "glass"));
-    run(check(&Kernel::<Intensity, Partial>::default(), &glass, case, "glass"));
+    run(check(
+        &Kernel::<Full, Partial>::default(),
+        &glass,
+        case,
+        "glass",
+    ));
+    run(check(
+        &Kernel::<Intensity, Partial>::default(),
+        &glass,
+        case,
+        "glass",
+    ));
     // The lanes ran: most pairs were not sent to the per-direction kernel.
-    assert!(redone * 10 < total, "{redone} of {total} pairs redone one at a time");
+    assert!(
+        redone * 10 < total,
+        "{redone} of {total} pairs redone one at a time"
+    );
 }
 
 #[test]

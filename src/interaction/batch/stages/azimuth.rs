@@ -22,6 +22,9 @@ pub(crate) struct ExitFrame<S: Simd, F: Real> {
     pub(crate) normal: F::M<S>,
 }
 
+/// The azimuth axes `(n̂ × ŝ_in, n̂ × (n̂ × ŝ_in))` as vectors.
+pub(crate) type AzimuthAxes<V> = ([V; 3], [V; 3]);
+
 /// [`ExitFrame`] of the unit exits `r`.
 #[inline(always)]
 pub(crate) fn exit_frame<S: Simd, F: Real>(
@@ -40,7 +43,7 @@ pub(crate) fn exit_frame<S: Simd, F: Real>(
 pub(crate) fn exit_frame_with<S: Simd, F: Real>(
     s: S,
     p: &Incidence<F>,
-    (u_az, v_az): ([F::V<S>; 3], [F::V<S>; 3]),
+    (u_az, v_az): AzimuthAxes<F::V<S>>,
     r: [F::V<S>; 3],
 ) -> ExitFrame<S, F> {
     let c = |v: F| F::vsplat(s, v);

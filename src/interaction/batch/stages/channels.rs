@@ -204,7 +204,12 @@ fn row<S: Simd, F: Real>(s: S, m: [F::V<S>; 4], v: [F::V<S>; 4]) -> F::V<S> {
         s,
         m[0],
         v[0],
-        F::vmul_add(s, m[1], v[1], F::vmul_add(s, m[2], v[2], F::vmul(s, m[3], v[3]))),
+        F::vmul_add(
+            s,
+            m[1],
+            v[1],
+            F::vmul_add(s, m[2], v[2], F::vmul(s, m[3], v[3])),
+        ),
     )
 }
 

@@ -24,10 +24,7 @@ pub(crate) struct IncidentTerms<V> {
 
 /// The [`IncidentTerms`] of `p` on every lane.
 #[inline(always)]
-pub(crate) fn incident_terms<S: Simd, F: Real>(
-    s: S,
-    p: &Incidence<F>,
-) -> IncidentTerms<F::V<S>> {
+pub(crate) fn incident_terms<S: Simd, F: Real>(s: S, p: &Incidence<F>) -> IncidentTerms<F::V<S>> {
     let cx = Cx(s);
     IncidentTerms {
         si2: F::vsplat(s, p.si2),
@@ -49,7 +46,7 @@ pub(crate) fn factors<S: Simd, F: Real>(
     azimuth: (F::V<S>, F::V<S>),
 ) -> [C<F::V<S>>; 4] {
     let terms = incident_terms::<S, F>(s, p);
-    factors_with::<S, F>(s, p, &terms, (cos_o, so2, qo), azimuth)
+    factors_with::<S, F>(s, p, &terms, cos_o, so2, qo, azimuth)
 }
 
 /// [`factors`] with the incident direction's terms given per lane (`terms`); `ε` and the scale
@@ -59,7 +56,9 @@ pub(crate) fn factors_with<S: Simd, F: Real>(
     s: S,
     p: &Incidence<F>,
     terms: &IncidentTerms<F::V<S>>,
-    (cos_o, so2, qo): (F::V<S>, F::V<S>, C<F::V<S>>),
+    cos_o: F::V<S>,
+    so2: F::V<S>,
+    qo: C<F::V<S>>,
     (cos_phi, sin_phi): (F::V<S>, F::V<S>),
 ) -> [C<F::V<S>>; 4] {
     let c = |v: F| F::vsplat(s, v);
@@ -91,10 +90,7 @@ pub(crate) fn factors_with<S: Simd, F: Real>(
     };
     let pp = cx.mul::<F>(cx.mul::<F>(em1s, cx.scale::<F>(inner, inv2)), inv_pp);
     let ps = cx.scale::<F>(
-        cx.mul::<F>(
-            terms.neg_em1s_qis,
-            cx.mul::<F>(cx.mul::<F>(d1s, d4s), both),
-        ),
+        cx.mul::<F>(terms.neg_em1s_qis, cx.mul::<F>(cx.mul::<F>(d1s, d4s), both)),
         sin_phi,
     );
     let sp = cx.scale::<F>(

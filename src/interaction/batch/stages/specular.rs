@@ -31,22 +31,29 @@ pub(crate) fn fresnel_stokes<S: Simd, F: Real>(
     frame_change::<S, F>(s, (&axes, flip_tol), r, s_out, w)
 }
 
-/// [`fresnel_stokes`] with the Fresnel matrix and the specular frame's axes (ŝ, p̂, r̂_spec)
-/// given per lane (the per-lane pass, `batch::per_lane`).
+/// The Fresnel matrix (`fresnel[i][j]` the lanes of `M_ij`) and the specular frame's axes
+/// (ŝ, p̂, `r̂_spec`) given per lane (the per-lane pass, `batch::per_lane`).
+#[derive(Clone, Copy)]
+pub(crate) struct SpecularLanes<V> {
+    pub(crate) fresnel: [[V; 4]; 4],
+    pub(crate) axes: [[V; 3]; 3],
+}
+
+/// [`fresnel_stokes`] with the Fresnel matrix and the specular frame given per lane.
 #[inline(always)]
 pub(crate) fn fresnel_stokes_with<S: Simd, F: Real>(
     s: S,
-    (fresnel, axes, flip_tol): (&[[F::V<S>; 4]; 4], &[[F::V<S>; 3]; 3], F),
+    (lanes, flip_tol): (&SpecularLanes<F::V<S>>, F),
     r: [F::V<S>; 3],
     s_out: [F::V<S>; 3],
     v: [F::V<S>; 4],
 ) -> [F::V<S>; 4] {
-    let w = mat_vec_with::<S, F>(s, fresnel, v);
-    frame_change::<S, F>(s, (axes, flip_tol), r, s_out, w)
+    let w = mat_vec_with::<S, F>(s, &lanes.fresnel, v);
+    frame_change::<S, F>(s, (&lanes.axes, flip_tol), r, s_out, w)
 }
 
 /// `T(F_spec → F_exit) w`: the frame change of [`fresnel_stokes`] from the specular frame of
-/// axes `[ŝ, p̂, r̂_spec]` to each exit's.
+/// axes `[ŝ, p̂, r̂_spec]` (`axes`) to each exit's.
 #[inline(always)]
 fn frame_change<S: Simd, F: Real>(
     s: S,
