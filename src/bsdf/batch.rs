@@ -22,14 +22,18 @@
 //! 2⁻¹⁰, `tests/bsdf/sample_batch.rs`); with the Kirchhoff series, plus the series' tolerance
 //! (the batch and the scalar sums are each within half of it of the whole series).
 
-use nalgebra::Vector3;
+use nalgebra::{Vector3, Vector4};
+
+use super::SurfaceCoherence;
+use crate::interaction::polarization::KernelOutput;
 
 use super::model::BsdfSurface;
 use super::sampler::{NO_LOBE, SampledLobe, SamplesSoa, UniformsSoa};
 use super::{Bsdf, BsdfKernel, LobeSampler};
 use crate::error::Error;
 use crate::interaction::Side;
-use crate::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
+use crate::interaction::batch::check_lengths;
+use crate::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
 use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
 use crate::interaction::roughness::{RoughnessLevel, RoughnessModel};
 use crate::numerics::unit_direction;
@@ -222,6 +226,206 @@ where
                 };
             }
             start += m;
+        }
+        Ok(())
+    }
+
+    /// The renderer's light for a batch of pairs: element `i` is
+    /// `eval_stokes(&prepare_surface(to_source[i], coherence)?, exits[i])` — unpolarized light
+    /// of unit irradiance arriving from `to_source[i]` with the surface coherence
+    /// `coherence`, leaving along `exits[i]`, its coherent lobe divided by that light's mass
+    /// `E` ([`Bsdf::prepare_surface`], [`super::Incident::specular_mass`]) — written into
+    /// `out` (both lobes, Stokes radiances in each exit's s/p frame; at the intensity levels
+    /// `S0` only) and, when given, the exit s vectors into `frames`. What a wavefront
+    /// renderer's next-event estimation evaluates, every lane its own light direction and
+    /// exit.
+    ///
+    /// On an opaque surface the pairs run through
+    /// [`Kernel::evaluate_pairs`](crate::interaction::Kernel::evaluate_pairs) (in SIMD lanes
+    /// where it has them, within its bound of the per-pair kernel), and each pair's `E` is then
+    /// computed alone; at an interface pair by pair. Allocates nothing (its buffers are on the
+    /// stack).
+    ///
+    /// # Errors
+    /// As [`Bsdf::prepare_surface`] and [`Bsdf::eval_stokes`] for the first pair they reject
+    /// (on an opaque surface nothing is written then);
+    /// [`Error::OutOfRange`] when a slice of `exits`, `out` or `frames` is shorter than
+    /// `to_source.x`, or one of `to_source` is.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::bsdf::{Bsdf, SurfaceCoherence};
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::batch::{DirectionsSoa, LobesSoa, StokesSoa};
+    /// use gmueller::interaction::{Full, Kernel, Partial, RoughConductor};
+    /// use gmueller::psd::GaussianPsd;
+    /// use gmueller::spectral::Metal;
+    /// use nalgebra::Vector3;
+    ///
+    /// let gold = RoughConductor::new(GaussianPsd::isotropic(0.02, 1.0)?, Metal::Au.index(0.55_f64))?;
+    /// let bsdf = Bsdf::new(&gold, Kernel::<Full, Partial>::default(), Frame::from_normal(Vector3::z())?, 0.55)?;
+    /// let sky = SurfaceCoherence::new(20.0)?;
+    /// let (sx, sy, sz) = ([0.4, -0.2], [0.0, 0.3], [0.9, 0.8]);
+    /// let (rx, ry, rz) = ([-0.4, 0.1], [0.05, -0.3], [0.9, 0.9]);
+    /// let mut buf = [[0.0; 2]; 8];
+    /// let [a, b, c, d, e, f, g, h] = &mut buf;
+    /// let mut out = LobesSoa {
+    ///     specular: StokesSoa { s: [a, b, c, d] },
+    ///     scattered: StokesSoa { s: [e, f, g, h] },
+    /// };
+    /// bsdf.eval_stokes_pairs(
+    ///     &sky,
+    ///     DirectionsSoa { x: &sx, y: &sy, z: &sz },
+    ///     DirectionsSoa { x: &rx, y: &ry, z: &rz },
+    ///     &mut out,
+    ///     None,
+    /// )?;
+    /// let light = bsdf.prepare_surface(Vector3::new(sx[1], sy[1], sz[1]), &sky)?;
+    /// let one = bsdf.eval_stokes(&light, Vector3::new(rx[1], ry[1], rz[1]))?;
+    /// assert!((out.scattered.s[0][1] - one.scattered.s0()).abs() <= 1e-12 * one.scattered.s0());
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    pub fn eval_stokes_pairs(
+        &self,
+        coherence: &SurfaceCoherence<T>,
+        to_source: DirectionsSoa<'_, T>,
+        exits: DirectionsSoa<'_, T>,
+        out: &mut LobesSoa<'_, T>,
+        mut frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error> {
+        let n = to_source.len();
+        if to_source.y.len() < n || to_source.z.len() < n {
+            return Err(Error::OutOfRange {
+                what: "batch slice length",
+                value: n as f64,
+                expected: "to_source.y and to_source.z at least as long as to_source.x",
+            });
+        }
+        check_lengths(
+            &DirectionsSoa {
+                x: &to_source.x[..n],
+                y: exits.y,
+                z: exits.z,
+            },
+            core::slice::from_ref(out),
+            frames.as_deref(),
+        )?;
+        if exits.x.len() < n {
+            return Err(Error::OutOfRange {
+                what: "batch slice length",
+                value: n as f64,
+                expected: "exits at least as long as to_source.x",
+            });
+        }
+        let at = |d: &DirectionsSoa<'_, T>, i: usize| Vector3::new(d.x[i], d.y[i], d.z[i]);
+        let intensity = K::Pol::LEVEL == PolarizationLevel::Intensity;
+        let stokes_len = if intensity { 1 } else { 4 };
+        if self.eta.is_some() {
+            for i in 0..n {
+                let light = self.prepare_surface(at(&to_source, i), coherence)?;
+                let r = self.eval_stokes(&light, at(&exits, i))?;
+                let z = T::zero();
+                let (sp, sc) = match r.stokes() {
+                    Some((sp, sc)) => (sp.vector(), sc.vector()),
+                    None => (
+                        Vector4::new(r.specular_intensity(), z, z, z),
+                        Vector4::new(r.scattered_intensity(), z, z, z),
+                    ),
+                };
+                for c in 0..stokes_len {
+                    out.specular.s[c][i] = sp[c];
+                    out.scattered.s[c][i] = sc[c];
+                }
+                if let Some(f) = frames.as_deref_mut() {
+                    let g = self.geometry(at(&to_source, i), at(&exits, i))?;
+                    for (col, v) in f.s.iter_mut().zip(g.exit_sp().x().iter()) {
+                        col[i] = *v;
+                    }
+                }
+            }
+            return Ok(());
+        }
+        let kernel = self.kernel.kernel();
+        let mut start = 0;
+        while start < n {
+            let m = CHUNK.min(n - start);
+            let end = start + m;
+            // Each pair's wavenumber and coherence width, as `prepare_surface` has them (every
+            // pair validated before anything is written).
+            let mut inv_w = [T::zero(); CHUNK];
+            let mut k = T::zero();
+            for (i, w) in inv_w[..m].iter_mut().enumerate() {
+                let s = unit_direction(&at(&to_source, start + i), "direction to the source")?;
+                k = self.wavenumber(&s)?;
+                *w = self.width_of(&s, k, coherence).recip();
+            }
+            fn sub<'d, T>(
+                d: &DirectionsSoa<'d, T>,
+                r: core::ops::Range<usize>,
+            ) -> DirectionsSoa<'d, T> {
+                DirectionsSoa {
+                    x: &d.x[r.clone()],
+                    y: &d.y[r.clone()],
+                    z: &d.z[r],
+                }
+            }
+            let [a0, a1, a2, a3] = &mut out.specular.s;
+            let [b0, b1, b2, b3] = &mut out.scattered.s;
+            let mut chunk = LobesSoa {
+                specular: StokesSoa {
+                    s: [
+                        &mut a0[start..end],
+                        &mut a1[start..end],
+                        &mut a2[start..end],
+                        &mut a3[start..end],
+                    ],
+                },
+                scattered: StokesSoa {
+                    s: [
+                        &mut b0[start..end],
+                        &mut b1[start..end],
+                        &mut b2[start..end],
+                        &mut b3[start..end],
+                    ],
+                },
+            };
+            let mut chunk_frames = frames.as_deref_mut().map(|f| {
+                let [fx, fy, fz] = &mut f.s;
+                ExitFramesSoa {
+                    s: [
+                        &mut fx[start..end],
+                        &mut fy[start..end],
+                        &mut fz[start..end],
+                    ],
+                }
+            });
+            let pairs = crate::interaction::batch::PairsSoa {
+                to_source: sub(&to_source, start..end),
+                exit: sub(&exits, start..end),
+                inverse_width: &inv_w[..m],
+            };
+            kernel.evaluate_pairs(
+                self.material,
+                k,
+                &self.surface,
+                pairs,
+                &mut chunk,
+                chunk_frames.as_mut(),
+            )?;
+            // The coherent lobe over its mass, as `eval_stokes`.
+            for (i, w) in inv_w[..m].iter().enumerate() {
+                let s = unit_direction(&at(&to_source, start + i), "direction to the source")?;
+                let prepared = kernel.prepare_unpolarized_isotropic(k, *w);
+                let facing = self.surface.facing(&s);
+                let mass = self.specular_mass(&prepared, &s, &facing, false, [true, false])[0];
+                if mass != T::one() {
+                    let inv = mass.recip();
+                    for c in chunk.specular.s.iter_mut().take(stokes_len) {
+                        c[i] *= inv;
+                    }
+                }
+            }
+            start = end;
         }
         Ok(())
     }

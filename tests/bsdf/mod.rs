@@ -7,6 +7,7 @@ mod f32;
 mod furnace;
 mod horizon;
 mod material;
+mod pairs;
 mod path;
 mod reciprocity;
 mod rough;

@@ -1,6 +1,6 @@
 //! Mirrors `src/interaction/`: the tests of `interaction`.
 
-mod batch;
+pub(crate) mod batch;
 mod energy;
 mod exitant;
 mod f32;

@@ -43,6 +43,7 @@ mod prep;
 mod spectral;
 mod stages;
 
+pub(crate) use outputs::check_lengths;
 pub use outputs::{ExitFramesSoa, LobesSoa};
 pub use pairs::PairsSoa;
 pub(crate) use prep::PlaneWavePrep;

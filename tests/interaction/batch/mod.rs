@@ -1,6 +1,6 @@
 //! Mirrors `src/interaction/batch/`: the tests of `interaction::batch`.
 
 mod lobes;
-mod pairs;
+pub(crate) mod pairs;
 mod plane_wave;
 mod series;

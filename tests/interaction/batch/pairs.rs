@@ -37,27 +37,27 @@ use proptest::prelude::*;
 
 /// One call's scene, in f64.
 #[derive(Debug, Clone)]
-struct Scene {
-    frame: Frame<f64>,
-    wavelength: f64,
+pub(crate) struct Scene {
+    pub(crate) frame: Frame<f64>,
+    pub(crate) wavelength: f64,
     /// The coherence widths' range (µm).
-    widths: (f64, f64),
-    eta: Complex<f64>,
-    sigma: f64,
+    pub(crate) widths: (f64, f64),
+    pub(crate) eta: Complex<f64>,
+    pub(crate) sigma: f64,
     /// The correlation covariance (µm²).
-    correlation: Matrix2<f64>,
-    level: usize,
-    pairs: usize,
-    seed: u64,
+    pub(crate) correlation: Matrix2<f64>,
+    pub(crate) level: usize,
+    pub(crate) pairs: usize,
+    pub(crate) seed: u64,
 }
 
 /// Uniform in `[lo, hi)`.
-fn uniform_in(rng: &mut Lcg, lo: f64, hi: f64) -> f64 {
+pub(crate) fn uniform_in(rng: &mut Lcg, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.uniform()
 }
 
 /// A direction `theta` from the normal of `f` at azimuth `phi` (degrees).
-fn local(f: &Frame<f64>, theta: f64, phi: f64) -> Vector3<f64> {
+pub(crate) fn local(f: &Frame<f64>, theta: f64, phi: f64) -> Vector3<f64> {
     let (t, p) = (theta.to_radians(), phi.to_radians());
     f.x() * (t.sin() * p.cos()) + f.y() * (t.sin() * p.sin()) + f.k() * t.cos()
 }
@@ -214,7 +214,7 @@ fn run<T: Real>(sc: &Scene) -> Result<(), TestCaseError> {
 }
 
 prop_compose! {
-    fn scene_strategy(extreme: bool)(
+    pub(crate) fn scene_strategy(extreme: bool)(
         frame in common::frame(),
         wavelength in if extreme { common::log_uniform(0.01, 100.0) } else { common::log_uniform(0.3, 1.0) },
         wide in any::<bool>(),
