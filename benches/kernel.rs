@@ -1009,8 +1009,8 @@ fn interface_for<T: Real>(c: &mut Criterion, prec: &str) {
 }
 
 /// The batch of pairs (issue 39, the wavefront case): `Kernel::<Full, Partial>::evaluate_pairs`
-/// on 1024 pairs, every one its own direction to the light and exit (half the exits within
-/// 0.3 rad of the mirror direction, half anywhere above) with the surface coherence of
+/// on 1024 pairs, every one its own direction to the light and exit (`Lcg::light_and_exit`:
+/// half the exits near the mirror direction, half anywhere above) with the surface coherence of
 /// sunlight (37.6 µm), on rough gold at 0.55 µm (the wavefront example's material), against
 /// the same pairs one at a time through the renderer layer (`Bsdf::prepare_surface` then
 /// `Bsdf::eval_stokes`, which also computes the coherent lobe's mass) and through the kernel
@@ -1034,17 +1034,8 @@ fn pairs_for<T: Real>(c: &mut Criterion, prec: &str) {
     let mut cols: Vec<Vec<T>> = vec![Vec::new(); 7];
     let mut packets = Vec::with_capacity(M);
     for i in 0..M {
-        let ti = rng.uniform().sqrt().asin().min(1.5);
-        let pi = std::f64::consts::TAU * rng.uniform();
-        let (to, po) = if i % 2 == 0 {
-            let to = (ti + (rng.uniform() - 0.5) * 0.6).abs().min(1.5);
-            (to, pi + std::f64::consts::PI + (rng.uniform() - 0.5) * 0.6)
-        } else {
-            let to = rng.uniform().acos().min(1.5);
-            (to, std::f64::consts::TAU * rng.uniform())
-        };
-        let s = Vector3::new(ti.sin() * pi.cos(), ti.sin() * pi.sin(), ti.cos()).map(T::lit);
-        let r = Vector3::new(to.sin() * po.cos(), to.sin() * po.sin(), to.cos()).map(T::lit);
+        let (s, r) = rng.light_and_exit(i);
+        let (s, r) = (Vector3::from(s).map(T::lit), Vector3::from(r).map(T::lit));
         for (col, v) in cols.iter_mut().zip([s.x, s.y, s.z, r.x, r.y, r.z]) {
             col.push(v);
         }

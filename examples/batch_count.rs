@@ -97,8 +97,8 @@ fn run<T: Real>(reps: usize) -> f64 {
 /// surface coherence of sunlight, 37.6 µm) on rough gold at 0.55 µm (the wavefront example's
 /// material), Full · Partial: `Kernel::evaluate_pairs` (`scalar = false`) or, pair by pair,
 /// what the renderer layer does for one such light (`Bsdf::prepare_surface`, then
-/// `Bsdf::eval_stokes`); half the exits within 0.3 rad of the mirror direction, half anywhere
-/// above. The sum of the last pass's scattered `S0`.
+/// `Bsdf::eval_stokes`); the pairs of `Lcg::light_and_exit`. The sum of the last pass's
+/// scattered `S0`.
 fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
     use gmueller::bsdf::{Bsdf, SurfaceCoherence};
     use gmueller::interaction::RoughConductor;
@@ -114,33 +114,12 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
     let mut rng = Lcg(0x9a1e);
     let mut cols = vec![Vec::new(); 7];
     for i in 0..M {
-        let ti = rng.uniform().sqrt().asin().min(1.5);
-        let pi = std::f64::consts::TAU * rng.uniform();
-        let (to, po) = if i % 2 == 0 {
-            let to = (ti + (rng.uniform() - 0.5) * 0.6).abs().min(1.5);
-            (to, pi + std::f64::consts::PI + (rng.uniform() - 0.5) * 0.6)
-        } else {
-            (
-                rng.uniform().acos().min(1.5),
-                std::f64::consts::TAU * rng.uniform(),
-            )
-        };
-        let v = [
-            ti.sin() * pi.cos(),
-            ti.sin() * pi.sin(),
-            ti.cos(),
-            to.sin() * po.cos(),
-            to.sin() * po.sin(),
-            to.cos(),
-        ];
-        for (c, x) in cols.iter_mut().zip(v) {
+        let (s, r) = rng.light_and_exit(i);
+        for (c, x) in cols.iter_mut().zip(s.into_iter().chain(r)) {
             c.push(T::lit(x));
         }
-        cols[6].push(
-            bsdf.surface_width(&Vector3::new(v[0], v[1], v[2]).map(T::lit), &sun)
-                .unwrap()
-                .recip(),
-        );
+        let s = Vector3::from(s).map(T::lit);
+        cols[6].push(bsdf.surface_width(&s, &sun).unwrap().recip());
     }
     let k = T::two_pi() / lambda;
     let mut buf = vec![vec![T::zero(); M]; 8];

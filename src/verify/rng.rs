@@ -64,3 +64,25 @@ impl Lcg {
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+impl Lcg {
+    /// A renderer's vertex about the normal `+z`: a direction to the light, cosine-weighted
+    /// (the next-event estimation of a diffuse environment), and an exit — for even `i` within
+    /// ±0.3 rad of the light's mirror direction in polar angle and azimuth (where the lobes
+    /// are), for odd `i` uniform in solid angle over the hemisphere; polar angles at most
+    /// 1.5 rad. Unit vectors `(to_light, exit)` in the frame's coordinates.
+    pub fn light_and_exit(&mut self, i: usize) -> ([f64; 3], [f64; 3]) {
+        use std::f64::consts::{PI, TAU};
+        let ti = self.uniform().sqrt().asin().min(1.5);
+        let pi = TAU * self.uniform();
+        let (to, po) = if i.is_multiple_of(2) {
+            let to = (ti + (self.uniform() - 0.5) * 0.6).abs().min(1.5);
+            (to, pi + PI + (self.uniform() - 0.5) * 0.6)
+        } else {
+            let to = self.uniform().acos().min(1.5);
+            (to, TAU * self.uniform())
+        };
+        let polar = |t: f64, p: f64| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()];
+        (polar(ti, pi), polar(to, po))
+    }
+}

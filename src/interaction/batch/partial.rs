@@ -485,30 +485,48 @@ fn lobe_loop<S: Simd, F: Real>(
                 store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
             }
             if F::vany(s, l.redo) {
-                let mut flags = [F::zero(); MAX_LANES];
-                let redo = F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
-                F::store_partial(s, &mut flags[..lanes], redo);
-                for (j, flag) in flags[..count].iter().enumerate() {
-                    if *flag != F::zero() {
-                        let i = start + j;
-                        let (sp, sc, so) = scalar(w, i)?;
-                        for k in 0..stokes_len {
-                            out.specular.s[k][i] = sp[k];
-                            out.scattered.s[k][i] = sc[k];
-                        }
-                        if w == 0
-                            && let Some(f) = frames.as_deref_mut()
-                        {
-                            for (col, v) in f.s.iter_mut().zip(so) {
-                                col[i] = v;
-                            }
-                        }
-                    }
+                for j in redo_lanes::<S, F>(s, l.redo, count) {
+                    let i = start + j;
+                    let f = if w == 0 { frames.as_deref_mut() } else { None };
+                    write_scalar(i, scalar(w, i)?, (out, f), stokes_len);
                 }
             }
         }
     }
     Ok(())
+}
+
+/// The lanes of the mask `redo` among the first `count`.
+#[inline(always)]
+pub(super) fn redo_lanes<S: Simd, F: Real>(
+    s: S,
+    redo: F::M<S>,
+    count: usize,
+) -> impl Iterator<Item = usize> {
+    let mut flags = [F::zero(); MAX_LANES];
+    let ones = F::vselect(s, redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
+    F::store_partial(s, &mut flags[..F::width::<S>()], ones);
+    (0..count).filter(move |&j| flags[j] != F::zero())
+}
+
+/// Exit `i` as the per-direction kernel gave it (`S0` alone when `stokes_len` is 1), with its
+/// exit s vector where `frames` is given.
+#[inline]
+pub(super) fn write_scalar<F: Real>(
+    i: usize,
+    (sp, sc, so): ScalarExit<F>,
+    (out, frames): (&mut LobesSoa<'_, F>, Option<&mut ExitFramesSoa<'_, F>>),
+    stokes_len: usize,
+) {
+    for k in 0..stokes_len {
+        out.specular.s[k][i] = sp[k];
+        out.scattered.s[k][i] = sc[k];
+    }
+    if let Some(f) = frames {
+        for (col, v) in f.s.iter_mut().zip(so) {
+            col[i] = v;
+        }
+    }
 }
 
 /// The lane constants of one wavelength: `Some` when the kernel and the material are those of

@@ -25,7 +25,10 @@ use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
-use super::partial::{ScalarExit, exit_lanes, lane_prep_at, load, lobe_lanes, row_maker, store};
+use super::partial::{
+    ScalarExit, exit_lanes, lane_prep_at, load, lobe_lanes, redo_lanes, row_maker, store,
+    write_scalar,
+};
 use super::per_lane::{Gathered, MAX_LANES};
 use super::prep::{LANE_FIELDS, LobePrep};
 use super::stages::validity::clearly_valid_about;
@@ -273,20 +276,6 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
         let lanes = F::width::<S>();
         let (xs, ys, zs) = (&exits.x[..n], &exits.y[..n], &exits.z[..n]);
         let stokes_len = if intensity { 1 } else { 4 };
-        let write = |i: usize,
-                     (sp, sc, so): ScalarExit<F>,
-                     out: &mut LobesSoa<'_, F>,
-                     frames: Option<&mut ExitFramesSoa<'_, F>>| {
-            for k in 0..stokes_len {
-                out.specular.s[k][i] = sp[k];
-                out.scattered.s[k][i] = sc[k];
-            }
-            if let Some(f) = frames {
-                for (col, v) in f.s.iter_mut().zip(so) {
-                    col[i] = v;
-                }
-            }
-        };
         let mut buf = [[F::zero(); MAX_LANES]; 3];
         let mut cols = [[F::zero(); MAX_LANES]; LANE_FIELDS];
         // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` pairs (overlapping
@@ -319,7 +308,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             let fresh = chunk * lanes;
             let (Some(p), true) = (head, built) else {
                 for i in fresh.max(start)..start + count {
-                    write(i, scalar(i)?, out, frames.as_deref_mut());
+                    write_scalar(i, scalar(i)?, (out, frames.as_deref_mut()), stokes_len);
                 }
                 continue;
             };
@@ -340,15 +329,11 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
                 }
             }
             if F::vany(s, l.redo) {
-                let mut flags = [F::zero(); MAX_LANES];
-                let redo = F::vselect(s, l.redo, F::vsplat(s, F::one()), F::vsplat(s, F::zero()));
-                F::store_partial(s, &mut flags[..lanes], redo);
                 // (The tail vector's lanes before `fresh` were stored again above: a lane to
                 // redo there is redone again.)
-                for (j, flag) in flags[..count].iter().enumerate() {
-                    if *flag != F::zero() {
-                        write(start + j, scalar(start + j)?, out, frames.as_deref_mut());
-                    }
+                for j in redo_lanes::<S, F>(s, l.redo, count) {
+                    let i = start + j;
+                    write_scalar(i, scalar(i)?, (out, frames.as_deref_mut()), stokes_len);
                 }
             }
         }
