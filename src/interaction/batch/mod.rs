@@ -18,6 +18,12 @@
 //! Gaussian-mixture (≤ 8 components) PSD, on a [`super::RoughConductor`] (reflection) or a
 //! [`super::RoughDielectric`] (reflection and transmission, lit from either side), they run the
 //! same stages in lanes (`partial.rs`), elsewhere the per-direction kernel per exit.
+//!
+//! [`Kernel::evaluate_pairs`] is the form a wavefront renderer's lanes need: every lane its own
+//! light direction, exit and coherence width ([`PairsSoa`]; the renderer's unpolarized light of
+//! `SurfaceCoherence`), the same lobe stages with the incidence constants gathered per lane
+//! (`per_lane.rs`, `pairs/`) on rough conductors and dielectrics in reflection at first order;
+//! [`crate::bsdf::Bsdf::eval_stokes_pairs`] adds each light's coherent-lobe mass.
 
 use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
