@@ -70,7 +70,7 @@ use super::{
 };
 use crate::error::Error;
 use crate::frame::Frame;
-use crate::interaction::batch::StokesSoa;
+use crate::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
 use crate::interaction::coherence::{CoherenceLevel, CoherenceWeights};
 use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
 use crate::interaction::roughness::{FirstOrder, Geometric, RoughnessWeights};
@@ -524,6 +524,52 @@ impl<T: Real> Material<T> {
             .sample_exit_batch(&self.side(at, &from), light, u, samples, weights)
     }
 
+    /// [`Material::eval_incident`] for a batch of pairs, as Stokes vectors of unpolarized light
+    /// of unit irradiance: element `i` is the light arriving from `to_source[i]` with the
+    /// surface coherence `coherence`, leaving along `exits[i]` — both lobes into `out` (each
+    /// exit's s/p frame; `S0` only at the intensity levels), the exit s vectors into `frames`
+    /// when given ([`super::Bsdf::eval_stokes_pairs`]: the pairs in SIMD lanes on opaque
+    /// surfaces where the kernel has them). What a wavefront renderer's next-event estimation
+    /// of an unpolarized light needs, every lane its own light direction and exit; a renderer
+    /// whose lanes have their own shading frames passes the directions in local coordinates
+    /// with one frame. A two-sided material takes the pairs whose exit is below the frame on
+    /// its flipped side, as `eval_incident` does. Allocates nothing.
+    ///
+    /// # Errors
+    /// As [`super::Bsdf::eval_stokes_pairs`]; a two-sided material with exits on both sides
+    /// may have written some pairs before the error.
+    pub fn eval_incident_pairs(
+        &self,
+        at: &ShadingPoint<T>,
+        coherence: &SurfaceCoherence<T>,
+        to_source: DirectionsSoa<'_, T>,
+        exits: DirectionsSoa<'_, T>,
+        out: &mut LobesSoa<'_, T>,
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error> {
+        let n = to_source.len();
+        let below = |i: usize| {
+            let r = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
+            self.side(at, &r) != *at
+        };
+        let lengths = crate::interaction::batch::check_lengths(
+            &exits,
+            core::slice::from_ref(out),
+            frames.as_deref(),
+        )
+        .is_ok()
+            && exits.x.len() >= n
+            && to_source.y.len() >= n
+            && to_source.z.len() >= n;
+        // (Short slices: the error of the one-sided path.)
+        if !(self.two_sided && self.opaque && lengths) || !(0..n).any(below) {
+            return self
+                .model
+                .eval_stokes_pairs(at, coherence, (to_source, exits), out, frames);
+        }
+        two_sided_pairs(self, at, coherence, (to_source, exits), (out, frames))
+    }
+
     /// Runs `visit` with the backward sampler of this shading point and the weight of a
     /// direction it draws ([`super::Bsdf::incident_sampler`], [`super::Bsdf::incident_weight`]
     /// of one `Bsdf`): what a wavelength bundle ([`super::Bundle`]) needs of each wavelength.
@@ -660,6 +706,14 @@ trait Shade<T: Real>: Send + Sync + Debug {
         at: &ShadingPoint<T>,
         light: &WavePacket<T>,
         visit: &mut Visit<'_, T>,
+    ) -> Result<(), Error>;
+    fn eval_stokes_pairs(
+        &self,
+        at: &ShadingPoint<T>,
+        coherence: &SurfaceCoherence<T>,
+        pairs: (DirectionsSoa<'_, T>, DirectionsSoa<'_, T>),
+        out: &mut LobesSoa<'_, T>,
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
     ) -> Result<(), Error>;
 }
 
@@ -813,6 +867,18 @@ where
             .sample_exit_batch(light, u, samples, weights)
     }
 
+    fn eval_stokes_pairs(
+        &self,
+        at: &ShadingPoint<T>,
+        coherence: &SurfaceCoherence<T>,
+        (to_source, exits): (DirectionsSoa<'_, T>, DirectionsSoa<'_, T>),
+        out: &mut LobesSoa<'_, T>,
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error> {
+        Bsdf::new(&self.surface, self.kernel.clone(), at.frame, at.wavelength)?
+            .eval_stokes_pairs(coherence, to_source, exits, out, frames)
+    }
+
     fn with_incident(
         &self,
         at: &ShadingPoint<T>,
@@ -908,4 +974,115 @@ where
             Kernel::<Full, _>::new(Incoherent).with_roughness(rough),
         ),
     }
+}
+
+/// Pairs of a two-sided material with exits on both sides ([`Material::eval_incident_pairs`]):
+/// per chunk of at most `CHUNK` pairs, the pairs of each side gathered into buffers on the
+/// stack, evaluated on that side's shading point, and scattered back.
+fn two_sided_pairs<T: Real>(
+    m: &Material<T>,
+    at: &ShadingPoint<T>,
+    coherence: &SurfaceCoherence<T>,
+    (to_source, exits): (DirectionsSoa<'_, T>, DirectionsSoa<'_, T>),
+    (out, mut frames): (&mut LobesSoa<'_, T>, Option<&mut ExitFramesSoa<'_, T>>),
+) -> Result<(), Error> {
+    const CHUNK: usize = 64;
+    let n = to_source.len();
+    // The intensity levels write S0 alone.
+    let stokes_len = if m.level().polarization == PolarizationLevel::Intensity {
+        1
+    } else {
+        4
+    };
+    let flipped = at.flipped();
+    for start in (0..n).step_by(CHUNK) {
+        let end = (start + CHUNK).min(n);
+        for down in [false, true] {
+            let mut idx = [0usize; CHUNK];
+            let mut count = 0;
+            for i in start..end {
+                let r = Vector3::new(exits.x[i], exits.y[i], exits.z[i]);
+                if (r.dot(&at.frame.k()) < T::zero()) == down {
+                    idx[count] = i;
+                    count += 1;
+                }
+            }
+            if count == 0 {
+                continue;
+            }
+            let mut dirs = [[T::zero(); CHUNK]; 6];
+            for (j, &i) in idx[..count].iter().enumerate() {
+                let v = [
+                    to_source.x[i],
+                    to_source.y[i],
+                    to_source.z[i],
+                    exits.x[i],
+                    exits.y[i],
+                    exits.z[i],
+                ];
+                for (d, x) in dirs.iter_mut().zip(v) {
+                    d[j] = x;
+                }
+            }
+            let mut lobes = [[T::zero(); CHUNK]; 11];
+            {
+                let [s0, s1, s2, r0, r1, r2] = &dirs;
+                let [a0, a1, a2, a3, b0, b1, b2, b3, f0, f1, f2] = &mut lobes;
+                let mut o = LobesSoa {
+                    specular: StokesSoa {
+                        s: [
+                            &mut a0[..count],
+                            &mut a1[..count],
+                            &mut a2[..count],
+                            &mut a3[..count],
+                        ],
+                    },
+                    scattered: StokesSoa {
+                        s: [
+                            &mut b0[..count],
+                            &mut b1[..count],
+                            &mut b2[..count],
+                            &mut b3[..count],
+                        ],
+                    },
+                };
+                let mut f = ExitFramesSoa {
+                    s: [&mut f0[..count], &mut f1[..count], &mut f2[..count]],
+                };
+                let side = if down { &flipped } else { at };
+                let pairs = (
+                    DirectionsSoa {
+                        x: &s0[..count],
+                        y: &s1[..count],
+                        z: &s2[..count],
+                    },
+                    DirectionsSoa {
+                        x: &r0[..count],
+                        y: &r1[..count],
+                        z: &r2[..count],
+                    },
+                );
+                let want_frames = frames.is_some();
+                m.model.eval_stokes_pairs(
+                    side,
+                    coherence,
+                    pairs,
+                    &mut o,
+                    want_frames.then_some(&mut f),
+                )?;
+            }
+            for (j, &i) in idx[..count].iter().enumerate() {
+                for c in 0..stokes_len {
+                    out.specular.s[c][i] = lobes[c][j];
+                    out.scattered.s[c][i] = lobes[4 + c][j];
+                }
+                if let Some(f) = frames.as_deref_mut() {
+                    for c in 0..3 {
+                        f.s[c][i] = lobes[8 + c][j];
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
 }

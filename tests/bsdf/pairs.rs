@@ -185,3 +185,100 @@ proptest! {
         run::<f32>(&sc, dielectric)?;
     }
 }
+
+/// `Material::eval_incident_pairs` against `Material::eval_incident` one pair at a time (its
+/// Mueller matrices applied to unpolarized light of unit irradiance), on gold one-sided and
+/// two-sided (exits on both sides of the frame, the lower ones on the flipped side), at the
+/// Full and Intensity levels, f64: within the lane bound plus `8 ε L` (the Mueller form's
+/// products against the Stokes form's) and `MIN_POSITIVE`.
+#[test]
+fn material_pairs_match_eval_incident_one_sided_and_two_sided() {
+    use gmueller::bsdf::{Material, ShadingPoint};
+    use gmueller::interaction::Level;
+    let psd = GaussianPsd::<f64, 2>::isotropic(0.03, 0.8).unwrap();
+    let gold = RoughConductor::new(psd, Complex::new(0.47, 2.4)).unwrap();
+    let frame = Frame::from_direction_and_x(
+        Vector3::new(0.2, -0.1, 1.0).normalize(),
+        Vector3::new(1.0, 0.3, 0.0),
+    )
+    .unwrap();
+    let at = ShadingPoint::new(frame, 0.6).unwrap();
+    let sky = SurfaceCoherence::new(15.0).unwrap();
+    let mut rng = Lcg(0x7a1e);
+    let n = 150;
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6];
+    for i in 0..n {
+        let (s, r) = rng.light_and_exit(i);
+        // Light and exit about the frame's normal, on the upper side or both below.
+        let down = if i % 3 == 2 { -1.0 } else { 1.0 };
+        let world = |v: [f64; 3]| (frame.x() * v[0] + frame.y() * v[1] + frame.k() * v[2]) * down;
+        let (s, r) = (world(s), world(r));
+        for (c, v) in cols.iter_mut().zip([s.x, s.y, s.z, r.x, r.y, r.z]) {
+            c.push(v);
+        }
+    }
+    let eps = f64::EPSILON;
+    for (two_sided, level) in [(false, 7), (true, 7), (true, 1)] {
+        let m = Material::new(gold.clone(), Level::ALL[level]).two_sided(two_sided);
+        let mut buf = vec![vec![-7.0; n]; 11];
+        let [a, b, c, d, e, f, g, h, fx, fy, fz] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, c, d] },
+            scattered: StokesSoa { s: [e, f, g, h] },
+        };
+        let mut frames = gmueller::interaction::batch::ExitFramesSoa { s: [fx, fy, fz] };
+        let to_source = DirectionsSoa {
+            x: &cols[0],
+            y: &cols[1],
+            z: &cols[2],
+        };
+        let exits = DirectionsSoa {
+            x: &cols[3],
+            y: &cols[4],
+            z: &cols[5],
+        };
+        let done = m.eval_incident_pairs(&at, &sky, to_source, exits, &mut out, Some(&mut frames));
+        if !two_sided {
+            // The lower pairs are below a one-sided conductor: an error, as eval_incident's.
+            assert!(done.is_err());
+            continue;
+        }
+        done.unwrap();
+        let len = if level == 1 { 1 } else { 4 };
+        for i in 0..n {
+            let s = Vector3::new(cols[0][i], cols[1][i], cols[2][i]);
+            let r = Vector3::new(cols[3][i], cols[4][i], cols[5][i]);
+            let v = m.eval_incident(&at, r, &sky, s).unwrap();
+            let unpolarized = nalgebra::Vector4::new(1.0, 0.0, 0.0, 0.0);
+            let lobes = [
+                (v.response.specular.matrix() * unpolarized, &out.specular),
+                (v.response.scattered.matrix() * unpolarized, &out.scattered),
+            ];
+            for (want, got) in lobes {
+                let l = want[0].abs();
+                let bound = 4.0
+                    * eps
+                    * (4.0 + l.max(f64::MIN_POSITIVE).ln().abs())
+                    * (1.0 + 3f64.sqrt())
+                    * l
+                    + 8.0 * eps * l
+                    + f64::MIN_POSITIVE;
+                for c in 0..len {
+                    assert!(
+                        (got.s[c][i] - want[c]).abs() <= bound,
+                        "level {level}, pair {i}, S{c}: {:e} vs {:e}",
+                        got.s[c][i],
+                        want[c]
+                    );
+                }
+            }
+            let so = Vector3::new(frames.s[0][i], frames.s[1][i], frames.s[2][i]);
+            assert!(
+                (so - v.geometry.exit_sp().x()).norm() <= 8.0 * eps,
+                "pair {i} frame"
+            );
+        }
+    }
+}
