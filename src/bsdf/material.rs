@@ -562,7 +562,7 @@ impl<T: Real> Material<T> {
             && to_source.y.len() >= n
             && to_source.z.len() >= n;
         // (Short slices: the error of the one-sided path.)
-        if !(self.two_sided && self.opaque && lengths) || !(0..n).any(below) {
+        if !(self.two_sided && self.opaque && lengths && (0..n).any(below)) {
             return self
                 .model
                 .eval_stokes_pairs(at, coherence, (to_source, exits), out, frames);

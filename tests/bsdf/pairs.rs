@@ -247,6 +247,10 @@ fn material_pairs_match_eval_incident_one_sided_and_two_sided() {
         }
         done.unwrap();
         let len = if level == 1 { 1 } else { 4 };
+        #[expect(
+            clippy::needless_range_loop,
+            reason = "pair i in six input columns and eleven output columns"
+        )]
         for i in 0..n {
             let s = Vector3::new(cols[0][i], cols[1][i], cols[2][i]);
             let r = Vector3::new(cols[3][i], cols[4][i], cols[5][i]);
