@@ -33,6 +33,7 @@ use super::{Bsdf, BsdfKernel, LobeSampler};
 use crate::error::Error;
 use crate::interaction::Side;
 use crate::interaction::batch::check_lengths;
+use crate::interaction::batch::clearly_valid_about;
 use crate::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
 use crate::interaction::polarization::{PolarizationLevel, PolarizationModel, Throughput};
 use crate::interaction::roughness::{RoughnessLevel, RoughnessModel};
@@ -345,13 +346,24 @@ where
             }
             return Ok(());
         }
+        // Every pair validated before anything is written: the directions (as
+        // `prepare_surface`) and the geometry (as `eval_stokes`), the latter exactly only where
+        // the fast test does not clear both directions.
+        let normal = self.surface.k();
+        for i in 0..n {
+            let (s, r) = (at(&to_source, i), at(&exits, i));
+            self.wavenumber(&unit_direction(&s, "direction to the source")?.into_inner())?;
+            let clear = |v: Vector3<T>| clearly_valid_about(&normal, false, v.into());
+            if !(clear(s) && clear(r)) {
+                self.geometry(s, r)?;
+            }
+        }
         let kernel = self.kernel.kernel();
         let mut start = 0;
         while start < n {
             let m = CHUNK.min(n - start);
             let end = start + m;
-            // Each pair's wavenumber and coherence width, as `prepare_surface` has them (every
-            // pair validated before anything is written).
+            // Each pair's wavenumber and coherence width, as `prepare_surface` has them.
             let mut inv_w = [T::zero(); CHUNK];
             let mut k = T::zero();
             for (i, w) in inv_w[..m].iter_mut().enumerate() {

@@ -286,3 +286,48 @@ fn material_pairs_match_eval_incident_one_sided_and_two_sided() {
         }
     }
 }
+
+/// A pair the geometry rejects beyond the first chunk of 128: an error, and nothing written.
+#[test]
+fn a_bad_pair_anywhere_writes_nothing() {
+    let psd = GaussianPsd::<f64, 2>::isotropic(0.03, 0.8).unwrap();
+    let gold = RoughConductor::new(psd, Complex::new(0.47, 2.4)).unwrap();
+    let frame = Frame::from_normal(Vector3::z()).unwrap();
+    let bsdf = Bsdf::new(&gold, Kernel::<Full, Partial>::default(), frame, 0.6).unwrap();
+    let sky = SurfaceCoherence::new(15.0).unwrap();
+    let n = 300;
+    let mut rng = Lcg(0xbad);
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6];
+    for i in 0..n {
+        let (s, mut r) = rng.light_and_exit(i);
+        if i == 250 {
+            r[2] = -r[2];
+        }
+        for (c, v) in cols.iter_mut().zip(s.into_iter().chain(r)) {
+            c.push(v);
+        }
+    }
+    let mut buf = vec![vec![-7.0; n]; 8];
+    let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
+        unreachable!()
+    };
+    let mut out = LobesSoa {
+        specular: StokesSoa { s: [a, b, c, d] },
+        scattered: StokesSoa { s: [e, f, g, h] },
+    };
+    let to_source = DirectionsSoa {
+        x: &cols[0],
+        y: &cols[1],
+        z: &cols[2],
+    };
+    let exits = DirectionsSoa {
+        x: &cols[3],
+        y: &cols[4],
+        z: &cols[5],
+    };
+    assert!(
+        bsdf.eval_stokes_pairs(&sky, to_source, exits, &mut out, None)
+            .is_err()
+    );
+    assert!(buf.iter().flatten().all(|v| *v == -7.0));
+}

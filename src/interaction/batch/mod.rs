@@ -54,6 +54,7 @@ pub use outputs::{ExitFramesSoa, LobesSoa};
 pub use pairs::PairsSoa;
 pub(crate) use prep::PlaneWavePrep;
 pub use spectral::{MAX_WAVELENGTHS, Wavelength};
+pub(crate) use stages::validity::clearly_valid_about;
 use stages::validity::{clearly_valid, clearly_valid_lanes};
 
 /// A batch of directions as three slices of equal length (world coordinates; need not be unit).
