@@ -768,7 +768,15 @@ where
         Some(eta) => Geometry::for_packet_at_interface(packet, surface, eta, exit)?,
         None => Geometry::for_packet(packet, surface, exit)?,
     };
-    let r = kernel.evaluate_prepared(material, prepared, &g);
+    Ok(as_written(
+        &kernel.evaluate_prepared(material, prepared, &g),
+        &g,
+    ))
+}
+
+/// The per-direction kernel's output `r` at geometry `g` as the lanes write it: both lobes'
+/// Stokes vectors (`S0` alone at the intensity levels, the rest 0) and the exit s vector.
+pub(crate) fn as_written<T: Real, O: KernelOutput<T>>(r: &O, g: &Geometry<T>) -> ScalarExit<T> {
     let z = T::zero();
     let (sp, sc) = match r.stokes() {
         Some((sp, sc)) => (sp.0.into(), sc.0.into()),
@@ -777,7 +785,7 @@ where
             [r.scattered_intensity(), z, z, z],
         ),
     };
-    Ok((sp, sc, g.exit_sp().x().into()))
+    (sp, sc, g.exit_sp().x().into())
 }
 
 /// The lane path of [`Kernel::evaluate_batch`] (see [`lane_prep`]); `None` when it does not

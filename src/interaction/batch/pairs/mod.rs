@@ -26,8 +26,8 @@ use pulp::{Simd, WithSimd};
 use super::DirectionsSoa;
 use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
 use super::partial::{
-    ScalarExit, exit_lanes, lane_prep_at, load, lobe_lanes, redo_lanes, row_maker, store,
-    write_scalar,
+    ScalarExit, as_written, exit_lanes, lane_prep_at, load, lobe_lanes, redo_lanes, row_maker,
+    store, write_scalar,
 };
 use super::per_lane::{Gathered, MAX_LANES};
 use super::prep::{LANE_FIELDS, LobePrep};
@@ -35,7 +35,7 @@ use super::stages::validity::clearly_valid_about;
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
-use crate::interaction::polarization::{KernelOutput, PolarizationModel};
+use crate::interaction::polarization::PolarizationModel;
 use crate::interaction::roughness::{RoughnessModel, RoughnessWeights};
 use crate::interaction::{Geometry, Kernel, Surface};
 use crate::real::Real;
@@ -206,25 +206,16 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             let s = at(&to_source, i);
             LobePrep::lane_row_of(&prepared(i), m.psd, m.indices, s, surface, m.incoherent)
         };
-        let scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
+        let mut scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
+            #[cfg(test)]
+            tests::PER_DIRECTION.with(|c| c.set(c.get() + 1));
             let g = Geometry::new(k, surface, at(&to_source, i), at(&exit, i))?;
-            let r = self.evaluate_prepared(material, &prepared(i), &g);
-            let z = T::zero();
-            let (sp, sc) = match r.stokes() {
-                Some((sp, sc)) => (sp.0.into(), sc.0.into()),
-                None => (
-                    [r.specular_intensity(), z, z, z],
-                    [r.scattered_intensity(), z, z, z],
-                ),
-            };
-            Ok((sp, sc, g.exit_sp().x().into()))
+            Ok(as_written(
+                &self.evaluate_prepared(material, &prepared(i), &g),
+                &g,
+            ))
         };
-        let mut calls = 0;
-        let mut counted = |i: usize| {
-            calls += 1;
-            scalar(i)
-        };
-        let done = crate::simd::dispatch(PairLobes {
+        crate::simd::dispatch(PairLobes {
             exits: exit,
             n,
             intensity: Pol::LEVEL == crate::interaction::polarization::PolarizationLevel::Intensity,
@@ -232,12 +223,8 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             frames,
             head: head.as_ref(),
             row: &mut row,
-            scalar: &mut counted,
-        });
-        #[cfg(test)]
-        tests::PER_DIRECTION.with(|c| c.set(c.get() + calls));
-        let _ = calls;
-        done
+            scalar: &mut scalar,
+        })
     }
 }
 
