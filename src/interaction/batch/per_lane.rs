@@ -109,16 +109,16 @@ impl<S: Simd, F: Real> LaneConsts<S, F> for LobePrep<F> {
 /// The per-lane constants of one vector of lanes, lane `j` from `preps[j]` (a shorter slice
 /// repeats its first element on the remaining lanes).
 pub(crate) struct Gathered<S: Simd, F: Real> {
-    to_source: [F::V<S>; 3],
-    u_az: [F::V<S>; 3],
-    v_az: [F::V<S>; 3],
-    cos_i: F::V<S>,
-    terms: IncidentTerms<F::V<S>>,
-    spec: LogGaussianLanes<F::V<S>>,
-    scat: LogGaussianLanes<F::V<S>>,
-    ln_scat: F::V<S>,
-    specular: SpecularLanes<F::V<S>>,
-    flip_tol: F,
+    pub(super) to_source: [F::V<S>; 3],
+    pub(super) u_az: [F::V<S>; 3],
+    pub(super) v_az: [F::V<S>; 3],
+    pub(super) cos_i: F::V<S>,
+    pub(super) terms: IncidentTerms<F::V<S>>,
+    pub(super) spec: LogGaussianLanes<F::V<S>>,
+    pub(super) scat: LogGaussianLanes<F::V<S>>,
+    pub(super) ln_scat: F::V<S>,
+    pub(super) specular: SpecularLanes<F::V<S>>,
+    pub(super) flip_tol: F,
 }
 
 /// At most this many lanes in a vector (`f32` under AVX-512).
@@ -171,6 +171,46 @@ impl<S: Simd, F: Real> Gathered<S, F> {
             },
             flip_tol: head.flip_tol,
         }
+    }
+}
+
+impl<S: Simd, F: Real> Gathered<S, F> {
+    /// Lane `j`'s constants in `prep::lane_row`'s order, for every lane of the vector (the
+    /// inverse of [`Gathered::new`]).
+    #[cfg(test)]
+    pub(crate) fn rows(&self, s: S) -> Vec<[F; LANE_FIELDS]> {
+        let t = &self.terms;
+        let (sp, sc, m, a) = (
+            &self.spec,
+            &self.scat,
+            &self.specular.fresnel,
+            &self.specular.axes,
+        );
+        let mut v = vec![];
+        v.extend(self.to_source);
+        v.extend(self.u_az);
+        v.extend(self.v_az);
+        v.extend([
+            self.cos_i, t.si2, t.qi.re, t.qi.im, t.d1s.re, t.d1s.im, t.d3s.re,
+        ]);
+        v.extend([t.d3s.im, t.neg_em1s_qis.re, t.neg_em1s_qis.im]);
+        v.extend([
+            sp.c, sp.l00, sp.l10, sp.inv_l11, sc.c, sc.l00, sc.l10, sc.inv_l11,
+        ]);
+        v.push(self.ln_scat);
+        v.extend(m.iter().flatten().copied());
+        v.extend(a.iter().flatten().copied());
+        assert_eq!(v.len(), LANE_FIELDS);
+        let lanes = F::width::<S>();
+        let mut rows = vec![[F::zero(); LANE_FIELDS]; lanes];
+        let mut buf = [F::zero(); MAX_LANES];
+        for (k, x) in v.into_iter().enumerate() {
+            F::store_partial(s, &mut buf[..lanes], x);
+            for (row, b) in rows.iter_mut().zip(&buf[..lanes]) {
+                row[k] = *b;
+            }
+        }
+        rows
     }
 }
 

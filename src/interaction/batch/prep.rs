@@ -266,6 +266,9 @@ impl<T: Real> LogGaussian<T> {
     }
 }
 
+/// The `½` channel's specular and scattered weight constants ([`LobePrep::channels_of`]).
+pub(crate) type HalfChannels<T> = (LogGaussian<T>, LogGaussian<T>);
+
 /// At most this many Gaussian components of a mixture PSD run in lanes (a larger mixture goes
 /// exit by exit).
 pub(crate) const MAX_COMPONENTS: usize = 8;
@@ -586,6 +589,35 @@ impl<T: Real> LobePrep<T> {
         incoherent: Option<T>,
     ) -> Option<[T; LANE_FIELDS]> {
         let inc = Incidence::from_direction(epsilon, to_source, prepared.k, surface).ok()?;
+        let (spec, scat) = Self::channels_of(prepared, psd, incoherent)?;
+        let ln_spec = prepared.two_ln_k_over_2pi + prepared.ln_s0;
+        let ln_scat = scat_exponent(ln_spec, &inc);
+        let fresnel = fresnel_mueller(&inc, fresnel_eta);
+        let finite = ln_spec.is_finite()
+            && ln_scat.is_finite()
+            && fresnel.iter().all(|v| v.is_finite())
+            && inc.plain_q
+            && prepared.ln_s0.is_finite();
+        finite.then(|| {
+            lane_row(
+                &inc,
+                (&spec, &scat),
+                ln_scat,
+                &fresnel,
+                &specular_frame(&inc),
+            )
+        })
+    }
+
+    /// The per-lane constants of [`LobePrep::lane_row_of`] that depend on the prepared packet
+    /// alone, not on the direction: the `½` channel's specular and scattered `LogGaussian`
+    /// (the scattered one at the incoherent level for the PSD's integral `incoherent`); `None`
+    /// where one is not finite.
+    pub(crate) fn channels_of<Pol, Coh>(
+        prepared: &crate::interaction::PreparedPacket<T, Pol, Coh>,
+        psd: &GaussianPsd<T, 2>,
+        incoherent: Option<T>,
+    ) -> Option<HalfChannels<T>> {
         let xi = prepared.sections[2].as_ref()?;
         let (spec, scat) = (spec_channel(xi), scat_channel(psd, xi, false)?);
         let scat = match incoherent {
@@ -596,26 +628,8 @@ impl<T: Real> LobePrep<T> {
             },
             None => scat,
         };
-        let ln_spec = prepared.two_ln_k_over_2pi + prepared.ln_s0;
-        let ln_scat = scat_exponent(ln_spec, &inc);
-        let fresnel = fresnel_mueller(&inc, fresnel_eta);
-        let finite = spec.is_finite()
-            && scat.is_finite()
-            && ln_spec.is_finite()
-            && ln_scat.is_finite()
-            && fresnel.iter().all(|v| v.is_finite())
-            && inc.plain_q
-            && prepared.ln_s0.is_finite();
         let shift_finite = incoherent.is_none_or(|i| incoherent_shift(i).is_finite());
-        (finite && shift_finite).then(|| {
-            lane_row(
-                &inc,
-                (&spec, &scat),
-                ln_scat,
-                &fresnel,
-                &specular_frame(&inc),
-            )
-        })
+        (spec.is_finite() && scat.is_finite() && shift_finite).then_some((spec, scat))
     }
 
     /// The constants at a dielectric interface of relative index `eta` (the geometry's, as

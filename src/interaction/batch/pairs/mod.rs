@@ -6,9 +6,14 @@
 //! the closed form of `PreparedPacket::unpolarized_isotropic`).
 //!
 //! # Lanes
-//! Per vector of pairs, each pair's per-packet constants (its [`super::prep::LobePrep`], from
-//! the closed-form preparation) are built one at a time and gathered into vectors
-//! ([`super::per_lane::Gathered`]); then the lobe stages of `super::partial` run on the vector,
+//! Per vector of pairs, the per-packet constants that depend on each pair's direction (its
+//! [`super::prep::LobePrep`]'s incidence, Fresnel matrix, specular frame and exponent) are
+//! built in lanes (`consts`), with the scalar operations in the scalar order, so bit for bit
+//! the scalar constants; those that depend on the width alone (the `½` channel's weights) one
+//! width at a time, reused while it repeats. Where a lane's direction is within `√ε` of the
+//! normal (or a constant would not be the scalar one), that vector's constants are built one
+//! pair at a time from the closed-form preparation and gathered
+//! ([`super::per_lane::Gathered`]). Then the lobe stages of `super::partial` run on the vector,
 //! with the same operations as the batch over exits of one packet. A lane is therefore
 //! bit for bit what [`Kernel::evaluate_batch`]'s lanes give for that pair's prepared packet
 //! and exit (the `pairs_equal_the_batch_lanes_bit_for_bit` test), and within the bound of
@@ -30,7 +35,7 @@ use super::partial::{
     store, write_scalar,
 };
 use super::per_lane::{Gathered, MAX_LANES};
-use super::prep::{LANE_FIELDS, LobePrep};
+use super::prep::{HalfChannels, LANE_FIELDS, LobePrep};
 use super::stages::validity::clearly_valid_about;
 use crate::error::Error;
 use crate::frame::Frame;
@@ -39,6 +44,8 @@ use crate::interaction::polarization::PolarizationModel;
 use crate::interaction::roughness::{RoughnessModel, RoughnessWeights};
 use crate::interaction::{Geometry, Kernel, Surface};
 use crate::real::Real;
+
+mod consts;
 
 /// A batch of pairs for [`Kernel::evaluate_pairs`], three views of equal length: element `i`
 /// is unpolarized light of unit `S0` arriving from `to_source[i]` (any length) with the
@@ -206,6 +213,24 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             let s = at(&to_source, i);
             LobePrep::lane_row_of(&prepared(i), m.psd, m.indices, s, surface, m.incoherent)
         };
+        // The `½` channel's constants depend on the width alone: kept while it repeats.
+        let mut last: Option<(T, Option<HalfChannels<T>>)> = None;
+        let mut channels = |i: usize| {
+            let w = inverse_width[i];
+            match last {
+                Some((lw, c)) if lw == w => c,
+                _ => {
+                    let m = maker.as_ref()?;
+                    let c = LobePrep::channels_of(&prepared(i), m.psd, m.incoherent);
+                    last = Some((w, c));
+                    c
+                }
+            }
+        };
+        let shared = head
+            .as_ref()
+            .zip(maker.as_ref())
+            .map(|(h, m)| consts::Shared::new(h, m.indices.0));
         let mut scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
             #[cfg(test)]
             tests::PER_DIRECTION.with(|c| c.set(c.get() + 1));
@@ -216,12 +241,15 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             ))
         };
         crate::simd::dispatch(PairLobes {
+            to_source,
             exits: exit,
             n,
             intensity: Pol::LEVEL == crate::interaction::polarization::PolarizationLevel::Intensity,
             out,
             frames,
             head: head.as_ref(),
+            shared: shared.as_ref(),
+            channels: &mut channels,
             row: &mut row,
             scalar: &mut scalar,
         })
@@ -231,6 +259,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
 /// The SIMD loop of [`Kernel::evaluate_pairs`] over vectors of (validated) pairs, one type
 /// per float type (the material and kernel behind the two callbacks, as `PartialLobes`).
 struct PairLobes<'r, 'e, 'o, 'f, F: Real> {
+    to_source: DirectionsSoa<'e, F>,
     exits: DirectionsSoa<'e, F>,
     n: usize,
     intensity: bool,
@@ -238,6 +267,10 @@ struct PairLobes<'r, 'e, 'o, 'f, F: Real> {
     frames: Option<&'r mut ExitFramesSoa<'f, F>>,
     /// The constants the pairs share (`None`: no pair in lanes).
     head: Option<&'r LobePrep<F>>,
+    /// The constants the lanes of `consts` share (`None`: no pair in lanes).
+    shared: Option<&'r consts::Shared<'r, F>>,
+    /// Pair `i`'s `½` channel constants (specular, scattered), `None` where they are not finite.
+    channels: &'r mut dyn FnMut(usize) -> Option<HalfChannels<F>>,
     /// Pair `i`'s own constants, `None` where the lanes do not reproduce its kernel.
     row: &'r mut dyn FnMut(usize) -> Option<[F; LANE_FIELDS]>,
     /// Pair `i` by the per-direction kernel.
@@ -251,20 +284,25 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
     #[inline(always)]
     fn with_simd<S: Simd>(self, s: S) -> Result<(), Error> {
         let Self {
+            to_source,
             exits,
             n,
             intensity,
             out,
             mut frames,
             head,
+            shared,
+            channels,
             row,
             scalar,
         } = self;
         let lanes = F::width::<S>();
         let (xs, ys, zs) = (&exits.x[..n], &exits.y[..n], &exits.z[..n]);
+        let (sxs, sys, szs) = (&to_source.x[..n], &to_source.y[..n], &to_source.z[..n]);
         let stokes_len = if intensity { 1 } else { 4 };
         let mut buf = [[F::zero(); MAX_LANES]; 3];
         let mut cols = [[F::zero(); MAX_LANES]; LANE_FIELDS];
+        let mut ch = [[F::zero(); MAX_LANES]; 8];
         // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` pairs (overlapping
         // the vector before it), or, for a batch shorter than one vector, padded with pair 0.
         for chunk in 0..n.div_ceil(lanes) {
@@ -273,33 +311,56 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             } else {
                 (0, n)
             };
-            // Each pair's constants into lane j of every column (a short batch's other lanes
-            // repeat pair 0's).
-            let mut built = head.is_some();
-            for j in 0..count {
-                let Some(r) = row(start + j).filter(|_| built) else {
-                    built = false;
-                    break;
-                };
-                for (col, v) in cols.iter_mut().zip(r) {
-                    col[j] = v;
-                }
-            }
-            if built {
-                for col in &mut cols {
-                    let first = col[0];
-                    col[count..lanes].fill(first);
-                }
-            }
             // The tail vector's first lanes were written by the vector before it.
             let fresh = chunk * lanes;
-            let (Some(p), true) = (head, built) else {
+            let Some(p) = head else {
                 for i in fresh.max(start)..start + count {
                     write_scalar(i, scalar(i)?, (out, frames.as_deref_mut()), stokes_len);
                 }
                 continue;
             };
-            let g = Gathered::<S, F>::new(p, &cols);
+            // The constants in lanes (`consts`), or, where a lane is flagged, pair by pair.
+            let in_lanes = match shared {
+                Some(sh) => {
+                    let dirs = [sxs, sys, szs];
+                    consts::gather::<S, F>(
+                        s,
+                        sh,
+                        channels,
+                        (dirs, start, count),
+                        (&mut ch, &mut buf),
+                    )
+                }
+                None => None,
+            };
+            let g = match in_lanes {
+                Some(g) => g,
+                None => {
+                    // Each pair's constants into lane j of every column (a short batch's
+                    // other lanes repeat pair 0's).
+                    let mut built = true;
+                    for j in 0..count {
+                        let Some(r) = row(start + j) else {
+                            built = false;
+                            break;
+                        };
+                        for (col, v) in cols.iter_mut().zip(r) {
+                            col[j] = v;
+                        }
+                    }
+                    if !built {
+                        for i in fresh.max(start)..start + count {
+                            write_scalar(i, scalar(i)?, (out, frames.as_deref_mut()), stokes_len);
+                        }
+                        continue;
+                    }
+                    for col in &mut cols {
+                        let first = col[0];
+                        col[count..lanes].fill(first);
+                    }
+                    Gathered::<S, F>::new(p, &cols)
+                }
+            };
             let [bx, by, bz] = &mut buf;
             let x = load::<S, F>(xs, bx, start, count);
             let y = load::<S, F>(ys, by, start, count);

@@ -53,19 +53,29 @@ fn direction(theta: f64, phi: f64) -> Vector3<f64> {
 }
 
 /// `n` random pairs `(to_source, exit, 1/w)`, the exits a third near the mirror direction
-/// (within 0.05 rad), a third within 0.3 rad, a third anywhere above the surface.
+/// (within 0.05 rad), a third within 0.3 rad, a third anywhere above the surface; some lights
+/// at the normal, some widths repeated.
 fn pairs(seed: u64, n: usize) -> Vec<Pair> {
     let mut st = seed;
+    let mut w = 1.0;
     (0..n)
         .map(|i| {
-            let theta_i = 89f64.to_radians() * uniform(&mut st).sqrt();
+            // Every 23rd light at (or within √ε of) the normal, where the constants are built
+            // pair by pair.
+            let theta_i = match i % 23 {
+                7 => [0.0, 1e-12, 1e-9, 1e-5][i % 4],
+                _ => 89f64.to_radians() * uniform(&mut st).sqrt(),
+            };
             let phi_i = std::f64::consts::TAU * uniform(&mut st);
             let s = direction(theta_i, phi_i);
             let spread = [0.05, 0.3, 1.5][i % 3];
             let theta_o = (theta_i + spread * (2.0 * uniform(&mut st) - 1.0)).clamp(0.0, 1.55);
             let phi_o = phi_i + std::f64::consts::PI + spread * (2.0 * uniform(&mut st) - 1.0);
             let r = direction(theta_o.abs(), phi_o) * (0.5 + 2.0 * uniform(&mut st));
-            let w = 0.3 * 1000f64.powf(uniform(&mut st));
+            // Every third width repeats the one before (the pass reuses its constants).
+            if i % 3 != 2 {
+                w = 0.3 * 1000f64.powf(uniform(&mut st));
+            }
             (s * (0.2 + 3.0 * uniform(&mut st)), r, 1.0 / w)
         })
         .collect()
