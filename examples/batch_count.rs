@@ -11,7 +11,10 @@
 //! ```
 //!
 //! (valgrind has no AVX-512, so the dispatch takes AVX2 + FMA under it). It prints a checksum
-//! so that the work is not optimised away.
+//! so that the work is not optimised away. A third argument picks another workload: `exits`
+//! (the default, above), `pairs` (`Kernel::evaluate_pairs` on 65,536 pairs of one surface
+//! width), `pairs-horizon` (each pair its own width, the horizon rule), and `pairs-scalar` or
+//! `pairs-horizon-scalar` (the same pairs one at a time through the renderer layer).
 
 use gmueller::Real;
 use gmueller::frame::Frame;
@@ -94,12 +97,13 @@ fn run<T: Real>(reps: usize) -> f64 {
 }
 
 /// `reps` passes over `M` (incident, exit) pairs of the renderer's light (unpolarized, the
-/// surface coherence of sunlight, 37.6 µm) on rough gold at 0.55 µm (the wavefront example's
+/// surface coherence of sunlight, 37.6 µm, the same for every pair, or with `horizon` widened
+/// by the horizon rule, `SurfaceCoherence::new`: a width of its own per pair) on rough gold at 0.55 µm (the wavefront example's
 /// material), Full · Partial: `Kernel::evaluate_pairs` (`scalar = false`) or, pair by pair,
 /// what the renderer layer does for one such light (`Bsdf::prepare_surface`, then
 /// `Bsdf::eval_stokes`); the pairs of `Lcg::light_and_exit`. The sum of the last pass's
 /// scattered `S0`.
-fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
+fn run_pairs<T: Real>(reps: usize, scalar: bool, horizon: bool) -> f64 {
     use gmueller::bsdf::{Bsdf, SurfaceCoherence};
     use gmueller::interaction::RoughConductor;
     use gmueller::interaction::batch::PairsSoa;
@@ -109,7 +113,11 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool) -> f64 {
     let gold = RoughConductor::new(psd, Metal::Au.index(lambda)).unwrap();
     let kernel = Kernel::<Full, Partial>::default();
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
-    let sun = SurfaceCoherence::fixed(T::lit(37.6)).unwrap();
+    let sun = if horizon {
+        SurfaceCoherence::new(T::lit(37.6)).unwrap()
+    } else {
+        SurfaceCoherence::fixed(T::lit(37.6)).unwrap()
+    };
     let bsdf = Bsdf::new(&gold, kernel, surface, lambda).unwrap();
     let mut rng = Lcg(0x9a1e);
     let mut cols = vec![Vec::new(); 7];
@@ -168,8 +176,8 @@ fn main() {
     let sum = match (precision.as_str(), what.as_str()) {
         ("f64", "exits") => run::<f64>(reps),
         (_, "exits") => run::<f32>(reps),
-        ("f64", w) => run_pairs::<f64>(reps, w == "pairs-scalar"),
-        (_, w) => run_pairs::<f32>(reps, w == "pairs-scalar"),
+        ("f64", w) => run_pairs::<f64>(reps, w.ends_with("scalar"), w.contains("horizon")),
+        (_, w) => run_pairs::<f32>(reps, w.ends_with("scalar"), w.contains("horizon")),
     };
     println!("{precision} {what}, {reps} passes of {M}: sum of scattered S0 = {sum:e}");
 }

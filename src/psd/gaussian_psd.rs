@@ -216,6 +216,12 @@ impl<T: Real, const N: usize> GaussianPsd<T, N> {
         Self::from_spectrum_parts(variance, spectral, "rms height σ and 1/e length L")
     }
 
+    /// `ln(σ²|Λ|^{1/2})`, the logarithm of the peak `p(0)` without the `(2π)^{n/2}`.
+    #[inline]
+    pub(crate) fn log_amplitude(&self) -> T {
+        self.log_amplitude
+    }
+
     /// The spectral shape `g^{Λ⁻¹}` (covariance in frequency space).
     #[must_use]
     pub fn spectral_shape(&self) -> &Gaussian<T, N> {

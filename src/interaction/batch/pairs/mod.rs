@@ -35,7 +35,7 @@ use super::partial::{
     store, write_scalar,
 };
 use super::per_lane::{Gathered, MAX_LANES};
-use super::prep::{HalfChannels, LANE_FIELDS, LobePrep};
+use super::prep::{LANE_FIELDS, LobePrep};
 use super::stages::validity::clearly_valid_about;
 use crate::error::Error;
 use crate::frame::Frame;
@@ -213,24 +213,10 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             let s = at(&to_source, i);
             LobePrep::lane_row_of(&prepared(i), m.psd, m.indices, s, surface, m.incoherent)
         };
-        // The `½` channel's constants depend on the width alone: kept while it repeats.
-        let mut last: Option<(T, Option<HalfChannels<T>>)> = None;
-        let mut channels = |i: usize| {
-            let w = inverse_width[i];
-            match last {
-                Some((lw, c)) if lw == w => c,
-                _ => {
-                    let m = maker.as_ref()?;
-                    let c = LobePrep::channels_of(&prepared(i), m.psd, m.incoherent);
-                    last = Some((w, c));
-                    c
-                }
-            }
-        };
         let shared = head
             .as_ref()
             .zip(maker.as_ref())
-            .map(|(h, m)| consts::Shared::new(h, m.indices.0));
+            .map(|(h, m)| consts::Shared::new(h, m));
         let mut scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
             #[cfg(test)]
             tests::PER_DIRECTION.with(|c| c.set(c.get() + 1));
@@ -249,7 +235,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             frames,
             head: head.as_ref(),
             shared: shared.as_ref(),
-            channels: &mut channels,
+            inverse_width,
             row: &mut row,
             scalar: &mut scalar,
         })
@@ -269,8 +255,8 @@ struct PairLobes<'r, 'e, 'o, 'f, F: Real> {
     head: Option<&'r LobePrep<F>>,
     /// The constants the lanes of `consts` share (`None`: no pair in lanes).
     shared: Option<&'r consts::Shared<'r, F>>,
-    /// Pair `i`'s `½` channel constants (specular, scattered), `None` where they are not finite.
-    channels: &'r mut dyn FnMut(usize) -> Option<HalfChannels<F>>,
+    /// `1/w` of each pair.
+    inverse_width: &'e [F],
     /// Pair `i`'s own constants, `None` where the lanes do not reproduce its kernel.
     row: &'r mut dyn FnMut(usize) -> Option<[F; LANE_FIELDS]>,
     /// Pair `i` by the per-direction kernel.
@@ -292,7 +278,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             mut frames,
             head,
             shared,
-            channels,
+            inverse_width,
             row,
             scalar,
         } = self;
@@ -301,8 +287,8 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
         let (sxs, sys, szs) = (&to_source.x[..n], &to_source.y[..n], &to_source.z[..n]);
         let stokes_len = if intensity { 1 } else { 4 };
         let mut buf = [[F::zero(); MAX_LANES]; 3];
+        let mut scratch = [[F::zero(); MAX_LANES]; 4];
         let mut cols = [[F::zero(); MAX_LANES]; LANE_FIELDS];
-        let mut ch = [[F::zero(); MAX_LANES]; 8];
         // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` pairs (overlapping
         // the vector before it), or, for a batch shorter than one vector, padded with pair 0.
         for chunk in 0..n.div_ceil(lanes) {
@@ -322,14 +308,8 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             // The constants in lanes (`consts`), or, where a lane is flagged, pair by pair.
             let in_lanes = match shared {
                 Some(sh) => {
-                    let dirs = [sxs, sys, szs];
-                    consts::gather::<S, F>(
-                        s,
-                        sh,
-                        channels,
-                        (dirs, start, count),
-                        (&mut ch, &mut buf),
-                    )
+                    let pairs = ([sxs, sys, szs], &inverse_width[..n]);
+                    consts::gather::<S, F>(s, sh, pairs, (start, count), &mut scratch)
                 }
                 None => None,
             };
