@@ -36,7 +36,7 @@ use super::partial::{
 };
 use super::per_lane::{Gathered, MAX_LANES};
 use super::prep::{LANE_FIELDS, LobePrep};
-use super::stages::validity::clearly_valid_about;
+use super::stages::validity::clearly_valid_lanes_about;
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
@@ -173,25 +173,13 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
                 expected: "positive and finite",
             });
         }
-        if let Some(w) = inverse_width[..n]
-            .iter()
-            .find(|w| !(**w > T::zero() && w.is_finite()))
-        {
-            return Err(Error::OutOfRange {
-                what: "inverse coherence width 1/w (1/µm)",
-                value: w.to_f64(),
-                expected: "positive and finite",
-            });
-        }
+        crate::simd::dispatch(Validate {
+            pairs,
+            n,
+            k,
+            surface,
+        })?;
         let at = |d: &DirectionsSoa<'_, T>, i: usize| Vector3::new(d.x[i], d.y[i], d.z[i]);
-        let normal = surface.k();
-        for i in 0..n {
-            let (s, r) = (at(&to_source, i), at(&exit, i));
-            let clear = |v: Vector3<T>| clearly_valid_about(&normal, false, v.into());
-            if !(clear(s) && clear(r)) {
-                Geometry::new(k, surface, s, r)?;
-            }
-        }
         let prepared = |i: usize| self.prepare_unpolarized_isotropic(k, inverse_width[i]);
         // The constants every pair shares, from the first pair (of the first four) the lanes
         // take; each pair's own from its row.
@@ -239,6 +227,87 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             row: &mut row,
             scalar: &mut scalar,
         })
+    }
+}
+
+/// The validation of [`Kernel::evaluate_pairs`]'s pairs in lanes: every inverse width positive
+/// and finite (else the error for the first that is not), then every pair whose directions
+/// the fast test does not clear ([`clearly_valid_lanes_about`]) through [`Geometry::new`], in
+/// order (its error for the first it rejects).
+struct Validate<'a, F: Real> {
+    pairs: PairsSoa<'a, F>,
+    n: usize,
+    k: F,
+    surface: &'a Frame<F>,
+}
+
+impl<F: Real> WithSimd for Validate<'_, F> {
+    type Output = Result<(), Error>;
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, s: S) -> Result<(), Error> {
+        let Self {
+            pairs,
+            n,
+            k,
+            surface,
+        } = self;
+        let lanes = F::width::<S>();
+        let (zero, max) = (F::vsplat(s, F::zero()), F::vsplat(s, F::MAX));
+        let widths = &pairs.inverse_width[..n];
+        let (head, tail) = F::vsplit::<S>(widths);
+        let good = |w: F| w > F::zero() && w.is_finite();
+        let all_good = head.iter().all(|&w| {
+            let ok = F::vand(s, F::vlt(s, zero, w), F::vle(s, w, max));
+            !F::vany(s, F::vnot(s, ok))
+        }) && tail.iter().all(|&w| good(w));
+        if !all_good && let Some(w) = widths.iter().find(|w| !good(**w)) {
+            return Err(Error::OutOfRange {
+                what: "inverse coherence width 1/w (1/µm)",
+                value: w.to_f64(),
+                expected: "positive and finite",
+            });
+        }
+        let normal = surface.k();
+        let mut buf = [[F::zero(); MAX_LANES]; 6];
+        let cols = [
+            pairs.to_source.x,
+            pairs.to_source.y,
+            pairs.to_source.z,
+            pairs.exit.x,
+            pairs.exit.y,
+            pairs.exit.z,
+        ];
+        for chunk in 0..n.div_ceil(lanes) {
+            let (start, count) = if n >= lanes {
+                ((chunk * lanes).min(n - lanes), lanes)
+            } else {
+                (0, n)
+            };
+            let [b0, b1, b2, b3, b4, b5] = &mut buf;
+            let v = [
+                load::<S, F>(&cols[0][..n], b0, start, count),
+                load::<S, F>(&cols[1][..n], b1, start, count),
+                load::<S, F>(&cols[2][..n], b2, start, count),
+                load::<S, F>(&cols[3][..n], b3, start, count),
+                load::<S, F>(&cols[4][..n], b4, start, count),
+                load::<S, F>(&cols[5][..n], b5, start, count),
+            ];
+            let clear = F::vand(
+                s,
+                clearly_valid_lanes_about::<S, F>(s, &normal, false, [v[0], v[1], v[2]]),
+                clearly_valid_lanes_about::<S, F>(s, &normal, false, [v[3], v[4], v[5]]),
+            );
+            let unclear = F::vnot(s, clear);
+            if F::vany(s, unclear) {
+                for j in redo_lanes::<S, F>(s, unclear, count) {
+                    let at = |c: usize| cols[c][start + j];
+                    let to_source = Vector3::new(at(0), at(1), at(2));
+                    Geometry::new(k, surface, to_source, Vector3::new(at(3), at(4), at(5)))?;
+                }
+            }
+        }
+        Ok(())
     }
 }
 

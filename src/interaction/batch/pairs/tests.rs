@@ -371,3 +371,116 @@ fn other_levels_and_bad_input() {
     assert!(run(pairs(d, below, &one), 11.4).is_err());
     assert_eq!(first, cols.borrow().lobes);
 }
+
+/// The error for the first bad pair of 37 (widths first, then directions, as documented), where
+/// the vector validation sees it (a whole vector, the tail, every position), in both types;
+/// against the scalar checks: the width test and `Geometry::new` of each pair in order.
+fn first_error_is_the_scalar_one<T: Real>() {
+    let t = |x: f64| T::lit(x);
+    let psd = GaussianPsd::<T, 2>::isotropic(t(0.05), t(1.0)).unwrap();
+    let gold = RoughConductor::new(psd, Complex::new(t(0.47), t(2.4))).unwrap();
+    let surface = Frame::from_normal(Vector3::new(t(0.0), t(0.0), t(1.0))).unwrap();
+    let kernel = Kernel::<Full, Partial>::default();
+    let k = t(11.4);
+    let n = 37;
+    let ps = pairs(0xbad, n);
+    let col = |f: &dyn Fn(&Pair) -> f64| -> Vec<T> { ps.iter().map(|p| t(f(p))).collect() };
+    let good: [Vec<T>; 7] = [
+        col(&|p| p.0.x),
+        col(&|p| p.0.y),
+        col(&|p| p.0.z),
+        col(&|p| p.1.x),
+        col(&|p| p.1.y),
+        col(&|p| p.1.z),
+        col(&|p| p.2),
+    ];
+    // (column, value): a bad width, a bad direction component, a direction below.
+    let bad: [(usize, f64); 9] = [
+        (6, f64::NAN),
+        (6, 0.0),
+        (6, -1.0),
+        (6, f64::INFINITY),
+        (0, f64::NAN),
+        (4, f64::INFINITY),
+        (2, -2.0),
+        (5, -2.0),
+        (5, 0.0),
+    ];
+    // The pairs as generated are all good.
+    let mut got = Columns::<T>::new(n);
+    got.write(|out, _| {
+        let pairs = PairsSoa {
+            to_source: DirectionsSoa {
+                x: &good[0],
+                y: &good[1],
+                z: &good[2],
+            },
+            exit: DirectionsSoa {
+                x: &good[3],
+                y: &good[4],
+                z: &good[5],
+            },
+            inverse_width: &good[6],
+        };
+        kernel
+            .evaluate_pairs(&gold, k, &surface, pairs, out, None)
+            .unwrap();
+    });
+    let mut cases = 0;
+    for (a, &(ca, va)) in bad.iter().enumerate() {
+        for &(cb, vb) in &bad[a..] {
+            for (ia, ib) in [(0, 36), (5, 3), (17, 30), (36, 36), (33, 8)] {
+                let mut c = good.clone();
+                c[ca][ia] = t(va);
+                c[cb][ib] = t(vb);
+                // The scalar order: every width, then each pair's geometry.
+                let width_ok = |w: T| w > T::zero() && w.is_finite();
+                let want = match c[6].iter().find(|w| !width_ok(**w)) {
+                    Some(w) => Err(Error::OutOfRange {
+                        what: "inverse coherence width 1/w (1/µm)",
+                        value: w.to_f64(),
+                        expected: "positive and finite",
+                    }),
+                    None => (0..n).try_for_each(|i| {
+                        let v = |j: usize| Vector3::new(c[j][i], c[j + 1][i], c[j + 2][i]);
+                        Geometry::new(k, &surface, v(0), v(3)).map(|_| ())
+                    }),
+                };
+                let mut got = Columns::<T>::new(n);
+                let mut r = Ok(());
+                got.write(|out, _| {
+                    let pairs = PairsSoa {
+                        to_source: DirectionsSoa {
+                            x: &c[0],
+                            y: &c[1],
+                            z: &c[2],
+                        },
+                        exit: DirectionsSoa {
+                            x: &c[3],
+                            y: &c[4],
+                            z: &c[5],
+                        },
+                        inverse_width: &c[6],
+                    };
+                    r = kernel.evaluate_pairs(&gold, k, &surface, pairs, out, None);
+                });
+                assert!(want.is_err(), "{ca} {cb} at {ia} {ib}: a bad pair");
+                assert_eq!(
+                    format!("{r:?}"),
+                    format!("{want:?}"),
+                    "{ca} {cb} at {ia} {ib}"
+                );
+                // Nothing written.
+                assert!(got.lobes.iter().flatten().all(|v| *v == t(-7.0)));
+                cases += 1;
+            }
+        }
+    }
+    assert_eq!(cases, 45 * 5);
+}
+
+#[test]
+fn the_first_bad_pair_gives_the_error() {
+    first_error_is_the_scalar_one::<f64>();
+    first_error_is_the_scalar_one::<f32>();
+}

@@ -51,6 +51,17 @@ pub(crate) fn clearly_valid_lanes<S: Simd, F: Real>(
     y: F::V<S>,
     z: F::V<S>,
 ) -> F::M<S> {
+    clearly_valid_lanes_about::<S, F>(s, &p.n, p.interface.is_some(), [x, y, z])
+}
+
+/// [`clearly_valid_about`] on every lane.
+#[inline(always)]
+pub(crate) fn clearly_valid_lanes_about<S: Simd, F: Real>(
+    s: S,
+    n: &nalgebra::Vector3<F>,
+    either_side: bool,
+    [x, y, z]: [F::V<S>; 3],
+) -> F::M<S> {
     let c = |v: F| F::vsplat(s, v);
     let (lo, hi) = size_range::<F>();
     let zero = c(F::zero());
@@ -58,14 +69,10 @@ pub(crate) fn clearly_valid_lanes<S: Simd, F: Real>(
     let m = F::vmax(s, F::vmax(s, F::vabs(s, x), F::vabs(s, y)), F::vabs(s, z));
     let d = F::vadd(
         s,
-        F::vadd(s, F::vmul(s, x, c(p.n.x)), F::vmul(s, y, c(p.n.y))),
-        F::vmul(s, z, c(p.n.z)),
+        F::vadd(s, F::vmul(s, x, c(n.x)), F::vmul(s, y, c(n.y))),
+        F::vmul(s, z, c(n.z)),
     );
-    let d = if p.interface.is_some() {
-        F::vabs(s, d)
-    } else {
-        d
-    };
+    let d = if either_side { F::vabs(s, d) } else { d };
     let and = F::vand::<S>;
     and(
         s,
