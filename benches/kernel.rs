@@ -1015,9 +1015,11 @@ fn interface_for<T: Real>(c: &mut Criterion, prec: &str) {
 /// the same pairs one at a time through the renderer layer (`Bsdf::prepare_surface` then
 /// `Bsdf::eval_stokes`, which also computes the coherent lobe's mass) and through the kernel
 /// (`Kernel::prepare` of each pair's `SurfaceCoherence` packet, built outside the timing, then
-/// `evaluate_prepared`).
+/// `evaluate_prepared`); and the one material type's batch (`Material::eval_incident_pairs`,
+/// `Full · Partial`, each coherent lobe divided by its light's mass, as the renderer layer).
 fn pairs_for<T: Real>(c: &mut Criterion, prec: &str) {
-    use gmueller::bsdf::{Bsdf, SurfaceCoherence};
+    use gmueller::bsdf::{Bsdf, Material, ShadingPoint, SurfaceCoherence};
+    use gmueller::interaction::Level;
     use gmueller::interaction::RoughConductor;
     use gmueller::interaction::batch::PairsSoa;
     use gmueller::spectral::Metal;
@@ -1075,6 +1077,32 @@ fn pairs_for<T: Real>(c: &mut Criterion, prec: &str) {
             };
             kernel
                 .evaluate_pairs(black_box(&gold), k, &surf, pairs, &mut out, None)
+                .unwrap();
+        });
+    });
+    let material = Material::new(gold.clone(), Level::ALL[7]);
+    let at = ShadingPoint::new(surf, lambda).unwrap();
+    g.bench_function("material-eval_incident_pairs-1024", |bch| {
+        let [a, b, cc, d, e, f, gg, h] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, cc, d] },
+            scattered: StokesSoa { s: [e, f, gg, h] },
+        };
+        bch.iter(|| {
+            let to_source = DirectionsSoa {
+                x: &cols[0],
+                y: &cols[1],
+                z: &cols[2],
+            };
+            let exits = DirectionsSoa {
+                x: &cols[3],
+                y: &cols[4],
+                z: &cols[5],
+            };
+            black_box(&material)
+                .eval_incident_pairs(&at, &sun, to_source, exits, &mut out, None)
                 .unwrap();
         });
     });

@@ -566,7 +566,6 @@ mod tests {
         Rough: RoughnessModel + RoughnessWeights<T, S::Psd, Coh>,
     {
         let k = T::lit(std::f64::consts::TAU / lambda);
-        let m = row_maker(kernel, material).expect("a kernel the lanes take");
         let maker = row_maker(kernel, material).expect("a kernel the lanes take");
         let (t1, t2, n) = (surface.x(), surface.y(), surface.k());
         let mut st = seed;
@@ -601,14 +600,9 @@ mod tests {
             };
             let prepared = kernel.prepare_unpolarized_isotropic(k, inv_w);
             c.inv_w.push(inv_w);
-            c.want.push(LobePrep::lane_row_of(
-                &prepared,
-                m.psd,
-                m.indices,
-                d,
-                surface,
-                m.incoherent,
-            ));
+            let m = &c.maker;
+            let row = LobePrep::lane_row_of(&prepared, m.psd, m.indices, d, surface, m.incoherent);
+            c.want.push(row);
             c.tilt.push(theta);
             c.dirs.push(d);
         }

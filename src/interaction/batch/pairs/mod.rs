@@ -9,10 +9,10 @@
 //! Per vector of pairs, the per-packet constants that depend on each pair's direction (its
 //! [`super::prep::LobePrep`]'s incidence, Fresnel matrix, specular frame and exponent) are
 //! built in lanes (`consts`), with the scalar operations in the scalar order, so bit for bit
-//! the scalar constants; those that depend on the width alone (the `½` channel's weights) one
-//! width at a time, reused while it repeats. Where a lane's direction is within `√ε` of the
-//! normal (or a constant would not be the scalar one), that vector's constants are built one
-//! pair at a time from the closed-form preparation and gathered
+//! the scalar constants, and so are those of each pair's width (the `½` channel's weights).
+//! Where a lane's direction is within `√ε` of the normal (or a constant would not be the
+//! scalar one), that vector's constants are built one pair at a time from the closed-form
+//! preparation and gathered
 //! ([`super::per_lane::Gathered`]). Then the lobe stages of `super::partial` run on the vector,
 //! with the same operations as the batch over exits of one packet. A lane is therefore
 //! bit for bit what [`Kernel::evaluate_batch`]'s lanes give for that pair's prepared packet
@@ -230,6 +230,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     }
 }
 
+/// Vector `chunk` of `n` pairs in vectors of `lanes`: `(start, count)`, whole vectors at 0,
+/// `lanes`, 2 `lanes`, …; the tail as the last `lanes` pairs (overlapping the vector before
+/// it), or, for a batch shorter than one vector, its `n` pairs (padded with pair 0).
+fn span(chunk: usize, n: usize, lanes: usize) -> (usize, usize) {
+    if n >= lanes {
+        ((chunk * lanes).min(n - lanes), lanes)
+    } else {
+        (0, n)
+    }
+}
+
 /// The validation of [`Kernel::evaluate_pairs`]'s pairs in lanes: every inverse width positive
 /// and finite (else the error for the first that is not), then every pair whose directions
 /// the fast test does not clear ([`clearly_valid_lanes_about`]) through [`Geometry::new`], in
@@ -279,11 +290,7 @@ impl<F: Real> WithSimd for Validate<'_, F> {
             pairs.exit.z,
         ];
         for chunk in 0..n.div_ceil(lanes) {
-            let (start, count) = if n >= lanes {
-                ((chunk * lanes).min(n - lanes), lanes)
-            } else {
-                (0, n)
-            };
+            let (start, count) = span(chunk, n, lanes);
             let [b0, b1, b2, b3, b4, b5] = &mut buf;
             let v = [
                 load::<S, F>(&cols[0][..n], b0, start, count),
@@ -358,14 +365,8 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
         let mut buf = [[F::zero(); MAX_LANES]; 3];
         let mut scratch = [[F::zero(); MAX_LANES]; 4];
         let mut cols = [[F::zero(); MAX_LANES]; LANE_FIELDS];
-        // Whole vectors at 0, lanes, 2 lanes, …; the tail as the last `lanes` pairs (overlapping
-        // the vector before it), or, for a batch shorter than one vector, padded with pair 0.
         for chunk in 0..n.div_ceil(lanes) {
-            let (start, count) = if n >= lanes {
-                ((chunk * lanes).min(n - lanes), lanes)
-            } else {
-                (0, n)
-            };
+            let (start, count) = span(chunk, n, lanes);
             // The tail vector's first lanes were written by the vector before it.
             let fresh = chunk * lanes;
             let Some(p) = head else {
