@@ -13,8 +13,9 @@
 //! (valgrind has no AVX-512, so the dispatch takes AVX2 + FMA under it). It prints a checksum
 //! so that the work is not optimised away. A third argument picks another workload: `exits`
 //! (the default, above), `pairs` (`Kernel::evaluate_pairs` on 65,536 pairs of one surface
-//! width), `pairs-horizon` (each pair its own width, the horizon rule), and `pairs-scalar` or
-//! `pairs-horizon-scalar` (the same pairs one at a time through the renderer layer).
+//! width), `pairs-horizon` (each pair its own width, the horizon rule), `pairs-scalar` or
+//! `pairs-horizon-scalar` (the same pairs one at a time through the renderer layer), and
+//! `pairs-material` or `pairs-horizon-material` (`Material::eval_incident_pairs`).
 
 use gmueller::Real;
 use gmueller::frame::Frame;
@@ -103,7 +104,7 @@ fn run<T: Real>(reps: usize) -> f64 {
 /// what the renderer layer does for one such light (`Bsdf::prepare_surface`, then
 /// `Bsdf::eval_stokes`); the pairs of `Lcg::light_and_exit`. The sum of the last pass's
 /// scattered `S0`.
-fn run_pairs<T: Real>(reps: usize, scalar: bool, horizon: bool) -> f64 {
+fn run_pairs<T: Real>(reps: usize, scalar: bool, horizon: bool, material: bool) -> f64 {
     use gmueller::bsdf::{Bsdf, SurfaceCoherence};
     use gmueller::interaction::RoughConductor;
     use gmueller::interaction::batch::PairsSoa;
@@ -138,8 +139,23 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool, horizon: bool) -> f64 {
         specular: StokesSoa { s: [a, b, c, d] },
         scattered: StokesSoa { s: [e, f, g, h] },
     };
+    let mat = gmueller::bsdf::Material::new(gold.clone(), gmueller::interaction::Level::ALL[7]);
+    let at = gmueller::bsdf::ShadingPoint::new(surface, lambda).unwrap();
     for _ in 0..reps {
-        if scalar {
+        if material {
+            let to_source = DirectionsSoa {
+                x: &cols[0],
+                y: &cols[1],
+                z: &cols[2],
+            };
+            let exits = DirectionsSoa {
+                x: &cols[3],
+                y: &cols[4],
+                z: &cols[5],
+            };
+            mat.eval_incident_pairs(&at, &sun, to_source, exits, &mut out, None)
+                .unwrap();
+        } else if scalar {
             for (i, o) in out.scattered.s[0].iter_mut().enumerate() {
                 let s = Vector3::new(cols[0][i], cols[1][i], cols[2][i]);
                 let light = bsdf.prepare_surface(s, &sun).unwrap();
@@ -176,8 +192,18 @@ fn main() {
     let sum = match (precision.as_str(), what.as_str()) {
         ("f64", "exits") => run::<f64>(reps),
         (_, "exits") => run::<f32>(reps),
-        ("f64", w) => run_pairs::<f64>(reps, w.ends_with("scalar"), w.contains("horizon")),
-        (_, w) => run_pairs::<f32>(reps, w.ends_with("scalar"), w.contains("horizon")),
+        ("f64", w) => run_pairs::<f64>(
+            reps,
+            w.ends_with("scalar"),
+            w.contains("horizon"),
+            w.contains("material"),
+        ),
+        (_, w) => run_pairs::<f32>(
+            reps,
+            w.ends_with("scalar"),
+            w.contains("horizon"),
+            w.contains("material"),
+        ),
     };
     println!("{precision} {what}, {reps} passes of {M}: sum of scattered S0 = {sum:e}");
 }

@@ -424,8 +424,16 @@ where
                 &mut chunk,
                 chunk_frames.as_mut(),
             )?;
-            // The coherent lobe over its mass, as `eval_stokes`.
+            // The coherent lobe over its mass, as `eval_stokes`: where the lobe is not zero
+            // (a zero stays zero, sign and all, under the positive finite `1/E`; the mass
+            // costs a quadrature near grazing, and most pairs lie outside the narrow lobe).
             for (i, w) in inv_w[..m].iter().enumerate() {
+                if chunk.specular.s[..stokes_len]
+                    .iter()
+                    .all(|c| c[i] == T::zero())
+                {
+                    continue;
+                }
                 let s = unit_direction(&at(&to_source, start + i), "direction to the source")?;
                 let prepared = kernel.prepare_unpolarized_isotropic(k, *w);
                 let facing = self.surface.facing(&s);
