@@ -347,14 +347,15 @@ where
             return Ok(());
         }
         // Every pair validated before anything is written: the directions (as
-        // `prepare_surface`) and the geometry (as `eval_stokes`), the latter exactly only where
-        // the fast test does not clear both directions.
+        // `prepare_surface`) and the geometry (as `eval_stokes`), exactly only where the fast
+        // test does not clear both directions (a cleared direction to the source is finite,
+        // non-zero and above the surface, so those checks pass too).
         let normal = self.surface.k();
         for i in 0..n {
             let (s, r) = (at(&to_source, i), at(&exits, i));
-            self.wavenumber(&unit_direction(&s, "direction to the source")?.into_inner())?;
             let clear = |v: Vector3<T>| clearly_valid_about(&normal, false, v.into());
             if !(clear(s) && clear(r)) {
+                self.wavenumber(&unit_direction(&s, "direction to the source")?.into_inner())?;
                 self.geometry(s, r)?;
             }
         }

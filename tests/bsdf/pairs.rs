@@ -287,7 +287,9 @@ fn material_pairs_match_eval_incident_one_sided_and_two_sided() {
     }
 }
 
-/// A pair the geometry rejects beyond the first chunk of 128: an error, and nothing written.
+/// A pair rejected beyond the first chunk of 128 — an exit or a light below the surface, a
+/// direction with a NaN, a zero direction to the light: the error of that pair one at a time
+/// (`prepare_surface`, then `eval_stokes`), and nothing written.
 #[test]
 fn a_bad_pair_anywhere_writes_nothing() {
     let psd = GaussianPsd::<f64, 2>::isotropic(0.03, 0.8).unwrap();
@@ -296,38 +298,51 @@ fn a_bad_pair_anywhere_writes_nothing() {
     let bsdf = Bsdf::new(&gold, Kernel::<Full, Partial>::default(), frame, 0.6).unwrap();
     let sky = SurfaceCoherence::new(15.0).unwrap();
     let n = 300;
-    let mut rng = Lcg(0xbad);
-    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6];
-    for i in 0..n {
-        let (s, mut r) = rng.light_and_exit(i);
-        if i == 250 {
-            r[2] = -r[2];
+    type Spoil = fn(&mut [f64; 3], &mut [f64; 3]);
+    let spoil: [Spoil; 5] = [
+        |_, r| r[2] = -r[2],
+        |s, _| s[2] = -s[2],
+        |s, _| s[0] = f64::NAN,
+        |_, r| r[1] = f64::NAN,
+        |s, _| *s = [0.0; 3],
+    ];
+    for (kind, spoil) in spoil.iter().enumerate() {
+        let mut rng = Lcg(0xbad);
+        let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6];
+        let mut bad = None;
+        for i in 0..n {
+            let (mut s, mut r) = rng.light_and_exit(i);
+            if i == 250 {
+                spoil(&mut s, &mut r);
+                let light = bsdf.prepare_surface(Vector3::from(s), &sky);
+                bad = Some(light.and_then(|l| bsdf.eval_stokes(&l, Vector3::from(r)).map(|_| ())));
+            }
+            for (c, v) in cols.iter_mut().zip(s.into_iter().chain(r)) {
+                c.push(v);
+            }
         }
-        for (c, v) in cols.iter_mut().zip(s.into_iter().chain(r)) {
-            c.push(v);
-        }
+        let want = bad.unwrap();
+        assert!(want.is_err(), "kind {kind}: one at a time, an error");
+        let mut buf = vec![vec![-7.0; n]; 8];
+        let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
+            unreachable!()
+        };
+        let mut out = LobesSoa {
+            specular: StokesSoa { s: [a, b, c, d] },
+            scattered: StokesSoa { s: [e, f, g, h] },
+        };
+        let to_source = DirectionsSoa {
+            x: &cols[0],
+            y: &cols[1],
+            z: &cols[2],
+        };
+        let exits = DirectionsSoa {
+            x: &cols[3],
+            y: &cols[4],
+            z: &cols[5],
+        };
+        let got = bsdf.eval_stokes_pairs(&sky, to_source, exits, &mut out, None);
+        assert_eq!(format!("{got:?}"), format!("{want:?}"), "kind {kind}");
+        assert!(buf.iter().flatten().all(|v| *v == -7.0), "kind {kind}");
     }
-    let mut buf = vec![vec![-7.0; n]; 8];
-    let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
-        unreachable!()
-    };
-    let mut out = LobesSoa {
-        specular: StokesSoa { s: [a, b, c, d] },
-        scattered: StokesSoa { s: [e, f, g, h] },
-    };
-    let to_source = DirectionsSoa {
-        x: &cols[0],
-        y: &cols[1],
-        z: &cols[2],
-    };
-    let exits = DirectionsSoa {
-        x: &cols[3],
-        y: &cols[4],
-        z: &cols[5],
-    };
-    assert!(
-        bsdf.eval_stokes_pairs(&sky, to_source, exits, &mut out, None)
-            .is_err()
-    );
-    assert!(buf.iter().flatten().all(|v| *v == -7.0));
 }
