@@ -1,19 +1,22 @@
-//! Each pair's constants that depend on its direction to the source, built in lanes: the
-//! incidence (ŝ, `cos θ_i`, the incident s/p frame's ŝ and the azimuth axes), the Rayleigh–Rice
-//! factors' incident terms, the scattered part's constant exponent, the Fresnel reflection
-//! matrix and the specular frame — the fields of `prep::lane_row` that
-//! `LobePrep::lane_row_of` builds one pair at a time, with the same operations in the same
-//! order (nalgebra's and `num_complex`'s, unfused), so the same values bit for bit.
+//! Each pair's own constants, built in lanes: those of its direction to the source (the
+//! incidence — ŝ, `cos θ_i`, the incident s/p frame's ŝ and the azimuth axes —, the
+//! Rayleigh–Rice factors' incident terms, the scattered part's constant exponent, the Fresnel
+//! reflection matrix and the specular frame) and those of its coherence width (the `½`
+//! channel's specular and scattered weights of the section `I/w²`) — the fields of
+//! `prep::lane_row` that `LobePrep::lane_row_of` builds one pair at a time, with the same
+//! operations in the same order (nalgebra's and `num_complex`'s, unfused), so the same values
+//! bit for bit.
 //!
-//! Two pieces stay scalar: the logarithm of `(2k cos θ_i)²` (the library `ln`, lane by lane,
-//! so that the exponent is the scalar one exactly), and the `½` channel's constants, which
-//! depend on the pair's coherence width only (the caller's, [`super::Kernel::evaluate_pairs`]
-//! reuses them while the width repeats).
+//! The three logarithms per pair (`ln (2k cos θ_i)²`, `ln|Ξ|` and `ln|Λ⁻¹ + Ξ|` through the
+//! products of their Cholesky factors' diagonals) call the library `ln` lane by lane, so that
+//! they too are the scalar ones exactly.
 //!
 //! A lane is flagged where the lanes would not reproduce the scalar code: an incidence or a
 //! specular direction within `√ε` of the normal (`Frame::sp_unit` falls back to a tangent of
 //! n̂ there), a Fresnel square root off the plain `hypot` branch, a Fresnel denominator of
-//! zero, a constant that is not finite. The caller then builds that vector's constants one
+//! zero, a product of Cholesky diagonals outside `[1e-30, 1e30]` (the sum-of-logarithms
+//! branch), the Cauchy–Binet branch of the Cholesky factor of `Λ⁻¹ + Ξ`, a constant that is
+//! not finite. The caller then builds that vector's constants one
 //! pair at a time.
 
 use num_complex::Complex;
