@@ -369,7 +369,7 @@ fn scat_channel<T: Real>(
 /// `ln ∫p − ln 2π`: the incoherent limit's scattered weight over the specular one
 /// ([`LobePrep::incoherent`]).
 #[inline]
-fn incoherent_shift<T: Real>(integral: T) -> T {
+pub(crate) fn incoherent_shift<T: Real>(integral: T) -> T {
     integral.ln() - crate::interaction::coherence::ln_two_pi::<T>()
 }
 

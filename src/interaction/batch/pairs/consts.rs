@@ -24,7 +24,7 @@ use pulp::Simd;
 
 use super::super::partial::{RowMaker, load};
 use super::super::per_lane::{Gathered, MAX_LANES};
-use super::super::prep::LobePrep;
+use super::super::prep::{LobePrep, incoherent_shift};
 use super::super::stages::azimuth::exit_frame_with;
 use super::super::stages::channels::LogGaussianLanes;
 use super::super::stages::fresnel::exit_q;
@@ -60,9 +60,7 @@ impl<'a, F: Real> Shared<'a, F> {
             spectral: [a[(0, 0)], a[(1, 0)], a[(1, 1)]],
             spectral_log_det: shape.log_det(),
             log_amplitude: maker.psd.log_amplitude(),
-            incoherent_shift: maker
-                .incoherent
-                .map(|i| i.ln() - crate::interaction::coherence::ln_two_pi::<F>()),
+            incoherent_shift: maker.incoherent.map(incoherent_shift),
         }
     }
 }
