@@ -49,8 +49,9 @@ mod prep;
 mod spectral;
 mod stages;
 
+pub use crate::mueller::batch::MuellerSoa;
 pub(crate) use outputs::check_lengths;
-pub use outputs::{ExitFramesSoa, LobesSoa};
+pub use outputs::{ExitFramesSoa, LobesSoa, MuellerLobesSoa};
 pub use pairs::PairsSoa;
 pub(crate) use prep::PlaneWavePrep;
 pub use spectral::{MAX_WAVELENGTHS, Wavelength};

@@ -8,6 +8,7 @@ use crate::error::Error;
 use crate::frame::Frame;
 #[cfg(doc)]
 use crate::interaction::Geometry;
+use crate::mueller::batch::MuellerSoa;
 
 /// The two lobes of a batch: Stokes radiances in each direction's exit s/p frame
 /// ([`Geometry::exit_sp`]), in the exit medium.
@@ -17,6 +18,18 @@ pub struct LobesSoa<'a, T> {
     pub specular: StokesSoa<'a, T>,
     /// The scattered part, attenuation included.
     pub scattered: StokesSoa<'a, T>,
+}
+
+/// The two lobes of a batch of pairs as Mueller matrices ([`crate::interaction::Kernel::evaluate_pairs_mueller`]):
+/// sixteen slices per lobe, row-major (`m[4 k + l]` holds `M_kl` of every pair), each matrix
+/// acting on Stokes vectors in its pair's incident s/p frame and giving them in its exit s/p
+/// frame ([`Geometry::exit_sp`]), per unit incident irradiance, in the exit medium.
+#[derive(Debug)]
+pub struct MuellerLobesSoa<'a, T> {
+    /// The coherent specular (direct) lobe, attenuation included.
+    pub specular: MuellerSoa<'a, T>,
+    /// The scattered part, attenuation included.
+    pub scattered: MuellerSoa<'a, T>,
 }
 
 /// The exit s/p frames of a batch, as the unit `ŝ` axis of each ([`Frame::x`] of

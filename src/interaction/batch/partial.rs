@@ -61,6 +61,7 @@ use crate::interaction::{Geometry, Kernel, PreparedPacket, Surface};
 use crate::packet::WavePacket;
 use crate::psd::{GaussianPsd, Psd};
 use crate::real::Real;
+use crate::simd::complex::C;
 
 /// One exit evaluated by the per-direction kernel: the specular and scattered Stokes vectors
 /// and the exit s vector.
@@ -109,6 +110,40 @@ pub(super) fn lobe_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
     e: &ExitLanes<S, F>,
     below: Option<&TransmissionPrep<F>>,
 ) -> LobeLanes<S, F> {
+    let parts = lobe_parts::<S, F, Q>(s, (p, q), series, e, below);
+    if p.intensity {
+        intensity_lanes::<S, F, Q>(s, (p, q), &parts)
+    } else {
+        stokes_lanes::<S, F, Q>(s, (p, q), e, &parts)
+    }
+}
+
+/// What [`lobe_lanes`] computes before it assembles the Stokes vectors (and
+/// [`mueller_lanes`] the Mueller matrices): `cos θ_o`, the Rayleigh–Rice factors, the two
+/// parts' log scales and effective vectors, the side's specular lobe and the lanes to redo so
+/// far (within `√ε` of the normal, a series lane out of range).
+pub(super) struct LobeParts<'t, S: Simd, F: Real> {
+    cos_o: F::V<S>,
+    factors: [C<F::V<S>>; 4],
+    ln_spec: F::V<S>,
+    ln_scat: F::V<S>,
+    v_spec: [F::V<S>; 4],
+    v_scat: [F::V<S>; 4],
+    /// `None`: no specular lobe on this side; `Some(None)` in reflection; `Some(Some(t))` in
+    /// transmission.
+    spec: Option<Option<&'t TransmissionPrep<F>>>,
+    redo: F::M<S>,
+}
+
+/// [`LobeParts`] of one wavelength on one vector of exits ([`lobe_lanes`]' arguments).
+#[inline(always)]
+fn lobe_parts<'t, S: Simd, F: Real, Q: LaneConsts<S, F>>(
+    s: S,
+    (p, q): (&LobePrep<F>, &Q),
+    series: Option<&SeriesPrep<F>>,
+    e: &ExitLanes<S, F>,
+    below: Option<&'t TransmissionPrep<F>>,
+) -> LobeParts<'t, S, F> {
     let c = |v: F| F::vsplat(s, v);
     let (add, sub, mul) = (F::vadd::<S>, F::vsub::<S>, F::vmul::<S>);
     let inc = &p.inc;
@@ -213,39 +248,167 @@ pub(super) fn lobe_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
         let tv = [c(t[0]), c(t[1]), c(t[2]), c(t[3])];
         ((tv, lgw(s, &q.spec_half(s), h0, h1)), (tv, scat_logs[2]))
     };
-    let zero = c(F::zero());
     let ln_scat = if series.is_some() {
         add(s, m_scat, ln_scat0)
     } else {
         add(s, add(s, ln_alpha, m_scat), ln_scat0)
     };
     let ln_spec = add(s, add(s, ln_alpha, m_spec), ln_spec0);
+    LobeParts {
+        cos_o,
+        factors,
+        ln_spec,
+        ln_scat,
+        v_spec,
+        v_scat,
+        spec,
+        redo: F::vor(s, e.frame.normal, redo_series),
+    }
+}
+
+/// [`lobe_lanes`] at the `Intensity` level.
+#[inline(always)]
+fn intensity_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
+    s: S,
+    (p, q): (&LobePrep<F>, &Q),
+    parts: &LobeParts<'_, S, F>,
+) -> LobeLanes<S, F> {
+    let c = |v: F| F::vsplat(s, v);
+    let mul = F::vmul::<S>;
+    let zero = c(F::zero());
+    let &LobeParts {
+        cos_o,
+        factors,
+        ln_spec,
+        ln_scat,
+        spec,
+        redo,
+        ..
+    } = parts;
+    // S0 only, of the effective vector (1, 0, 0, 0): the scattered M₀₀ cos θ_o (the S0 of
+    // `assemble_vector`, bit for bit), the specular M₀₀ cos θ_o (the frame change keeps
+    // row 0 of the Fresnel matrix: the S0 of `fresnel_stokes`, bit for bit), and of
+    // `onto_cone` the S0 alone (u₀ where u₀ > 0, else 0; it never changes u₀).
+    let s0 = |u: F::V<S>| [F::vselect(s, F::vlt(s, zero, u), u, zero), zero, zero, zero];
+    let u_scat = s0(stages::stokes::assemble_s0::<S, F>(s, factors, cos_o));
+    let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
+    let (specular, redo_spec) = match spec {
+        Some(side) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
+            let m00 = side.map_or_else(|| q.fresnel_m00(s), |t| c(t.fresnel[(0, 0)]));
+            let u = s0(mul(s, m00, cos_o));
+            stages::channels::scaled::<S, F>(s, p, u, ln_spec)
+        }
+        _ => ([zero; 4], F::vlt(s, zero, zero)),
+    };
+    LobeLanes {
+        specular,
+        scattered,
+        redo: F::vor(s, redo, F::vor(s, redo_scat, redo_spec)),
+    }
+}
+
+/// The lanes of one vector of pairs as Mueller matrices (`[j]` column `j`, in each exit's
+/// s/p frame, acting on Stokes vectors in the incident s/p frame), for
+/// `Kernel::evaluate_pairs_mueller`.
+pub(super) struct MuellerLanes<S: Simd, F: Real> {
+    pub(super) specular: stages::channels::MatrixLanes<S, F>,
+    pub(super) scattered: stages::channels::MatrixLanes<S, F>,
+    /// The lanes the per-direction kernel must redo.
+    pub(super) redo: F::M<S>,
+}
+
+/// [`lobe_lanes`] in reflection at first order as Mueller matrices, for a packet whose
+/// effective vector is the unpolarized `(1, 0, 0, 0)` with one channel (`T = I`: the closed
+/// form of `PreparedPacket::unpolarized_isotropic` the pairs use). Column `j` is what the
+/// Stokes assembly gives for the effective vector `e_j` before the projection onto the cone,
+/// so column 0 is [`lobe_lanes`]' vector before that projection, bit for bit; the scale, the
+/// dark and negligible parts and the lanes to redo follow `M₀₀`
+/// ([`stages::channels::scaled_matrix`]). At the `Intensity` level `M₀₀` alone (the other
+/// entries 0): [`lobe_lanes`]' `S0`.
+#[inline(always)]
+pub(super) fn mueller_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
+    s: S,
+    (p, q): (&LobePrep<F>, &Q),
+    e: &ExitLanes<S, F>,
+) -> MuellerLanes<S, F> {
+    debug_assert!(
+        !p.three && p.t_stokes == nalgebra::Vector4::new(F::one(), F::zero(), F::zero(), F::zero()),
+        "mueller_lanes: an unpolarized packet with one channel"
+    );
+    let c = |v: F| F::vsplat(s, v);
+    let zero = c(F::zero());
+    let parts = lobe_parts::<S, F, Q>(s, (p, q), None, e, None);
     if p.intensity {
-        // S0 only, of the effective vector (1, 0, 0, 0): the scattered M₀₀ cos θ_o (the S0 of
-        // `assemble_vector`, bit for bit), the specular M₀₀ cos θ_o (the frame change keeps
-        // row 0 of the Fresnel matrix: the S0 of `fresnel_stokes`, bit for bit), and of
-        // `onto_cone` the S0 alone (u₀ where u₀ > 0, else 0; it never changes u₀).
-        let s0 = |u: F::V<S>| [F::vselect(s, F::vlt(s, zero, u), u, zero), zero, zero, zero];
-        let u_scat = s0(stages::stokes::assemble_s0::<S, F>(s, factors, cos_o));
-        let (scattered, redo_scat) = stages::channels::scaled::<S, F>(s, p, u_scat, ln_scat);
-        let (specular, redo_spec) = match spec {
-            Some(side) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
-                let m00 = side.map_or_else(|| q.fresnel_m00(s), |t| c(t.fresnel[(0, 0)]));
-                let u = s0(mul(s, m00, cos_o));
-                stages::channels::scaled::<S, F>(s, p, u, ln_spec)
-            }
-            _ => ([zero; 4], F::vlt(s, zero, zero)),
-        };
-        return LobeLanes {
-            specular,
-            scattered,
-            redo: F::vor(
-                s,
-                F::vor(s, frame.normal, redo_series),
-                F::vor(s, redo_scat, redo_spec),
-            ),
+        let l = intensity_lanes::<S, F, Q>(s, (p, q), &parts);
+        let m00 = |v: F::V<S>| [[v, zero, zero, zero], [zero; 4], [zero; 4], [zero; 4]];
+        return MuellerLanes {
+            specular: m00(l.specular[0]),
+            scattered: m00(l.scattered[0]),
+            redo: l.redo,
         };
     }
+    let LobeParts {
+        cos_o,
+        factors,
+        ln_spec,
+        ln_scat,
+        spec,
+        redo,
+        ..
+    } = parts;
+    // The effective vectors e_j as [P, Q, S2, S3] (`channels::halves` of e_j).
+    let (half, one) = (c(F::lit(0.5)), c(F::one()));
+    let assemble = |b: [F::V<S>; 4]| stages::stokes::assemble_vector::<S, F>(s, b, factors, cos_o);
+    let scat = [
+        assemble([half, half, zero, zero]),
+        assemble([half, c(F::lit(-0.5)), zero, zero]),
+        assemble([zero, zero, one, zero]),
+        assemble([zero, zero, zero, one]),
+    ];
+    let (scattered, redo_scat) = stages::channels::scaled_matrix::<S, F>(s, p, scat, ln_scat);
+    let (specular, redo_spec) = match spec {
+        Some(None) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
+            let (r, s_out) = (e.r, e.frame.s_out);
+            let column = |v: [F::V<S>; 4]| q.fresnel_stokes(s, r, s_out, v);
+            let m = [
+                column([cos_o, zero, zero, zero]),
+                column([zero, cos_o, zero, zero]),
+                column([zero, zero, cos_o, zero]),
+                column([zero, zero, zero, cos_o]),
+            ];
+            stages::channels::scaled_matrix::<S, F>(s, p, m, ln_spec)
+        }
+        _ => ([[zero; 4]; 4], F::vlt(s, zero, zero)),
+    };
+    MuellerLanes {
+        specular,
+        scattered,
+        redo: F::vor(s, redo, F::vor(s, redo_scat, redo_spec)),
+    }
+}
+
+/// [`lobe_lanes`] at the Stokes levels.
+#[inline(always)]
+fn stokes_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
+    s: S,
+    (p, q): (&LobePrep<F>, &Q),
+    e: &ExitLanes<S, F>,
+    parts: &LobeParts<'_, S, F>,
+) -> LobeLanes<S, F> {
+    let c = |v: F| F::vsplat(s, v);
+    let mul = F::vmul::<S>;
+    let zero = c(F::zero());
+    let (r, frame) = (e.r, &e.frame);
+    let &LobeParts {
+        cos_o,
+        factors,
+        ln_spec,
+        ln_scat,
+        v_spec,
+        v_scat,
+        spec,
+        redo,
+    } = parts;
     let raw_scat = stages::stokes::assemble_vector::<S, F>(
         s,
         stages::channels::halves::<S, F>(s, v_scat),
@@ -280,11 +443,7 @@ pub(super) fn lobe_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
     LobeLanes {
         specular,
         scattered,
-        redo: F::vor(
-            s,
-            F::vor(s, frame.normal, redo_series),
-            F::vor(s, redo_scat, redo_spec),
-        ),
+        redo: F::vor(s, redo, F::vor(s, redo_scat, redo_spec)),
     }
 }
 

@@ -313,6 +313,10 @@ pub trait Throughput<T: Real>: Copy + Debug + PartialEq + sealed::Sealed {
     /// `true` when every entry is finite.
     #[must_use]
     fn is_finite(&self) -> bool;
+    /// The sixteen entries of the Mueller matrix in row-major order (`[4 k + l]` holds
+    /// `M_kl`); for a scalar, `M₀₀` followed by fifteen zeros.
+    #[must_use]
+    fn entries(&self) -> [T; 16];
     /// The re-expression of light given in frame `from` in frame `to` (the same beam):
     /// [`crate::frame::frame_change_mueller`] for Mueller matrices, `1` for scalars.
     #[must_use]
@@ -341,6 +345,10 @@ impl<T: Real> sealed::Sealed for T {}
 
 impl<T: Real> Throughput<T> for Mueller<T> {
     type Light = Stokes<T>;
+    #[inline]
+    fn entries(&self) -> [T; 16] {
+        core::array::from_fn(|i| self.0[(i / 4, i % 4)])
+    }
     #[inline]
     fn zero() -> Self {
         Mueller(Matrix4::zeros())
@@ -405,6 +413,12 @@ impl<T: Real> Throughput<T> for Mueller<T> {
 
 impl<T: Real> Throughput<T> for T {
     type Light = T;
+    #[inline]
+    fn entries(&self) -> [T; 16] {
+        let mut m = [T::zero(); 16];
+        m[0] = *self;
+        m
+    }
     #[inline]
     fn zero() -> Self {
         T::zero()

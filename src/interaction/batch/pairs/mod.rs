@@ -29,10 +29,10 @@ use nalgebra::Vector3;
 use pulp::{Simd, WithSimd};
 
 use super::DirectionsSoa;
-use super::outputs::{ExitFramesSoa, LobesSoa, check_lengths};
+use super::outputs::{ExitFramesSoa, LobesSoa, MuellerLobesSoa, check_lengths};
 use super::partial::{
-    ScalarExit, as_written, exit_lanes, lane_prep_at, load, lobe_lanes, redo_lanes, row_maker,
-    store, write_scalar,
+    ScalarExit, as_written, exit_lanes, lane_prep_at, load, lobe_lanes, mueller_lanes, redo_lanes,
+    row_maker, store, write_scalar,
 };
 use super::per_lane::{Gathered, MAX_LANES};
 use super::prep::{LANE_FIELDS, LobePrep};
@@ -40,9 +40,10 @@ use super::stages::validity::clearly_valid_lanes_about;
 use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::coherence::{CoherenceModel, CoherenceWeights};
-use crate::interaction::polarization::PolarizationModel;
+use crate::interaction::polarization::{PolarizationModel, Throughput};
 use crate::interaction::roughness::{RoughnessModel, RoughnessWeights};
 use crate::interaction::{Geometry, Kernel, Surface};
+use crate::mueller::batch::MuellerSoa;
 use crate::real::Real;
 
 mod consts;
@@ -148,13 +149,123 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
         Coh: CoherenceWeights<T, S::Psd>,
         Rough: RoughnessWeights<T, S::Psd, Coh>,
     {
+        check_lengths(&pairs.exit, core::slice::from_ref(out), frames.as_deref())?;
+        self.pairs_into(material, k, surface, pairs, Sink::Stokes(out), frames)
+    }
+
+    /// [`Kernel::evaluate_pairs`] as Mueller matrices: for every pair of `pairs` at the
+    /// wavenumber `k` (rad/µm, in the medium above `surface`), in reflection, both lobes'
+    /// `M` into `out` and, when given, the exit s/p frames into `frames`. Entry `i` is
+    /// [`Kernel::evaluate_mueller_prepared`] of the pair's packet (unpolarized light of unit
+    /// irradiance from `to_source[i]` with the section `I/wᵢ²` on the surface, in the closed
+    /// form of [`Kernel::evaluate_pairs`]) at the geometry [`Geometry::new`] of the pair: the
+    /// matrix acts on Stokes vectors in the pair's incident s/p frame and gives them in its
+    /// exit s/p frame, per unit incident irradiance. Its first column is what
+    /// [`Kernel::evaluate_pairs`] writes (before that projects onto the cone of valid
+    /// vectors). At the [`super::super::Intensity`] level `M₀₀` only (`m[0]`; the other
+    /// slices are not written). This is the value a backward path tracer's weight needs at
+    /// each lane's vertex: the throughput it carries is a Mueller matrix.
+    ///
+    /// # Lanes
+    /// As [`Kernel::evaluate_pairs`]: column `j` of a lane is its Stokes assembly for the
+    /// effective vector `e_j`, scaled like `M₀₀`. Against the per-direction kernel, every entry
+    /// within the bound [`Kernel::evaluate_batch`] documents for a vector of `S0 = M₀₀`
+    /// (`tests`: `mueller_pairs_equal_the_per_direction_kernel`). Allocates nothing.
+    ///
+    /// # Errors
+    /// As [`Kernel::evaluate_pairs`] (a slice of `out` shorter than `pairs.exit.x`: every
+    /// slice of both lobes is checked, at the `Intensity` level too).
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::batch::{DirectionsSoa, MuellerLobesSoa, MuellerSoa, PairsSoa};
+    /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughConductor};
+    /// use gmueller::psd::GaussianPsd;
+    /// use nalgebra::Vector3;
+    /// use num_complex::Complex;
+    ///
+    /// let gold = RoughConductor::new(GaussianPsd::<f64, 2>::isotropic(0.02, 1.0)?,
+    ///     Complex::new(0.47, 2.4))?;
+    /// let surface = Frame::from_normal(Vector3::z())?;
+    /// let k = 2.0 * std::f64::consts::PI / 0.55;
+    /// let (s, r, inverse_width) = ([0.4, 0.0, 0.9], [-0.4, 0.05, 0.9], [0.2]);
+    /// let pairs = PairsSoa {
+    ///     to_source: DirectionsSoa { x: &s[..1], y: &s[1..2], z: &s[2..] },
+    ///     exit: DirectionsSoa { x: &r[..1], y: &r[1..2], z: &r[2..] },
+    ///     inverse_width: &inverse_width,
+    /// };
+    /// let mut buf = [[0.0; 1]; 32];
+    /// let [m0, m1, m2, m3, m4, m5, m6, m7, m8, m9, m10, m11, m12, m13, m14, m15,
+    ///     n0, n1, n2, n3, n4, n5, n6, n7, n8, n9, n10, n11, n12, n13, n14, n15] = &mut buf;
+    /// let mut out = MuellerLobesSoa {
+    ///     specular: MuellerSoa { m: [m0, m1, m2, m3, m4, m5, m6, m7, m8, m9, m10, m11, m12,
+    ///         m13, m14, m15] },
+    ///     scattered: MuellerSoa { m: [n0, n1, n2, n3, n4, n5, n6, n7, n8, n9, n10, n11, n12,
+    ///         n13, n14, n15] },
+    /// };
+    /// let kernel = Kernel::<Full, Partial>::default();
+    /// kernel.evaluate_pairs_mueller(&gold, k, &surface, pairs, &mut out, None)?;
+    /// // Against the pair's prepared packet and geometry, one at a time.
+    /// let prepared = kernel.prepare_unpolarized_isotropic(k, inverse_width[0]);
+    /// let g = Geometry::new(k, &surface, Vector3::from(s), Vector3::from(r))?;
+    /// let one = kernel.evaluate_mueller_prepared(&gold, &prepared, &g).scattered.matrix();
+    /// for (i, m) in out.scattered.m.iter().enumerate() {
+    ///     assert!((m[0] - one[(i / 4, i % 4)]).abs() <= 1e-12 * one[(0, 0)]);
+    /// }
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    pub fn evaluate_pairs_mueller<T, S>(
+        &self,
+        material: &S,
+        k: T,
+        surface: &Frame<T>,
+        pairs: PairsSoa<'_, T>,
+        out: &mut MuellerLobesSoa<'_, T>,
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error>
+    where
+        T: Real,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
+    {
+        let n = pairs.exit.len();
+        let short = |m: &MuellerSoa<'_, T>| m.m.iter().any(|c| c.len() < n);
+        if short(&out.specular) || short(&out.scattered) {
+            return Err(Error::OutOfRange {
+                what: "batch slice length",
+                value: n as f64,
+                expected: "every direction, lobe and frame slice at least as long as exits.x",
+            });
+        }
+        check_lengths(&pairs.exit, &[], frames.as_deref())?;
+        self.pairs_into(material, k, surface, pairs, Sink::Mueller(out), frames)
+    }
+
+    /// The checks and the pass of [`Kernel::evaluate_pairs`] and
+    /// [`Kernel::evaluate_pairs_mueller`] (the output slices' lengths checked by the caller).
+    fn pairs_into<T, S>(
+        &self,
+        material: &S,
+        k: T,
+        surface: &Frame<T>,
+        pairs: PairsSoa<'_, T>,
+        sink: Sink<'_, '_, T>,
+        frames: Option<&mut ExitFramesSoa<'_, T>>,
+    ) -> Result<(), Error>
+    where
+        T: Real,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessWeights<T, S::Psd, Coh>,
+    {
         let PairsSoa {
             to_source,
             exit,
             inverse_width,
         } = pairs;
         let n = exit.len();
-        check_lengths(&exit, core::slice::from_ref(out), frames.as_deref())?;
         if to_source.x.len() < n
             || to_source.y.len() < n
             || to_source.z.len() < n
@@ -205,21 +316,28 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
             .as_ref()
             .zip(maker.as_ref())
             .map(|(h, m)| consts::Shared::new(h, m));
-        let mut scalar = |i: usize| -> Result<ScalarExit<T>, Error> {
+        let mueller = matches!(sink, Sink::Mueller(_));
+        let mut scalar = |i: usize| -> Result<ScalarPair<T>, Error> {
             #[cfg(test)]
             tests::PER_DIRECTION.with(|c| c.set(c.get() + 1));
             let g = Geometry::new(k, surface, at(&to_source, i), at(&exit, i))?;
-            Ok(as_written(
-                &self.evaluate_prepared(material, &prepared(i), &g),
-                &g,
-            ))
+            Ok(if mueller {
+                let m = self.evaluate_mueller_prepared(material, &prepared(i), &g);
+                let (sp, sc) = (m.specular.entries(), m.scattered.entries());
+                ScalarPair::Mueller(sp, sc, g.exit_sp().x().into())
+            } else {
+                ScalarPair::Stokes(as_written(
+                    &self.evaluate_prepared(material, &prepared(i), &g),
+                    &g,
+                ))
+            })
         };
         crate::simd::dispatch(PairLobes {
             to_source,
             exits: exit,
             n,
             intensity: Pol::LEVEL == crate::interaction::polarization::PolarizationLevel::Intensity,
-            out,
+            sink,
             frames,
             head: head.as_ref(),
             shared: shared.as_ref(),
@@ -325,7 +443,7 @@ struct PairLobes<'r, 'e, 'o, 'f, F: Real> {
     exits: DirectionsSoa<'e, F>,
     n: usize,
     intensity: bool,
-    out: &'r mut LobesSoa<'o, F>,
+    sink: Sink<'r, 'o, F>,
     frames: Option<&'r mut ExitFramesSoa<'f, F>>,
     /// The constants the pairs share (`None`: no pair in lanes).
     head: Option<&'r LobePrep<F>>,
@@ -336,7 +454,51 @@ struct PairLobes<'r, 'e, 'o, 'f, F: Real> {
     /// Pair `i`'s own constants, `None` where the lanes do not reproduce its kernel.
     row: &'r mut dyn FnMut(usize) -> Option<[F; LANE_FIELDS]>,
     /// Pair `i` by the per-direction kernel.
-    scalar: &'r mut dyn FnMut(usize) -> Result<ScalarExit<F>, Error>,
+    scalar: &'r mut dyn FnMut(usize) -> Result<ScalarPair<F>, Error>,
+}
+
+/// Where [`PairLobes`] writes: Stokes vectors ([`Kernel::evaluate_pairs`]) or Mueller
+/// matrices ([`Kernel::evaluate_pairs_mueller`]).
+enum Sink<'r, 'o, F> {
+    Stokes(&'r mut LobesSoa<'o, F>),
+    Mueller(&'r mut MuellerLobesSoa<'o, F>),
+}
+
+/// One pair by the per-direction kernel, as its [`Sink`] takes it.
+enum ScalarPair<F> {
+    Stokes(ScalarExit<F>),
+    /// The specular and scattered matrices' entries (row-major) and the exit s vector.
+    Mueller([F; 16], [F; 16], [F; 3]),
+}
+
+/// Writes pair `i` as the per-direction kernel gave it: its first `len` Stokes parameters or
+/// matrix entries (`S0` or `M₀₀` alone at the `Intensity` level), and its exit s vector where
+/// `frames` is given.
+fn write_pair<F: Real>(
+    i: usize,
+    pair: ScalarPair<F>,
+    sink: &mut Sink<'_, '_, F>,
+    frames: Option<&mut ExitFramesSoa<'_, F>>,
+    intensity: bool,
+) {
+    match (pair, sink) {
+        (ScalarPair::Stokes(x), Sink::Stokes(out)) => {
+            write_scalar(i, x, (out, frames), if intensity { 1 } else { 4 });
+        }
+        (ScalarPair::Mueller(sp, sc, so), Sink::Mueller(out)) => {
+            let len = if intensity { 1 } else { 16 };
+            for k in 0..len {
+                out.specular.m[k][i] = sp[k];
+                out.scattered.m[k][i] = sc[k];
+            }
+            if let Some(f) = frames {
+                for (col, v) in f.s.iter_mut().zip(so) {
+                    col[i] = v;
+                }
+            }
+        }
+        _ => unreachable!("the per-direction kernel answers in its sink's form"),
+    }
 }
 
 impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
@@ -350,7 +512,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             exits,
             n,
             intensity,
-            out,
+            mut sink,
             mut frames,
             head,
             shared,
@@ -361,7 +523,6 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
         let lanes = F::width::<S>();
         let (xs, ys, zs) = (&exits.x[..n], &exits.y[..n], &exits.z[..n]);
         let (sxs, sys, szs) = (&to_source.x[..n], &to_source.y[..n], &to_source.z[..n]);
-        let stokes_len = if intensity { 1 } else { 4 };
         let mut buf = [[F::zero(); MAX_LANES]; 3];
         let mut scratch = [[F::zero(); MAX_LANES]; 4];
         let mut cols = [[F::zero(); MAX_LANES]; LANE_FIELDS];
@@ -371,7 +532,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             let fresh = chunk * lanes;
             let Some(p) = head else {
                 for i in fresh.max(start)..start + count {
-                    write_scalar(i, scalar(i)?, (out, frames.as_deref_mut()), stokes_len);
+                    write_pair(i, scalar(i)?, &mut sink, frames.as_deref_mut(), intensity);
                 }
                 continue;
             };
@@ -400,7 +561,7 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
                     }
                     if !built {
                         for i in fresh.max(start)..start + count {
-                            write_scalar(i, scalar(i)?, (out, frames.as_deref_mut()), stokes_len);
+                            write_pair(i, scalar(i)?, &mut sink, frames.as_deref_mut(), intensity);
                         }
                         continue;
                     }
@@ -416,22 +577,36 @@ impl<F: Real> WithSimd for PairLobes<'_, '_, '_, '_, F> {
             let y = load::<S, F>(ys, by, start, count);
             let z = load::<S, F>(zs, bz, start, count);
             let e = exit_lanes::<S, F, Gathered<S, F>>(s, (&p.inc, &g), x, y, z);
-            let l = lobe_lanes::<S, F, Gathered<S, F>>(s, (p, &g), None, &e, None);
-            for k in 0..stokes_len {
-                store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
-                store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
-            }
+            let redo = match &mut sink {
+                Sink::Stokes(out) => {
+                    let l = lobe_lanes::<S, F, Gathered<S, F>>(s, (p, &g), None, &e, None);
+                    for k in 0..if intensity { 1 } else { 4 } {
+                        store::<S, F>(s, out.specular.s[k], l.specular[k], start, count);
+                        store::<S, F>(s, out.scattered.s[k], l.scattered[k], start, count);
+                    }
+                    l.redo
+                }
+                Sink::Mueller(out) => {
+                    let l = mueller_lanes::<S, F, Gathered<S, F>>(s, (p, &g), &e);
+                    for k in 0..if intensity { 1 } else { 16 } {
+                        let (row, col) = (k / 4, k % 4);
+                        store::<S, F>(s, out.specular.m[k], l.specular[col][row], start, count);
+                        store::<S, F>(s, out.scattered.m[k], l.scattered[col][row], start, count);
+                    }
+                    l.redo
+                }
+            };
             if let Some(f) = frames.as_deref_mut() {
                 for k in 0..3 {
                     store::<S, F>(s, f.s[k], e.frame.s_out[k], start, count);
                 }
             }
-            if F::vany(s, l.redo) {
+            if F::vany(s, redo) {
                 // (The tail vector's lanes before `fresh` were stored again above: a lane to
                 // redo there is redone again.)
-                for j in redo_lanes::<S, F>(s, l.redo, count) {
+                for j in redo_lanes::<S, F>(s, redo, count) {
                     let i = start + j;
-                    write_scalar(i, scalar(i)?, (out, frames.as_deref_mut()), stokes_len);
+                    write_pair(i, scalar(i)?, &mut sink, frames.as_deref_mut(), intensity);
                 }
             }
         }

@@ -484,3 +484,216 @@ fn the_first_bad_pair_gives_the_error() {
     first_error_is_the_scalar_one::<f64>();
     first_error_is_the_scalar_one::<f32>();
 }
+
+/// Checks every pair of `pairs(seed, n)` through [`Kernel::evaluate_pairs_mueller`] against the
+/// per-direction kernel's [`Kernel::evaluate_mueller_prepared`] of the pair's packet: every
+/// entry within `evaluate_batch`'s bound for a vector of `S0 = M₀₀` (at the `Intensity`
+/// level `M₀₀` alone, the other slices untouched), the exit frames bit for bit those of
+/// [`Kernel::evaluate_pairs`]; returns how many pairs went to the per-direction kernel.
+fn check_mueller<T, S, Pol, Coh, Rough>(
+    kernel: &Kernel<Pol, Coh, Rough>,
+    material: &S,
+    (seed, n, lambda): (u64, usize, f64),
+    what: &str,
+) -> usize
+where
+    T: Real,
+    S: Surface<T>,
+    Pol: PolarizationModel,
+    Coh: CoherenceModel + CoherenceWeights<T, S::Psd>,
+    Rough: RoughnessModel + RoughnessWeights<T, S::Psd, Coh>,
+{
+    use crate::interaction::batch::{MuellerLobesSoa, MuellerSoa};
+    use crate::interaction::polarization::{PolarizationLevel, Throughput};
+    let surface = Frame::from_normal(Vector3::new(T::zero(), T::zero(), T::one())).unwrap();
+    let k = T::lit(std::f64::consts::TAU / lambda);
+    let ps = pairs(seed, n);
+    let col = |f: &dyn Fn(&Pair) -> f64| -> Vec<T> { ps.iter().map(|p| T::lit(f(p))).collect() };
+    let (sx, sy, sz) = (col(&|p| p.0.x), col(&|p| p.0.y), col(&|p| p.0.z));
+    let (rx, ry, rz) = (col(&|p| p.1.x), col(&|p| p.1.y), col(&|p| p.1.z));
+    let inv_w = col(&|p| p.2);
+    let pairs = PairsSoa {
+        to_source: DirectionsSoa {
+            x: &sx,
+            y: &sy,
+            z: &sz,
+        },
+        exit: DirectionsSoa {
+            x: &rx,
+            y: &ry,
+            z: &rz,
+        },
+        inverse_width: &inv_w,
+    };
+    let mut m: [Vec<T>; 32] = core::array::from_fn(|_| vec![T::lit(-7.0); n]);
+    let mut frames: [Vec<T>; 3] = core::array::from_fn(|_| vec![T::lit(-7.0); n]);
+    let before = PER_DIRECTION.with(Cell::get);
+    {
+        let (a, b) = m.split_at_mut(16);
+        let mut it_a = a.iter_mut().map(Vec::as_mut_slice);
+        let mut it_b = b.iter_mut().map(Vec::as_mut_slice);
+        let mut out = MuellerLobesSoa {
+            specular: MuellerSoa {
+                m: core::array::from_fn(|_| it_a.next().unwrap()),
+            },
+            scattered: MuellerSoa {
+                m: core::array::from_fn(|_| it_b.next().unwrap()),
+            },
+        };
+        let [fx, fy, fz] = &mut frames;
+        let mut f = ExitFramesSoa { s: [fx, fy, fz] };
+        kernel
+            .evaluate_pairs_mueller(material, k, &surface, pairs, &mut out, Some(&mut f))
+            .unwrap();
+    }
+    let redone = PER_DIRECTION.with(Cell::get) - before;
+    // The Stokes pass's frames.
+    let mut stokes = Columns::<T>::new(n);
+    stokes.write(|out, f| {
+        kernel
+            .evaluate_pairs(material, k, &surface, pairs, out, Some(f))
+            .unwrap();
+    });
+    let intensity = Pol::LEVEL == PolarizationLevel::Intensity;
+    let eps = T::EPSILON.to_f64();
+    for i in 0..n {
+        let s = Vector3::new(sx[i], sy[i], sz[i]);
+        let r = Vector3::new(rx[i], ry[i], rz[i]);
+        let prepared = kernel.prepare_unpolarized_isotropic(k, inv_w[i]);
+        let g = Geometry::new(k, &surface, s, r).unwrap();
+        let one = kernel.evaluate_mueller_prepared(material, &prepared, &g);
+        for (got, want) in frames.iter().zip(&stokes.frames) {
+            assert!(same(got[i], want[i]), "{what}: pair {i} frame");
+        }
+        // Where the BSDF form writes a part as 0 because its scale alone is subnormal (its
+        // unscaled matrix, some 10³ in these units, would have made it normal), the lanes keep
+        // the product: there the oracle of M₀₀ (and of the first column) is the Stokes kernel,
+        // which folds the matrix into the exponent, and every other entry is at most M₀₀.
+        let stokes_one = kernel.evaluate_prepared(material, &prepared, &g);
+        let (sp, sc) = match stokes_one.stokes() {
+            Some((sp, sc)) => (sp.0, sc.0),
+            None => {
+                let z = T::zero();
+                let v = |x: T| nalgebra::Vector4::new(x, z, z, z);
+                (
+                    v(stokes_one.specular_intensity()),
+                    v(stokes_one.scattered_intensity()),
+                )
+            }
+        };
+        for (lobe, mut want, vector) in [
+            (0, one.specular.entries(), sp),
+            (16, one.scattered.entries(), sc),
+        ] {
+            let zeroed = want.iter().all(|x| *x == T::zero());
+            if zeroed {
+                let m00 = m[lobe][i];
+                for e in 1..16 {
+                    assert!(
+                        intensity || m[lobe + e][i].abs() <= m00,
+                        "{what}: pair {i}, lobe {lobe}: |M{e}| > M00"
+                    );
+                }
+                if intensity {
+                    want[0] = vector[0];
+                } else {
+                    for r in 0..4 {
+                        want[4 * r] = vector[r];
+                    }
+                    for e in (0..16).filter(|e| e % 4 != 0) {
+                        want[e] = m[lobe + e][i];
+                    }
+                }
+            }
+            let l = want[0].to_f64();
+            let bound = 4.0
+                * eps
+                * (4.0 + l.abs().max(f64::MIN_POSITIVE).ln().abs())
+                * (1.0 + 3f64.sqrt())
+                * l.abs()
+                + T::MIN_POSITIVE.to_f64();
+            for e in 0..16 {
+                let got = m[lobe + e][i];
+                if intensity && e > 0 {
+                    assert!(got == T::lit(-7.0), "{what}: pair {i}: M{e} written");
+                    continue;
+                }
+                let d = (got.to_f64() - want[e].to_f64()).abs();
+                assert!(
+                    d <= bound,
+                    "{what}: pair {i}, lobe {lobe}, M{}{}: {:e} vs {:e} (bound {bound:e})",
+                    e / 4,
+                    e % 4,
+                    got.to_f64(),
+                    want[e].to_f64()
+                );
+            }
+        }
+    }
+    redone
+}
+
+/// [`check_mueller`] at every level and material of [`every_case`], in type `T`; the pairs
+/// redone one at a time stay few.
+fn every_mueller_case<T: Real>(seed: u64, n: usize) {
+    let t = |x: f64| T::lit(x);
+    let iso = GaussianPsd::<T, 2>::isotropic(t(0.02), t(1.0)).unwrap();
+    let aniso = GaussianPsd::<T, 2>::from_autocorrelation(
+        t(4e-4),
+        &Gaussian::new(Matrix2::new(t(2.0), t(0.6), t(0.6), t(0.5))).unwrap(),
+    )
+    .unwrap();
+    let gold = Complex::new(t(0.47), t(2.4));
+    let gold_iso = RoughConductor::new(iso, gold).unwrap();
+    let gold_aniso = RoughConductor::new(aniso, gold).unwrap();
+    let glass = RoughDielectric::new(iso, t(1.5)).unwrap();
+    let (mut redone, mut total) = (0, 0);
+    let mut run = |r: usize| {
+        redone += r;
+        total += n;
+    };
+    for (m, name) in [(&gold_iso, "gold"), (&gold_aniso, "gold, anisotropic")] {
+        let case = |i: u64| (seed ^ (i << 32), n, 0.38 + 0.4 * (i as f64 / 6.0));
+        run(check_mueller(
+            &Kernel::<Full, Partial>::default(),
+            m,
+            case(0),
+            name,
+        ));
+        run(check_mueller(
+            &Kernel::<OneShape, Partial>::default(),
+            m,
+            case(1),
+            name,
+        ));
+        run(check_mueller(
+            &Kernel::<Intensity, Partial>::default(),
+            m,
+            case(2),
+            name,
+        ));
+        run(check_mueller(
+            &Kernel::<Full, Incoherent>::default(),
+            m,
+            case(3),
+            name,
+        ));
+    }
+    let case = (seed ^ (9 << 32), n, 0.55);
+    run(check_mueller(
+        &Kernel::<Full, Partial>::default(),
+        &glass,
+        case,
+        "glass",
+    ));
+    assert!(
+        redone * 10 < total,
+        "{redone} of {total} pairs redone one at a time"
+    );
+}
+
+#[test]
+fn mueller_pairs_equal_the_per_direction_kernel() {
+    every_mueller_case::<f64>(0x5eed_0003, 203);
+    every_mueller_case::<f32>(0x5eed_0004, 203);
+}

@@ -306,6 +306,46 @@ fn onto_cone_exact<S: Simd, F: Real>(s: S, u: [F::V<S>; 4]) -> [F::V<S>; 4] {
     ]
 }
 
+/// A 4×4 matrix in lanes, by columns (`[j][i]` the lanes of `M_ij`).
+pub(crate) type MatrixLanes<S, F> = [[<F as crate::simd::Lanes>::V<S>; 4]; 4];
+
+/// `m · e^{ln_e}` for the columns of a Mueller matrix (`m[j]` column `j`, `m[0][0] = M₀₀` its
+/// largest entry), under the scalar BSDF form's rules (`prepared::throughput_scaled`, whose
+/// `flush_to_normal` is the rule for small entries of every throughput): 0 where the part is
+/// dark (`ln_e` below the smallest subnormal number, or NaN) or `e^{ln_e}` below the smallest
+/// normal number; then, by `M₀₀ e`, 0 below the smallest normal number, the entries below it
+/// set to 0 from `MIN_POSITIVE/ε` on, unchanged in between (the largest entry taken as `M₀₀`:
+/// the rules agree up to the rounding of the band's edges, within `MIN_POSITIVE`). The mask
+/// is of the lanes the scalar kernel must redo: lit with `e^{ln_e}` beyond the largest
+/// number (where the scalar kernel folds each entry into the exponent).
+#[inline(always)]
+pub(crate) fn scaled_matrix<S: Simd, F: Real>(
+    s: S,
+    p: &LobePrep<F>,
+    m: MatrixLanes<S, F>,
+    ln_e: F::V<S>,
+) -> (MatrixLanes<S, F>, F::M<S>) {
+    let c = |x: F| F::vsplat(s, x);
+    let (zero, tiny) = (c(F::zero()), c(F::MIN_POSITIVE));
+    let e = vexp::<S, F>(s, ln_e);
+    let lit = F::vand(s, F::vle(s, c(p.ln_dark), ln_e), F::vle(s, tiny, e));
+    let redo = F::vand(s, lit, F::vlt(s, c(F::MAX), e));
+    let m00 = F::vmul(s, m[0][0], e);
+    let lit = F::vand(s, lit, F::vle(s, tiny, m00));
+    let flush = F::vle(s, c(F::MIN_POSITIVE / F::EPSILON), m00);
+    let entry = |x: F::V<S>| {
+        let y = F::vmul(s, x, e);
+        let kept = F::vand(
+            s,
+            lit,
+            F::vnot(s, F::vand(s, flush, F::vlt(s, F::vabs(s, y), tiny))),
+        );
+        F::vselect(s, kept, y, zero)
+    };
+    let col = |v: [F::V<S>; 4]| [entry(v[0]), entry(v[1]), entry(v[2]), entry(v[3])];
+    ([col(m[0]), col(m[1]), col(m[2]), col(m[3])], redo)
+}
+
 /// `u · e^{ln_e}` with the lanes where the part is dark (`ln_e` below the smallest subnormal
 /// number, or NaN) or negligible (its `S0` below half the smallest normal number) set to 0, and
 /// the mask of the lanes the scalar kernel must redo: lit, not negligible, and `e^{ln_e}`
