@@ -20,7 +20,8 @@
 //! 1024 exits against 4 `evaluate_batch` calls, at first order and (`-series`) with the
 //! Kirchhoff series at `vσ ≈ 1`.
 //! `kernel_pairs/{f64,f32}`: `evaluate_pairs` on 1024 (light, exit) pairs against the same
-//! pairs one at a time (renderer layer, kernel).
+//! pairs one at a time (renderer layer, kernel); `evaluate_pairs_mueller` against
+//! `Bsdf::prepare_surface` + `evaluate_mueller_prepared` one at a time.
 //!
 //! Run: `cargo bench --bench kernel -- --warm-up-time 0.5 --measurement-time 1`.
 use std::hint::black_box;
@@ -31,7 +32,8 @@ use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::fresnel;
 use gmueller::interaction::batch::{
-    DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa, plane_wave_rayleigh_rice,
+    DirectionsSoa, ExitFramesSoa, LobesSoa, MuellerLobesSoa, MuellerSoa, StokesSoa,
+    plane_wave_rayleigh_rice,
 };
 use gmueller::interaction::coherence::CoherenceWeights;
 use gmueller::interaction::level::LevelVisitor;
@@ -1016,7 +1018,9 @@ fn interface_for<T: Real>(c: &mut Criterion, prec: &str) {
 /// `Bsdf::eval_stokes`, which also computes the coherent lobe's mass) and through the kernel
 /// (`Kernel::prepare` of each pair's `SurfaceCoherence` packet, built outside the timing, then
 /// `evaluate_prepared`); and the one material type's batch (`Material::eval_incident_pairs`,
-/// `Full · Partial`, each coherent lobe divided by its light's mass, as the renderer layer).
+/// `Full · Partial`, each coherent lobe divided by its light's mass, as the renderer layer);
+/// and both lobes' Mueller matrices (`evaluate_pairs_mueller`, the backward weight's value)
+/// against `Bsdf::prepare_surface` + `evaluate_mueller_prepared` one pair at a time.
 fn pairs_for<T: Real>(c: &mut Criterion, prec: &str) {
     use gmueller::bsdf::{Bsdf, Material, ShadingPoint, SurfaceCoherence};
     use gmueller::interaction::Level;
@@ -1123,6 +1127,50 @@ fn pairs_for<T: Real>(c: &mut Criterion, prec: &str) {
             }
         });
     });
+    let mut mbuf = vec![vec![T::zero(); M]; 32];
+    g.bench_function("evaluate_pairs_mueller-1024", |bch| {
+        let (sp, sc) = mbuf.split_at_mut(16);
+        let mut sp = sp.iter_mut().map(Vec::as_mut_slice);
+        let mut sc = sc.iter_mut().map(Vec::as_mut_slice);
+        let mut out = MuellerLobesSoa {
+            specular: MuellerSoa {
+                m: core::array::from_fn(|_| sp.next().unwrap()),
+            },
+            scattered: MuellerSoa {
+                m: core::array::from_fn(|_| sc.next().unwrap()),
+            },
+        };
+        bch.iter(|| {
+            let pairs = PairsSoa {
+                to_source: DirectionsSoa {
+                    x: &cols[0],
+                    y: &cols[1],
+                    z: &cols[2],
+                },
+                exit: DirectionsSoa {
+                    x: &cols[3],
+                    y: &cols[4],
+                    z: &cols[5],
+                },
+                inverse_width: &cols[6],
+            };
+            kernel
+                .evaluate_pairs_mueller(black_box(&gold), k, &surf, pairs, &mut out, None)
+                .unwrap();
+        });
+    });
+    g.bench_function(
+        "bsdf-prepare_surface-evaluate_mueller_prepared-1024",
+        |bch| {
+            bch.iter(|| {
+                for (_, s, r) in &packets {
+                    let light = bsdf.prepare_surface(black_box(*s), &sun).unwrap();
+                    let geo = Geometry::new(k, &surf, *s, *r).unwrap();
+                    black_box(kernel.evaluate_mueller_prepared(&gold, light.prepared(), &geo));
+                }
+            });
+        },
+    );
     g.finish();
 }
 

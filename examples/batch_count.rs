@@ -14,8 +14,10 @@
 //! so that the work is not optimised away. A third argument picks another workload: `exits`
 //! (the default, above), `pairs` (`Kernel::evaluate_pairs` on 65,536 pairs of one surface
 //! width), `pairs-horizon` (each pair its own width, the horizon rule), `pairs-scalar` or
-//! `pairs-horizon-scalar` (the same pairs one at a time through the renderer layer), and
-//! `pairs-material` or `pairs-horizon-material` (`Material::eval_incident_pairs`).
+//! `pairs-horizon-scalar` (the same pairs one at a time through the renderer layer),
+//! `pairs-material` or `pairs-horizon-material` (`Material::eval_incident_pairs`), and
+//! `pairs-mueller` or `pairs-horizon-mueller` (`Kernel::evaluate_pairs_mueller`; its checksum
+//! is the sum of the scattered `M₀₀`).
 
 use gmueller::Real;
 use gmueller::frame::Frame;
@@ -104,10 +106,15 @@ fn run<T: Real>(reps: usize) -> f64 {
 /// what the renderer layer does for one such light (`Bsdf::prepare_surface`, then
 /// `Bsdf::eval_stokes`); the pairs of `Lcg::light_and_exit`. The sum of the last pass's
 /// scattered `S0`.
-fn run_pairs<T: Real>(reps: usize, scalar: bool, horizon: bool, material: bool) -> f64 {
+fn run_pairs<T: Real>(
+    reps: usize,
+    scalar: bool,
+    horizon: bool,
+    (material, mueller): (bool, bool),
+) -> f64 {
     use gmueller::bsdf::{Bsdf, SurfaceCoherence};
     use gmueller::interaction::RoughConductor;
-    use gmueller::interaction::batch::PairsSoa;
+    use gmueller::interaction::batch::{MuellerLobesSoa, MuellerSoa, PairsSoa};
     use gmueller::spectral::Metal;
     let lambda = T::lit(0.55);
     let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.0438), T::lit(0.619)).unwrap();
@@ -132,6 +139,7 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool, horizon: bool, material: bool) 
     }
     let k = T::two_pi() / lambda;
     let mut buf = vec![vec![T::zero(); M]; 8];
+    let mut mbuf = vec![vec![T::zero(); if mueller { M } else { 0 }]; 32];
     let [a, b, c, d, e, f, g, h] = &mut buf[..] else {
         unreachable!()
     };
@@ -176,10 +184,30 @@ fn run_pairs<T: Real>(reps: usize, scalar: bool, horizon: bool, material: bool) 
                 },
                 inverse_width: &cols[6],
             };
-            kernel
-                .evaluate_pairs(&gold, k, &surface, pairs, &mut out, None)
-                .unwrap();
+            if mueller {
+                let (sp, sc) = mbuf.split_at_mut(16);
+                let mut sp = sp.iter_mut().map(Vec::as_mut_slice);
+                let mut sc = sc.iter_mut().map(Vec::as_mut_slice);
+                let mut m = MuellerLobesSoa {
+                    specular: MuellerSoa {
+                        m: core::array::from_fn(|_| sp.next().unwrap()),
+                    },
+                    scattered: MuellerSoa {
+                        m: core::array::from_fn(|_| sc.next().unwrap()),
+                    },
+                };
+                kernel
+                    .evaluate_pairs_mueller(&gold, k, &surface, pairs, &mut m, None)
+                    .unwrap();
+            } else {
+                kernel
+                    .evaluate_pairs(&gold, k, &surface, pairs, &mut out, None)
+                    .unwrap();
+            }
         }
+    }
+    if mueller {
+        return mbuf[16].iter().map(|v| v.to_f64()).sum::<f64>();
     }
     out.scattered.s[0].iter().map(|v| v.to_f64()).sum::<f64>()
 }
@@ -196,13 +224,13 @@ fn main() {
             reps,
             w.ends_with("scalar"),
             w.contains("horizon"),
-            w.contains("material"),
+            (w.contains("material"), w.contains("mueller")),
         ),
         (_, w) => run_pairs::<f32>(
             reps,
             w.ends_with("scalar"),
             w.contains("horizon"),
-            w.contains("material"),
+            (w.contains("material"), w.contains("mueller")),
         ),
     };
     println!("{precision} {what}, {reps} passes of {M}: sum of scattered S0 = {sum:e}");

@@ -178,6 +178,7 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     ///
     /// # Examples
     /// ```
+    /// use gmueller::bsdf::{Bsdf, SurfaceCoherence};
     /// use gmueller::frame::Frame;
     /// use gmueller::interaction::batch::{DirectionsSoa, MuellerLobesSoa, MuellerSoa, PairsSoa};
     /// use gmueller::interaction::{Full, Geometry, Kernel, Partial, RoughConductor};
@@ -206,10 +207,12 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
     /// };
     /// let kernel = Kernel::<Full, Partial>::default();
     /// kernel.evaluate_pairs_mueller(&gold, k, &surface, pairs, &mut out, None)?;
-    /// // Against the pair's prepared packet and geometry, one at a time.
-    /// let prepared = kernel.prepare_unpolarized_isotropic(k, inverse_width[0]);
+    /// // Against the pair's light prepared by the renderer layer (the same closed form), one
+    /// // at a time.
+    /// let bsdf = Bsdf::new(&gold, kernel, surface, 0.55)?;
+    /// let light = bsdf.prepare_surface(Vector3::from(s), &SurfaceCoherence::fixed(5.0)?)?;
     /// let g = Geometry::new(k, &surface, Vector3::from(s), Vector3::from(r))?;
-    /// let one = kernel.evaluate_mueller_prepared(&gold, &prepared, &g).scattered.matrix();
+    /// let one = kernel.evaluate_mueller_prepared(&gold, light.prepared(), &g).scattered.matrix();
     /// for (i, m) in out.scattered.m.iter().enumerate() {
     ///     assert!((m[0] - one[(i / 4, i % 4)]).abs() <= 1e-12 * one[(0, 0)]);
     /// }
