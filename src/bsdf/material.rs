@@ -64,6 +64,7 @@ use core::fmt::Debug;
 use nalgebra::Vector3;
 
 use super::sampler::{SamplesSoa, UniformsSoa};
+use super::vertices::VertexQuery;
 use super::{
     Bsdf, BsdfSample, BsdfSurface, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler,
     Part, SampledLobe, SurfaceCoherence,
@@ -570,6 +571,81 @@ impl<T: Real> Material<T> {
         two_sided_pairs(self, at, coherence, (to_source, exits), (out, frames))
     }
 
+    /// [`Material::incident_vertex`] for a batch of vertices, every lane its own shading point,
+    /// exit, light direction and uniforms (what a wavefront renderer's paths are): `out[i]` is
+    /// what `incident_vertex(&q.at, q.exit, coherence, q.to_light, q.u_lobe, q.u)` returns for
+    /// `q = queries[i]`, each lane's error its own. The samplers are built and drawn one lane
+    /// at a time; the two evaluations of every vertex — the light's value and the drawn
+    /// direction's weight — run together in SIMD lanes
+    /// ([`crate::interaction::Kernel::evaluate_pairs_mueller`], on opaque surfaces at first
+    /// order with a Gaussian PSD; other materials and Dirac draws as `incident_vertex`). The
+    /// directions, densities, lobes and geometries are `incident_vertex`'s bit for bit; the
+    /// values and weights agree within the batch kernel's documented bound of `M₀₀`
+    /// (`tests/bsdf/vertices.rs`). Lanes with the same wavelength, in runs, are evaluated
+    /// together. Allocates nothing (64 lanes per pass, on the stack).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] when `out` is shorter than `queries` (nothing is written). A
+    /// lane's own error is in its `out` entry, as `incident_vertex` gives it.
+    ///
+    /// # Examples
+    /// ```
+    /// use gmueller::bsdf::{Material, ShadingPoint, SurfaceCoherence, VertexQuery};
+    /// use gmueller::frame::Frame;
+    /// use gmueller::interaction::{Level, RoughConductor};
+    /// use gmueller::psd::GaussianPsd;
+    /// use nalgebra::Vector3;
+    /// use num_complex::Complex;
+    ///
+    /// let gold = RoughConductor::new(GaussianPsd::isotropic(0.01, 1.0)?, Complex::new(0.47, 2.4))?;
+    /// let m = Material::new(gold, Level::ALL[7]); // Full · Partial
+    /// let sky = SurfaceCoherence::new(20.0)?;
+    /// // Two vertices, each with its own shading frame.
+    /// let queries = [
+    ///     VertexQuery {
+    ///         at: ShadingPoint::new(Frame::from_normal(Vector3::z())?, 0.55)?,
+    ///         exit: Vector3::new(0.3, 0.0, 1.0),
+    ///         to_light: Some(Vector3::new(-0.3, 0.1, 1.0)),
+    ///         u_lobe: 0.3,
+    ///         u: [0.6, 0.2],
+    ///     },
+    ///     VertexQuery {
+    ///         at: ShadingPoint::new(Frame::from_normal(Vector3::new(0.2, 0.0, 1.0))?, 0.55)?,
+    ///         exit: Vector3::new(0.0, 0.4, 1.0),
+    ///         to_light: None,
+    ///         u_lobe: 0.8,
+    ///         u: [0.1, 0.9],
+    ///     },
+    /// ];
+    /// let mut out = [const { Ok(gmueller::bsdf::IncidentVertex { light: None, sample: None }) }; 2];
+    /// m.incident_vertices(&sky, &queries, &mut out)?;
+    /// for (q, v) in queries.iter().zip(&out) {
+    ///     let one = m.incident_vertex(&q.at, q.exit, &sky, q.to_light, q.u_lobe, q.u)?;
+    ///     let (a, b) = (v.as_ref().unwrap().sample.unwrap(), one.sample.unwrap());
+    ///     assert_eq!(a.sample, b.sample);
+    ///     let (wa, wb) = (a.weight.matrix(), b.weight.matrix());
+    ///     assert!((wa - wb).abs().max() <= 1e-12 * wb[(0, 0)]);
+    /// }
+    /// # Ok::<(), gmueller::Error>(())
+    /// ```
+    pub fn incident_vertices(
+        &self,
+        coherence: &SurfaceCoherence<T>,
+        queries: &[VertexQuery<T>],
+        out: &mut [Result<IncidentVertex<T>, Error>],
+    ) -> Result<(), Error> {
+        if out.len() < queries.len() {
+            return Err(Error::OutOfRange {
+                what: "incident_vertices output length",
+                value: out.len() as f64,
+                expected: "at least as long as queries",
+            });
+        }
+        self.model
+            .incident_vertices(&|at, from| self.side(at, from), coherence, queries, out);
+        Ok(())
+    }
+
     /// Runs `visit` with the backward sampler of this shading point and the weight of a
     /// direction it draws ([`super::Bsdf::incident_sampler`], [`super::Bsdf::incident_weight`]
     /// of one `Bsdf`): what a wavelength bundle ([`super::Bundle`]) needs of each wavelength.
@@ -715,6 +791,13 @@ trait Shade<T: Real>: Send + Sync + Debug {
         out: &mut LobesSoa<'_, T>,
         frames: Option<&mut ExitFramesSoa<'_, T>>,
     ) -> Result<(), Error>;
+    fn incident_vertices(
+        &self,
+        side: &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
+        coherence: &SurfaceCoherence<T>,
+        queries: &[VertexQuery<T>],
+        out: &mut [Result<IncidentVertex<T>, Error>],
+    );
 }
 
 /// A surface with its kernel.
@@ -725,7 +808,9 @@ struct Model<S, Pol, Coh, Rough> {
 }
 
 /// A value in BSDF form with Mueller throughputs.
-fn to_mueller<T: Real, M: Throughput<T>>(v: BsdfValue<T, M>) -> BsdfValue<T, Mueller<T>> {
+pub(super) fn to_mueller<T: Real, M: Throughput<T>>(
+    v: BsdfValue<T, M>,
+) -> BsdfValue<T, Mueller<T>> {
     let r = v.response;
     BsdfValue {
         response: crate::interaction::polarization::MuellerResponse {
@@ -892,6 +977,23 @@ where
             let (w, g) = b.incident_weight(exit, coherence, s)?;
             Ok((w.to_mueller(), g))
         })
+    }
+
+    fn incident_vertices(
+        &self,
+        side: &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
+        coherence: &SurfaceCoherence<T>,
+        queries: &[VertexQuery<T>],
+        out: &mut [Result<IncidentVertex<T>, Error>],
+    ) {
+        super::vertices::incident_vertices(
+            &self.surface,
+            &self.kernel,
+            side,
+            coherence,
+            queries,
+            out,
+        );
     }
 
     fn with_exit(

@@ -129,6 +129,7 @@ mod orders;
 mod path;
 mod sampler;
 pub mod sources;
+mod vertices;
 
 pub use bundle::{Bundle, BundleCoherence, BundlePdf, BundleSample, BundleValues};
 pub use flags::LobeFlags;
@@ -140,6 +141,7 @@ pub use sampler::{
     DirectionSample, LobeSampler, NO_LOBE, Part, SampledLobe, SamplesSoa, UniformsSoa,
 };
 pub use sources::{HORIZON_RULE_Q, SurfaceCoherence, area_light, distant_disk};
+pub use vertices::VertexQuery;
 
 use nalgebra::{Matrix2, Unit, Vector3};
 

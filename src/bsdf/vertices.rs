@@ -1,0 +1,406 @@
+//! A batch of backward vertices ([`super::Material::incident_vertices`]): every lane its own
+//! shading point, exit, light direction and random numbers, as a wavefront renderer's paths
+//! are — [`super::Material::incident_vertex`] for each, with the two evaluations of every
+//! vertex (the light's value and the drawn direction's weight) done together in SIMD lanes.
+//!
+//! # What runs where
+//! Per lane, one at a time: the backward sampler's build, its density of the light's
+//! direction, the draw, and the geometries (as `incident_vertex`). Then, for all lanes at
+//! once, the Mueller matrices of every (light, exit) and (drawn direction, exit) pair:
+//! [`crate::interaction::Kernel::evaluate_pairs_mueller`] in the lanes' own shading frames
+//! (the directions taken to local coordinates, where the s/p frames and so the matrices are
+//! the same up to rounding), each pair's coherence width by the horizon rule, the coherent
+//! lobe divided by its mass where it is not 0 (a zero stays zero). A drawn direction's weight
+//! is `M/p` from that matrix. A Dirac lobe's draw, and every lane of a material with a
+//! transmission side, take `incident_vertex`'s own path.
+//!
+//! # Agreement
+//! The directions, densities, lobes and geometries are `incident_vertex`'s bit for bit (the
+//! same scalar code); the values and weights agree within the batch kernel's bound
+//! ([`crate::interaction::Kernel::evaluate_batch`]) of `M₀₀` (the coherence width and the mass
+//! are computed in the local frame: a few ulp of the width, well inside that bound), and the
+//! errors are the same (`tests/bsdf/vertices.rs`).
+
+use nalgebra::{Matrix4, Unit, Vector3};
+
+use super::material::{IncidentVertex, LightEval, ShadingPoint};
+use super::{Bsdf, BsdfKernel, BsdfSample, BsdfSurface, BsdfValue, SurfaceCoherence};
+use crate::error::Error;
+use crate::frame::Frame;
+use crate::interaction::Geometry;
+use crate::interaction::batch::{DirectionsSoa, MuellerLobesSoa, MuellerSoa, PairsSoa};
+use crate::interaction::polarization::{MuellerResponse, PolarizationModel, Throughput};
+use crate::mueller::Mueller;
+use crate::numerics::unit_direction;
+use crate::psd::Psd;
+use crate::real::Real;
+
+/// One lane of [`super::Material::incident_vertices`]: the arguments of
+/// [`super::Material::incident_vertex`] for one vertex of a backward path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VertexQuery<T: Real> {
+    /// The shading frame and wavelength of the vertex.
+    pub at: ShadingPoint<T>,
+    /// The direction the light leaves along (toward the previous vertex or the camera).
+    pub exit: Vector3<T>,
+    /// The direction to a light for next-event estimation (`None`: no light sample).
+    pub to_light: Option<Vector3<T>>,
+    /// The uniform that chooses the lobe.
+    pub u_lobe: T,
+    /// The two uniforms of the point in the lobe.
+    pub u: [T; 2],
+}
+
+/// Lanes per pass (two pairs each: the light's and the drawn direction's); the buffers live on
+/// the stack.
+pub(super) const LANES: usize = 64;
+
+/// What one lane asks of the pairs.
+#[derive(Clone, Copy)]
+enum Ask<T: Real> {
+    /// Nothing (no light, or answered one at a time).
+    None,
+    /// The pair at this index, with the geometry of the world frame.
+    Pair(usize, Geometry<T>),
+}
+
+/// One lane between the passes.
+struct Lane<T: Real> {
+    light: Ask<T>,
+    light_pdf: T,
+    /// The light's value answered one at a time (an error, or no lanes).
+    light_done: Option<Result<LightEval<T>, Error>>,
+    sample: Ask<T>,
+    drawn: Option<super::DirectionSample<T>>,
+    /// The vertex answered one at a time (an error of the sampler, a Dirac draw's weight).
+    done: Option<Result<Option<BsdfSample<T, Mueller<T>>>, Error>>,
+}
+
+/// The pairs of one pass, in the lanes' local coordinates: direction to the source, exit, `1/w`.
+struct Pairs<T> {
+    s: [[T; 2 * LANES]; 3],
+    r: [[T; 2 * LANES]; 3],
+    inv_w: [T; 2 * LANES],
+    /// The mass each pair's coherent lobe is divided by.
+    mass: [T; 2 * LANES],
+    n: usize,
+}
+
+/// `d` in the coordinates of `f`.
+fn local<T: Real>(f: &Frame<T>, d: &Vector3<T>) -> Vector3<T> {
+    Vector3::new(d.dot(&f.x()), d.dot(&f.y()), d.dot(&f.k()))
+}
+
+impl<'m, T, S, K> Bsdf<'m, T, S, K>
+where
+    T: Real,
+    S: BsdfSurface<T>,
+    K: BsdfKernel<T, S::Psd>,
+{
+    /// The checks and geometry of `eval_incident` (`prepare_surface` then `eval`) for light
+    /// from `to_source` leaving along `exit`, in its order: the unit direction to the source and
+    /// its wavenumber, then the unit exit and the geometry.
+    fn incident_geometry(
+        &self,
+        to_source: &Vector3<T>,
+        exit: &Vector3<T>,
+        what: &'static str,
+    ) -> Result<(Unit<Vector3<T>>, Geometry<T>), Error> {
+        let s = unit_direction(to_source, what)?;
+        let k = self.wavenumber(&s)?;
+        let r = unit_direction(exit, "exit direction")?;
+        Ok((s, self.geometry_at(k, &s, &r)?))
+    }
+
+    /// Adds the pair `(ŝ, r̂)` (world coordinates, checked: `ŝ` unit and above, an opaque
+    /// surface) to `pairs` in this frame's local coordinates, with its coherence width and its
+    /// coherent lobe's mass as `prepare_surface` has them; returns its index.
+    fn push_pair(
+        &self,
+        pairs: &mut Pairs<T>,
+        coherence: &SurfaceCoherence<T>,
+        s: &Unit<Vector3<T>>,
+        r: &Vector3<T>,
+    ) -> usize {
+        let f = &self.surface;
+        let s = s.into_inner();
+        let (sl, rl) = (local(f, &s), local(f, r));
+        let i = pairs.n;
+        for c in 0..3 {
+            pairs.s[c][i] = sl[c];
+            pairs.r[c][i] = rl[c];
+        }
+        // Above an opaque surface: the wavenumber above.
+        let k = self.k[0];
+        let w = self.width_of(&s, k, coherence);
+        pairs.inv_w[i] = w.recip();
+        let prepared = self
+            .kernel
+            .kernel()
+            .prepare_unpolarized_isotropic(k, pairs.inv_w[i]);
+        let facing = self.surface.facing(&s);
+        pairs.mass[i] = self.specular_mass(&prepared, &s, &facing, false, [true, false])[0];
+        pairs.n += 1;
+        i
+    }
+}
+
+/// `incident_vertex` for every query (module docs): the vertices into `out[..queries.len()]`,
+/// each lane's frame flipped by `side` first (a two-sided material's exit below).
+pub(super) fn incident_vertices<T, S, K>(
+    surface: &S,
+    kernel: &K,
+    side: &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
+    coherence: &SurfaceCoherence<T>,
+    queries: &[VertexQuery<T>],
+    out: &mut [Result<IncidentVertex<T>, Error>],
+) where
+    T: Real,
+    S: BsdfSurface<T>,
+    K: BsdfKernel<T, S::Psd>,
+{
+    let identity = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).expect("the unit axes");
+    for (qs, os) in queries.chunks(LANES).zip(out.chunks_mut(LANES)) {
+        // Lanes of one wavelength at a time.
+        let mut start = 0;
+        while start < qs.len() {
+            let lambda = qs[start].at.wavelength();
+            let len = qs[start..]
+                .iter()
+                .take_while(|q| q.at.wavelength() == lambda)
+                .count();
+            let range = start..start + len;
+            pass(
+                (surface, kernel, side, &identity),
+                coherence,
+                &qs[range.clone()],
+                &mut os[range],
+            );
+            start += len;
+        }
+    }
+}
+
+/// One pass of [`incident_vertices`] over at most [`LANES`] queries of one wavelength.
+fn pass<T, S, K>(
+    (surface, kernel, side, identity): (
+        &S,
+        &K,
+        &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
+        &Frame<T>,
+    ),
+    coherence: &SurfaceCoherence<T>,
+    queries: &[VertexQuery<T>],
+    out: &mut [Result<IncidentVertex<T>, Error>],
+) where
+    T: Real,
+    S: BsdfSurface<T>,
+    K: BsdfKernel<T, S::Psd>,
+{
+    let mut pairs = Pairs {
+        s: [[T::zero(); 2 * LANES]; 3],
+        r: [[T::zero(); 2 * LANES]; 3],
+        inv_w: [T::zero(); 2 * LANES],
+        mass: [T::one(); 2 * LANES],
+        n: 0,
+    };
+    let vertex = |q: &VertexQuery<T>| -> Result<IncidentVertex<T>, Error> {
+        let at = side(&q.at, &q.exit);
+        let b = Bsdf::new(surface, kernel.clone(), *at.frame(), at.wavelength())?;
+        let value = q.to_light.map(|d| {
+            b.eval(&b.prepare_surface(d, coherence)?, q.exit)
+                .map(super::material::to_mueller)
+        });
+        let sampler = b.incident_sampler(q.exit, coherence)?;
+        let pdf = q.to_light.map_or(T::zero(), |d| sampler.pdf(&d));
+        let sample = match sampler.sample(q.u_lobe, q.u) {
+            Some(s) => {
+                let (w, g) = b.incident_weight(q.exit, coherence, &s)?;
+                Some(BsdfSample {
+                    sample: s,
+                    weight: w.to_mueller(),
+                    geometry: g,
+                })
+            }
+            None => None,
+        };
+        Ok(IncidentVertex {
+            light: value.map(|v| v.map(|value| LightEval { value, pdf })),
+            sample,
+        })
+    };
+    let Ok(first) = Bsdf::new(
+        surface,
+        kernel.clone(),
+        *identity,
+        queries[0].at.wavelength(),
+    ) else {
+        // An unusable wavelength: every lane gives its own error.
+        for (q, o) in queries.iter().zip(out.iter_mut()) {
+            *o = vertex(q);
+        }
+        return;
+    };
+    if first.eta.is_some() {
+        for (q, o) in queries.iter().zip(out.iter_mut()) {
+            *o = vertex(q);
+        }
+        return;
+    }
+    // Pass 1, lane by lane: the sampler, the light's density, the draw, the checks and
+    // geometries; the pairs to evaluate.
+    let mut lanes: [Option<Lane<T>>; LANES] = [const { None }; LANES];
+    for (q, lane) in queries.iter().zip(lanes.iter_mut()) {
+        let mut l = Lane {
+            light: Ask::None,
+            light_pdf: T::zero(),
+            light_done: None,
+            sample: Ask::None,
+            drawn: None,
+            done: None,
+        };
+        let at = side(&q.at, &q.exit);
+        let b = match Bsdf::new(surface, kernel.clone(), *at.frame(), at.wavelength()) {
+            Ok(b) => b,
+            Err(e) => {
+                l.done = Some(Err(e));
+                *lane = Some(l);
+                continue;
+            }
+        };
+        if let Some(d) = q.to_light {
+            match b.incident_geometry(&d, &q.exit, "direction to the source") {
+                Ok((s, g)) => {
+                    l.light = Ask::Pair(b.push_pair(&mut pairs, coherence, &s, &q.exit), g);
+                }
+                Err(e) => l.light_done = Some(Err(e)),
+            }
+        }
+        match b.incident_sampler(q.exit, coherence) {
+            Err(e) => l.done = Some(Err(e)),
+            Ok(sampler) => {
+                if let Some(d) = &q.to_light {
+                    l.light_pdf = sampler.pdf(d);
+                }
+                match sampler.sample(q.u_lobe, q.u) {
+                    None => l.done = Some(Ok(None)),
+                    Some(s) if s.lobe.delta => {
+                        l.done = Some(b.incident_weight(q.exit, coherence, &s).map(|(w, g)| {
+                            Some(BsdfSample {
+                                sample: s,
+                                weight: w.to_mueller(),
+                                geometry: g,
+                            })
+                        }));
+                    }
+                    Some(s) => {
+                        match b.incident_geometry(&s.direction, &q.exit, "sampled direction") {
+                            Ok((d, g)) => {
+                                let i = b.push_pair(&mut pairs, coherence, &d, &q.exit);
+                                l.sample = Ask::Pair(i, g);
+                                l.drawn = Some(s);
+                            }
+                            Err(e) => l.done = Some(Err(e)),
+                        }
+                    }
+                }
+            }
+        }
+        *lane = Some(l);
+    }
+    // Pass 2: every pair's Mueller matrices in lanes.
+    let n = pairs.n;
+    let mut m = [[T::zero(); 2 * LANES]; 32];
+    if n > 0 {
+        let (sp, sc) = m.split_at_mut(16);
+        let mut sp = sp.iter_mut().map(|c| &mut c[..n]);
+        let mut sc = sc.iter_mut().map(|c| &mut c[..n]);
+        let mut lobes = MuellerLobesSoa {
+            specular: MuellerSoa {
+                m: core::array::from_fn(|_| sp.next().expect("16 columns")),
+            },
+            scattered: MuellerSoa {
+                m: core::array::from_fn(|_| sc.next().expect("16 columns")),
+            },
+        };
+        fn dirs<T>(d: &[[T; 2 * LANES]; 3], n: usize) -> DirectionsSoa<'_, T> {
+            DirectionsSoa {
+                x: &d[0][..n],
+                y: &d[1][..n],
+                z: &d[2][..n],
+            }
+        }
+        let p = PairsSoa {
+            to_source: dirs(&pairs.s, n),
+            exit: dirs(&pairs.r, n),
+            inverse_width: &pairs.inv_w[..n],
+        };
+        let done = first.kernel.kernel().evaluate_pairs_mueller(
+            surface.parts(),
+            first.k[0],
+            identity,
+            p,
+            &mut lobes,
+            None,
+        );
+        if done.is_err() {
+            // Not expected (every pair was checked in its own frame): each lane alone.
+            for (q, o) in queries.iter().zip(out.iter_mut()) {
+                *o = vertex(q);
+            }
+            return;
+        }
+    }
+    // Pass 3: the values and weights.
+    let variance = surface.parts().psd.variance();
+    let response = |i: usize, g: &Geometry<T>| {
+        let matrix = |base: usize| Mueller(Matrix4::from_fn(|r, c| m[base + 4 * r + c][i]));
+        let from = <<K::Pol as PolarizationModel>::Throughput<T> as Throughput<T>>::from_mueller;
+        let v = g.phase_factor();
+        let r = MuellerResponse {
+            specular: from(&matrix(0)),
+            scattered: from(&matrix(16)),
+            attenuation: (-(v * v) * variance).exp(),
+            side: g.side(),
+        };
+        if pairs.mass[i] == T::one() {
+            r
+        } else {
+            r.specular_scaled(pairs.mass[i].recip())
+        }
+    };
+    for (lane, o) in lanes.iter_mut().zip(out.iter_mut()).take(queries.len()) {
+        let l = lane.take().expect("every lane");
+        let light = match (l.light_done, l.light) {
+            (Some(r), _) => Some(r),
+            (None, Ask::Pair(i, g)) => {
+                let r = response(i, &g);
+                Some(Ok(LightEval {
+                    value: super::material::to_mueller(BsdfValue {
+                        response: r,
+                        geometry: g,
+                    }),
+                    pdf: l.light_pdf,
+                }))
+            }
+            (None, Ask::None) => None,
+        };
+        let sample = match (l.done, l.sample, l.drawn) {
+            (Some(Err(e)), _, _) => {
+                *o = Err(e);
+                continue;
+            }
+            (Some(Ok(s)), _, _) => s,
+            (None, Ask::Pair(i, g), Some(s)) => {
+                let w = response(i, &g).total().scaled(T::one() / s.pdf).flushed();
+                Some(BsdfSample {
+                    sample: s,
+                    weight: w.to_mueller(),
+                    geometry: g,
+                })
+            }
+            _ => None,
+        };
+        *o = Ok(IncidentVertex { light, sample });
+    }
+}
