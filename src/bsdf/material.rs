@@ -64,7 +64,7 @@ use core::fmt::Debug;
 use nalgebra::Vector3;
 
 use super::sampler::{SamplesSoa, UniformsSoa};
-use super::vertices::VertexQuery;
+use super::vertices::{SideFn, VertexQuery};
 use super::{
     Bsdf, BsdfSample, BsdfSurface, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler,
     Part, SampledLobe, SurfaceCoherence,
@@ -793,7 +793,7 @@ trait Shade<T: Real>: Send + Sync + Debug {
     ) -> Result<(), Error>;
     fn incident_vertices(
         &self,
-        side: &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
+        side: &SideFn<'_, T>,
         coherence: &SurfaceCoherence<T>,
         queries: &[VertexQuery<T>],
         out: &mut [Result<IncidentVertex<T>, Error>],
@@ -981,7 +981,7 @@ where
 
     fn incident_vertices(
         &self,
-        side: &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
+        side: &SideFn<'_, T>,
         coherence: &SurfaceCoherence<T>,
         queries: &[VertexQuery<T>],
         out: &mut [Result<IncidentVertex<T>, Error>],

@@ -12,16 +12,24 @@
 //! the same up to rounding), each pair's coherence width by the horizon rule, the coherent
 //! lobe divided by its mass where it is not 0 (a zero stays zero). A drawn direction's weight
 //! is `M/p` from that matrix. A Dirac lobe's draw, and every lane of a material with a
-//! transmission side, take `incident_vertex`'s own path.
+//! transmission side or a kernel the pairs do not run in lanes (the Kirchhoff series, a
+//! mixture PSD, a quadrature blur, a plane wave), take `incident_vertex`'s own path.
 //!
 //! # Agreement
-//! The directions, densities, lobes and geometries are `incident_vertex`'s bit for bit (the
-//! same scalar code); the values and weights agree within the batch kernel's bound
-//! ([`crate::interaction::Kernel::evaluate_batch`]) of `M₀₀` (the coherence width and the mass
-//! are computed in the local frame: a few ulp of the width, well inside that bound), and the
-//! errors are the same (`tests/bsdf/vertices.rs`).
+//! The directions, densities, lobes, geometries, attenuations and errors are
+//! `incident_vertex`'s bit for bit (the same scalar code). The values and weights are those of
+//! the lane's local coordinates: each equals the one-at-a-time evaluation
+//! ([`super::Material::eval_incident`] in the frame of the unit axes, at the local directions)
+//! within the batch kernel's bound of `M₀₀` ([`crate::interaction::Kernel::evaluate_batch`];
+//! the `1/E` and `1/p` add `8 ε M₀₀`). Against `incident_vertex` in world coordinates they
+//! also carry the kernel's conditioning under the rounding of that rotation (a few `ε` per
+//! direction): negligible except in a narrow specular lobe near the horizon, where `M` changes
+//! by `√(2E) δ √(2π p/cos θ_i)` relatively for a direction moved by `δ` (`E` the sample's
+//! exponent in the lobe, `p` its density) — measured up to 3·10⁻¹¹ in `f64` and 1·10⁻² in
+//! `f32` at `cos θ_i ≈ 0.01`, `p ≈ 10⁷ sr⁻¹` (`tests/bsdf/vertices.rs`). A lane whose local
+//! direction to the source rounds below the surface (within `ε` of it) goes one at a time.
 
-use nalgebra::{Matrix4, Unit, Vector3};
+use nalgebra::{Matrix4, Vector3};
 
 use super::material::{IncidentVertex, LightEval, ShadingPoint};
 use super::{Bsdf, BsdfKernel, BsdfSample, BsdfSurface, BsdfValue, SurfaceCoherence};
@@ -51,6 +59,13 @@ pub struct VertexQuery<T: Real> {
     pub u: [T; 2],
 }
 
+/// The shading point a lane runs in, from its own and its exit (a two-sided material turns it
+/// over for an exit below: `Material::side`).
+pub(super) type SideFn<'a, T> = dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T> + 'a;
+
+/// A drawn direction with a Mueller weight.
+type MuellerSample<T> = BsdfSample<T, Mueller<T>>;
+
 /// Lanes per pass (two pairs each: the light's and the drawn direction's); the buffers live on
 /// the stack.
 pub(super) const LANES: usize = 64;
@@ -73,7 +88,9 @@ struct Lane<T: Real> {
     sample: Ask<T>,
     drawn: Option<super::DirectionSample<T>>,
     /// The vertex answered one at a time (an error of the sampler, a Dirac draw's weight).
-    done: Option<Result<Option<BsdfSample<T, Mueller<T>>>, Error>>,
+    done: Option<Result<Option<MuellerSample<T>>, Error>>,
+    /// The whole vertex one at a time (a local direction rounded below the surface).
+    alone: bool,
 }
 
 /// The pairs of one pass, in the lanes' local coordinates: direction to the source, exit, `1/w`.
@@ -105,43 +122,43 @@ where
         to_source: &Vector3<T>,
         exit: &Vector3<T>,
         what: &'static str,
-    ) -> Result<(Unit<Vector3<T>>, Geometry<T>), Error> {
+    ) -> Result<Geometry<T>, Error> {
         let s = unit_direction(to_source, what)?;
         let k = self.wavenumber(&s)?;
         let r = unit_direction(exit, "exit direction")?;
-        Ok((s, self.geometry_at(k, &s, &r)?))
+        self.geometry_at(k, &s, &r)
     }
 
-    /// Adds the pair `(ŝ, r̂)` (world coordinates, checked: `ŝ` unit and above, an opaque
-    /// surface) to `pairs` in this frame's local coordinates, with its coherence width and its
-    /// coherent lobe's mass as `prepare_surface` has them; returns its index.
+    /// Adds the pair `(s, r)` (world coordinates, any length, checked: `s` above an opaque
+    /// surface) to `pairs` in `f`'s local coordinates, with the coherence width and the
+    /// coherent lobe's mass `prepare_surface` gives the local `s` in this (the local) frame:
+    /// the inputs of [`super::Material::eval_incident`] at the local directions, bit for bit;
+    /// returns its index.
     fn push_pair(
         &self,
         pairs: &mut Pairs<T>,
         coherence: &SurfaceCoherence<T>,
-        s: &Unit<Vector3<T>>,
-        r: &Vector3<T>,
-    ) -> usize {
-        let f = &self.surface;
-        let s = s.into_inner();
-        let (sl, rl) = (local(f, &s), local(f, r));
+        f: &Frame<T>,
+        (s, r): (&Vector3<T>, &Vector3<T>),
+    ) -> Result<usize, Error> {
+        let sl = unit_direction(&local(f, s), "direction to the source")?.into_inner();
+        let rl = local(f, r);
         let i = pairs.n;
         for c in 0..3 {
             pairs.s[c][i] = sl[c];
             pairs.r[c][i] = rl[c];
         }
-        // Above an opaque surface: the wavenumber above.
-        let k = self.k[0];
-        let w = self.width_of(&s, k, coherence);
+        let k = self.wavenumber(&sl)?;
+        let w = self.width_of(&sl, k, coherence);
         pairs.inv_w[i] = w.recip();
         let prepared = self
             .kernel
             .kernel()
             .prepare_unpolarized_isotropic(k, pairs.inv_w[i]);
-        let facing = self.surface.facing(&s);
-        pairs.mass[i] = self.specular_mass(&prepared, &s, &facing, false, [true, false])[0];
+        let facing = self.surface.facing(&sl);
+        pairs.mass[i] = self.specular_mass(&prepared, &sl, &facing, false, [true, false])[0];
         pairs.n += 1;
-        i
+        Ok(i)
     }
 }
 
@@ -150,7 +167,7 @@ where
 pub(super) fn incident_vertices<T, S, K>(
     surface: &S,
     kernel: &K,
-    side: &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
+    side: &SideFn<'_, T>,
     coherence: &SurfaceCoherence<T>,
     queries: &[VertexQuery<T>],
     out: &mut [Result<IncidentVertex<T>, Error>],
@@ -183,12 +200,7 @@ pub(super) fn incident_vertices<T, S, K>(
 
 /// One pass of [`incident_vertices`] over at most [`LANES`] queries of one wavelength.
 fn pass<T, S, K>(
-    (surface, kernel, side, identity): (
-        &S,
-        &K,
-        &dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T>,
-        &Frame<T>,
-    ),
+    (surface, kernel, side, identity): (&S, &K, &SideFn<'_, T>, &Frame<T>),
     coherence: &SurfaceCoherence<T>,
     queries: &[VertexQuery<T>],
     out: &mut [Result<IncidentVertex<T>, Error>],
@@ -241,7 +253,7 @@ fn pass<T, S, K>(
         }
         return;
     };
-    if first.eta.is_some() {
+    if first.eta.is_some() || !first.kernel.kernel().pairs_in_lanes(surface.parts()) {
         for (q, o) in queries.iter().zip(out.iter_mut()) {
             *o = vertex(q);
         }
@@ -258,6 +270,7 @@ fn pass<T, S, K>(
             sample: Ask::None,
             drawn: None,
             done: None,
+            alone: false,
         };
         let at = side(&q.at, &q.exit);
         let b = match Bsdf::new(surface, kernel.clone(), *at.frame(), at.wavelength()) {
@@ -270,9 +283,10 @@ fn pass<T, S, K>(
         };
         if let Some(d) = q.to_light {
             match b.incident_geometry(&d, &q.exit, "direction to the source") {
-                Ok((s, g)) => {
-                    l.light = Ask::Pair(b.push_pair(&mut pairs, coherence, &s, &q.exit), g);
-                }
+                Ok(g) => match first.push_pair(&mut pairs, coherence, &b.surface, (&d, &q.exit)) {
+                    Ok(i) => l.light = Ask::Pair(i, g),
+                    Err(_) => l.alone = true,
+                },
                 Err(e) => l.light_done = Some(Err(e)),
             }
         }
@@ -295,10 +309,15 @@ fn pass<T, S, K>(
                     }
                     Some(s) => {
                         match b.incident_geometry(&s.direction, &q.exit, "sampled direction") {
-                            Ok((d, g)) => {
-                                let i = b.push_pair(&mut pairs, coherence, &d, &q.exit);
-                                l.sample = Ask::Pair(i, g);
-                                l.drawn = Some(s);
+                            Ok(g) => {
+                                let (f, d) = (&b.surface, &s.direction);
+                                match first.push_pair(&mut pairs, coherence, f, (d, &q.exit)) {
+                                    Ok(i) => {
+                                        l.sample = Ask::Pair(i, g);
+                                        l.drawn = Some(s);
+                                    }
+                                    Err(_) => l.alone = true,
+                                }
                             }
                             Err(e) => l.done = Some(Err(e)),
                         }
@@ -369,8 +388,12 @@ fn pass<T, S, K>(
             r.specular_scaled(pairs.mass[i].recip())
         }
     };
-    for (lane, o) in lanes.iter_mut().zip(out.iter_mut()).take(queries.len()) {
+    for ((q, lane), o) in queries.iter().zip(lanes.iter_mut()).zip(out.iter_mut()) {
         let l = lane.take().expect("every lane");
+        if l.alone {
+            *o = vertex(q);
+            continue;
+        }
         let light = match (l.light_done, l.light) {
             (Some(r), _) => Some(r),
             (None, Ask::Pair(i, g)) => {

@@ -13,3 +13,4 @@ mod reciprocity;
 mod rough;
 mod sample_batch;
 mod sampling;
+mod vertices;

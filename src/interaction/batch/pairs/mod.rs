@@ -246,6 +246,17 @@ impl<Pol: PolarizationModel, Coh: CoherenceModel, Rough: RoughnessModel> Kernel<
         self.pairs_into(material, k, surface, pairs, Sink::Mueller(out), frames)
     }
 
+    /// Whether [`Kernel::evaluate_pairs`] and [`Kernel::evaluate_pairs_mueller`] run the pairs
+    /// of `material` in SIMD lanes (else pair by pair through the per-direction kernel).
+    pub(crate) fn pairs_in_lanes<T, S>(&self, material: &S) -> bool
+    where
+        T: Real,
+        S: Surface<T>,
+        Coh: CoherenceWeights<T, S::Psd>,
+    {
+        row_maker(self, material).is_some()
+    }
+
     /// The checks and the pass of [`Kernel::evaluate_pairs`] and
     /// [`Kernel::evaluate_pairs_mueller`] (the output slices' lengths checked by the caller).
     fn pairs_into<T, S>(
