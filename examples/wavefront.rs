@@ -217,6 +217,10 @@ struct Wavefront {
     paths: Vec<PathState>,
     hits: Vec<Option<Hit>>,
     image: Vec<f32>,
+    /// The batched step 2: every hit's query, what it keeps, and the vertices.
+    queries: Vec<VertexQuery<f32>>,
+    pending: Vec<Pending>,
+    vertices: Vec<Result<IncidentVertex<f32>, Error>>,
 }
 
 #[derive(Default, Clone, Copy)]
@@ -227,35 +231,50 @@ struct Stats {
     errors: u64,
 }
 
-/// Steps 2 and 3 at one hit, from one build of the backward sampler
-/// (`Material::incident_vertex`): NEE of the environment gathered into the path, then the
-/// direction the light comes from, the throughput and the next ray; ends the path
-/// (`alive = false`) when it cannot continue.
-fn shade(
-    p: &mut PathState,
-    hit: &Hit,
-    mat: &Material<f32>,
-    coh: &SurfaceCoherence<f32>,
-    sky: &Stokes<f32>,
-) -> Result<(), Error> {
+/// What step 2 keeps of one hit between the vertex's query and its answer.
+struct Pending {
+    /// The path's index in the wavefront.
+    path: usize,
+    hit: Hit,
+    to_light: V3,
+    /// The light sampler's density of `to_light` (cosine-weighted); 0: no light sample.
+    light_pdf: f32,
+}
+
+/// Step 2's query at one hit (`Material::incident_vertex`'s arguments): a cosine-weighted
+/// direction about the normal for next-event estimation of the environment, and the uniforms
+/// of the continuation, from the path's random numbers.
+fn query(p: &mut PathState, hit: &Hit) -> Result<(VertexQuery<f32>, V3, f32), Error> {
     let sp = ShadingPoint::new(Frame::from_normal(hit.normal)?, LAMBDA)?;
     let exit = -p.dir;
     let f = sp.frame();
-    // A cosine-weighted direction about the normal.
     let (u1, u2) = (p.rng.f(), p.rng.f());
     let (r, cos) = (u1.sqrt(), (1.0 - u1).max(0.0).sqrt());
     let (sin_phi, cos_phi) = (std::f32::consts::TAU * u2).sin_cos();
     let to_light = f.x() * (r * cos_phi) + f.y() * (r * sin_phi) + f.k() * cos;
     let light_pdf = cos * std::f32::consts::FRAC_1_PI;
     let u = [p.rng.f(), p.rng.f(), p.rng.f()];
-    let v = mat.incident_vertex(
-        &sp,
+    let q = VertexQuery {
+        at: sp,
         exit,
-        coh,
-        (light_pdf > 0.0).then_some(to_light),
-        u[0],
-        [u[1], u[2]],
-    )?;
+        to_light: (light_pdf > 0.0).then_some(to_light),
+        u_lobe: u[0],
+        u: [u[1], u[2]],
+    };
+    Ok((q, to_light, light_pdf))
+}
+
+/// Steps 2 and 3 at one hit from its vertex (`Material::incident_vertex` or a lane of
+/// `Material::incident_vertices`): NEE of the environment gathered into the path, then the
+/// direction the light comes from, the throughput and the next ray; ends the path
+/// (`alive = false`) when it cannot continue.
+fn finish(
+    p: &mut PathState,
+    (hit, to_light): (&Hit, V3),
+    v: IncidentVertex<f32>,
+    light_pdf: f32,
+    sky: &Stokes<f32>,
+) -> Result<(), Error> {
     if let Some(light) = v.light {
         let light = light?;
         let (value, bsdf_pdf) = (light.value, light.pdf);
@@ -286,6 +305,20 @@ fn shade(
     Ok(())
 }
 
+/// Steps 2 and 3 at one hit, from one build of the backward sampler
+/// (`Material::incident_vertex`), one hit at a time.
+fn shade(
+    p: &mut PathState,
+    hit: &Hit,
+    mat: &Material<f32>,
+    coh: &SurfaceCoherence<f32>,
+    sky: &Stokes<f32>,
+) -> Result<(), Error> {
+    let (q, to_light, light_pdf) = query(p, hit)?;
+    let v = mat.incident_vertex(&q.at, q.exit, coh, q.to_light, q.u_lobe, q.u)?;
+    finish(p, (hit, to_light), v, light_pdf, sky)
+}
+
 /// One render of `res × res` paths into `wf.image` (cleared first).
 fn render(
     wf: &mut Wavefront,
@@ -293,11 +326,18 @@ fn render(
     cam: &Camera,
     mat: &Material<f32>,
     coh: &SurfaceCoherence<f32>,
-    seed: u64,
+    (seed, batch): (u64, bool),
 ) -> Stats {
     let mut stats = Stats::default();
     let sky = Stokes::unpolarized(1.0).expect("radiance 1");
-    let Wavefront { paths, hits, image } = wf;
+    let Wavefront {
+        paths,
+        hits,
+        image,
+        queries,
+        pending,
+        vertices,
+    } = wf;
     image.iter_mut().for_each(|x| *x = 0.0);
     paths.clear();
     let inv = 1.0 / res as f32;
@@ -329,7 +369,9 @@ fn render(
         let shade_now = depth < MAX_INTERACTIONS;
         // Steps 2 and 3: the environment seen by escaping rays; at every hit, NEE and the
         // continuation from one build of the sampler.
-        for (p, h) in paths.iter_mut().zip(hits.iter()) {
+        queries.clear();
+        pending.clear();
+        for (i, (p, h)) in paths.iter_mut().zip(hits.iter()).enumerate() {
             match h {
                 None => {
                     if depth > 0 {
@@ -345,12 +387,45 @@ fn render(
                 }
                 Some(h) if shade_now => {
                     stats.bounces += 1;
-                    if shade(p, h, mat, coh, &sky).is_err() {
+                    let done = if batch {
+                        query(p, h).map(|(q, to_light, light_pdf)| {
+                            queries.push(q);
+                            pending.push(Pending {
+                                path: i,
+                                hit: *h,
+                                to_light,
+                                light_pdf,
+                            });
+                        })
+                    } else {
+                        shade(p, h, mat, coh, &sky)
+                    };
+                    if done.is_err() {
                         stats.errors += 1;
                         p.alive = false;
                     }
                 }
                 Some(_) => p.alive = false,
+            }
+        }
+        if batch && !queries.is_empty() {
+            // Step 2 for every hit at once.
+            vertices.resize_with(queries.len(), || {
+                Ok(IncidentVertex {
+                    light: None,
+                    sample: None,
+                })
+            });
+            mat.incident_vertices(coh, queries, vertices)
+                .expect("an output as long as the queries");
+            for (pd, v) in pending.iter().zip(vertices.drain(..)) {
+                let p = &mut paths[pd.path];
+                let done =
+                    v.and_then(|v| finish(p, (&pd.hit, pd.to_light), v, pd.light_pdf, &sky));
+                if done.is_err() {
+                    stats.errors += 1;
+                    p.alive = false;
+                }
             }
         }
         // Compaction: ended paths add S0 to their pixel.
@@ -439,6 +514,7 @@ fn main() {
     let mut res = 256usize;
     let mut reps = 5usize;
     let mut only: Option<String> = None;
+    let mut batch = true;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut value = |what| {
@@ -451,10 +527,17 @@ fn main() {
             "--size" => res = value("a size").parse().expect("--size N"),
             "--reps" => reps = value("a count").parse().expect("--reps N"),
             "--only" => only = Some(value("full, intensity or geometric")),
+            "--vertex" => {
+                batch = match value("one or batch").as_str() {
+                    "one" => false,
+                    "batch" => true,
+                    v => panic!("--vertex one|batch, not {v}"),
+                };
+            }
             "--help" | "-h" => {
                 println!(
                     "usage: wavefront [--quick | --size N] [--reps N] \
-                     [--only full|intensity|geometric]"
+                     [--only full|intensity|geometric] [--vertex batch|one]"
                 );
                 return;
             }
@@ -470,23 +553,31 @@ fn main() {
         paths: Vec::with_capacity(n),
         hits: Vec::with_capacity(n),
         image: vec![0.0; n],
+        queries: Vec::with_capacity(n),
+        pending: Vec::with_capacity(n),
+        vertices: Vec::with_capacity(n),
     };
     println!(
         "wavefront: {res}x{res} paths, ≤ {MAX_INTERACTIONS} shaded interactions each, f32, \
          λ = {LAMBDA} µm, 1 thread, coherence width {width:.1} µm, {reps} timed renders \
-         after 1 warm-up"
+         after 1 warm-up, vertices {}",
+        if batch {
+            "batched (Material::incident_vertices)"
+        } else {
+            "one at a time (Material::incident_vertex)"
+        }
     );
     for row in rows() {
         if only.as_deref().is_some_and(|k| k != row.key) {
             continue;
         }
         let seed = 7;
-        let stats = render(&mut wf, res, &cam, &row.material, &coh, seed);
+        let stats = render(&mut wf, res, &cam, &row.material, &coh, (seed, batch));
         let mut secs = Vec::with_capacity(reps);
         let cpu0 = cpu_ns();
         for _ in 0..reps {
             let t0 = Instant::now();
-            let s = render(&mut wf, res, &cam, &row.material, &coh, seed);
+            let s = render(&mut wf, res, &cam, &row.material, &coh, (seed, batch));
             secs.push(t0.elapsed().as_secs_f64());
             assert_eq!(s.bounces, stats.bounces, "the same work every render");
         }

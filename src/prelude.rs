@@ -18,8 +18,8 @@
 //! ```
 
 pub use crate::bsdf::{
-    Bsdf, BsdfKernel, BsdfSample, BsdfSurface, BsdfValue, Bundle, BundleSample, LobeFlags,
-    Material, PathThroughput, ShadingPoint, SurfaceCoherence,
+    Bsdf, BsdfKernel, BsdfSample, BsdfSurface, BsdfValue, Bundle, BundleSample, IncidentVertex,
+    LobeFlags, Material, PathThroughput, ShadingPoint, SurfaceCoherence, VertexQuery,
 };
 pub use crate::error::Error;
 pub use crate::frame::Frame;
