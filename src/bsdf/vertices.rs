@@ -98,8 +98,6 @@ struct Pairs<T> {
     s: [[T; 2 * LANES]; 3],
     r: [[T; 2 * LANES]; 3],
     inv_w: [T; 2 * LANES],
-    /// The mass each pair's coherent lobe is divided by.
-    mass: [T; 2 * LANES],
     n: usize,
 }
 
@@ -130,10 +128,10 @@ where
     }
 
     /// Adds the pair `(s, r)` (world coordinates, any length, checked: `s` above an opaque
-    /// surface) to `pairs` in `f`'s local coordinates, with the coherence width and the
-    /// coherent lobe's mass `prepare_surface` gives the local `s` in this (the local) frame:
-    /// the inputs of [`super::Material::eval_incident`] at the local directions, bit for bit;
-    /// returns its index.
+    /// surface) to `pairs` in `f`'s local coordinates, with the coherence width
+    /// `prepare_surface` gives the local `s` in this (the local) frame: the inputs of
+    /// [`super::Material::eval_incident`] at the local directions, bit for bit; returns its
+    /// index.
     fn push_pair(
         &self,
         pairs: &mut Pairs<T>,
@@ -151,14 +149,20 @@ where
         let k = self.wavenumber(&sl)?;
         let w = self.width_of(&sl, k, coherence);
         pairs.inv_w[i] = w.recip();
+        pairs.n += 1;
+        Ok(i)
+    }
+
+    /// The coherent lobe's mass for pair `i` of `pairs` (local coordinates, this the local
+    /// frame), as `prepare_surface` has it.
+    fn pair_mass(&self, pairs: &Pairs<T>, i: usize) -> T {
+        let sl = Vector3::new(pairs.s[0][i], pairs.s[1][i], pairs.s[2][i]);
         let prepared = self
             .kernel
             .kernel()
-            .prepare_unpolarized_isotropic(k, pairs.inv_w[i]);
+            .prepare_unpolarized_isotropic(self.k[0], pairs.inv_w[i]);
         let facing = self.surface.facing(&sl);
-        pairs.mass[i] = self.specular_mass(&prepared, &sl, &facing, false, [true, false])[0];
-        pairs.n += 1;
-        Ok(i)
+        self.specular_mass(&prepared, &sl, &facing, false, [true, false])[0]
     }
 }
 
@@ -213,7 +217,6 @@ fn pass<T, S, K>(
         s: [[T::zero(); 2 * LANES]; 3],
         r: [[T::zero(); 2 * LANES]; 3],
         inv_w: [T::zero(); 2 * LANES],
-        mass: [T::one(); 2 * LANES],
         n: 0,
     };
     let vertex = |q: &VertexQuery<T>| -> Result<IncidentVertex<T>, Error> {
@@ -382,10 +385,16 @@ fn pass<T, S, K>(
             attenuation: (-(v * v) * variance).exp(),
             side: g.side(),
         };
-        if pairs.mass[i] == T::one() {
+        // The coherent lobe over its mass where it is not 0 (a zero stays zero under the
+        // positive finite `1/E`; the mass costs a quadrature near grazing).
+        if (0..16).all(|e| m[e][i] == T::zero()) {
+            return r;
+        }
+        let mass = first.pair_mass(&pairs, i);
+        if mass == T::one() {
             r
         } else {
-            r.specular_scaled(pairs.mass[i].recip())
+            r.specular_scaled(mass.recip())
         }
     };
     for ((q, lane), o) in queries.iter().zip(lanes.iter_mut()).zip(out.iter_mut()) {

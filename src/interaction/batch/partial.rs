@@ -358,23 +358,22 @@ pub(super) fn mueller_lanes<S: Simd, F: Real, Q: LaneConsts<S, F>>(
     } = parts;
     // The effective vectors e_j as [P, Q, S2, S3] (`channels::halves` of e_j).
     let (half, one) = (c(F::lit(0.5)), c(F::one()));
-    let assemble = |b: [F::V<S>; 4]| stages::stokes::assemble_vector::<S, F>(s, b, factors, cos_o);
+    let assemble = stages::stokes::assemble_vector::<S, F>;
     let scat = [
-        assemble([half, half, zero, zero]),
-        assemble([half, c(F::lit(-0.5)), zero, zero]),
-        assemble([zero, zero, one, zero]),
-        assemble([zero, zero, zero, one]),
+        assemble(s, [half, half, zero, zero], factors, cos_o),
+        assemble(s, [half, c(F::lit(-0.5)), zero, zero], factors, cos_o),
+        assemble(s, [zero, zero, one, zero], factors, cos_o),
+        assemble(s, [zero, zero, zero, one], factors, cos_o),
     ];
     let (scattered, redo_scat) = stages::channels::scaled_matrix::<S, F>(s, p, scat, ln_scat);
     let (specular, redo_spec) = match spec {
         Some(None) if F::vany(s, F::vle(s, c(p.ln_dark), ln_spec)) => {
             let (r, s_out) = (e.r, e.frame.s_out);
-            let column = |v: [F::V<S>; 4]| q.fresnel_stokes(s, r, s_out, v);
             let m = [
-                column([cos_o, zero, zero, zero]),
-                column([zero, cos_o, zero, zero]),
-                column([zero, zero, cos_o, zero]),
-                column([zero, zero, zero, cos_o]),
+                q.fresnel_stokes(s, r, s_out, [cos_o, zero, zero, zero]),
+                q.fresnel_stokes(s, r, s_out, [zero, cos_o, zero, zero]),
+                q.fresnel_stokes(s, r, s_out, [zero, zero, cos_o, zero]),
+                q.fresnel_stokes(s, r, s_out, [zero, zero, zero, cos_o]),
             ];
             stages::channels::scaled_matrix::<S, F>(s, p, m, ln_spec)
         }

@@ -326,24 +326,49 @@ pub(crate) fn scaled_matrix<S: Simd, F: Real>(
     ln_e: F::V<S>,
 ) -> (MatrixLanes<S, F>, F::M<S>) {
     let c = |x: F| F::vsplat(s, x);
-    let (zero, tiny) = (c(F::zero()), c(F::MIN_POSITIVE));
+    let tiny = c(F::MIN_POSITIVE);
     let e = vexp::<S, F>(s, ln_e);
     let lit = F::vand(s, F::vle(s, c(p.ln_dark), ln_e), F::vle(s, tiny, e));
     let redo = F::vand(s, lit, F::vlt(s, c(F::MAX), e));
     let m00 = F::vmul(s, m[0][0], e);
     let lit = F::vand(s, lit, F::vle(s, tiny, m00));
     let flush = F::vle(s, c(F::MIN_POSITIVE / F::EPSILON), m00);
-    let entry = |x: F::V<S>| {
-        let y = F::vmul(s, x, e);
-        let kept = F::vand(
-            s,
-            lit,
-            F::vnot(s, F::vand(s, flush, F::vlt(s, F::vabs(s, y), tiny))),
-        );
-        F::vselect(s, kept, y, zero)
-    };
-    let col = |v: [F::V<S>; 4]| [entry(v[0]), entry(v[1]), entry(v[2]), entry(v[3])];
-    ([col(m[0]), col(m[1]), col(m[2]), col(m[3])], redo)
+    let col = scaled_column::<S, F>;
+    let k = (e, lit, flush);
+    (
+        [col(s, m[0], k), col(s, m[1], k), col(s, m[2], k), col(s, m[3], k)],
+        redo,
+    )
+}
+
+/// One column of [`scaled_matrix`]: each entry `x e`, 0 where the part is not `lit` or, under
+/// `flush`, where `|x e|` is below the smallest normal number.
+#[inline(always)]
+fn scaled_column<S: Simd, F: Real>(
+    s: S,
+    v: [F::V<S>; 4],
+    (e, lit, flush): (F::V<S>, F::M<S>, F::M<S>),
+) -> [F::V<S>; 4] {
+    let k = (e, lit, flush);
+    [
+        scaled_entry::<S, F>(s, v[0], k),
+        scaled_entry::<S, F>(s, v[1], k),
+        scaled_entry::<S, F>(s, v[2], k),
+        scaled_entry::<S, F>(s, v[3], k),
+    ]
+}
+
+/// One entry of [`scaled_column`].
+#[inline(always)]
+fn scaled_entry<S: Simd, F: Real>(
+    s: S,
+    x: F::V<S>,
+    (e, lit, flush): (F::V<S>, F::M<S>, F::M<S>),
+) -> F::V<S> {
+    let y = F::vmul(s, x, e);
+    let small = F::vlt(s, F::vabs(s, y), F::vsplat(s, F::MIN_POSITIVE));
+    let kept = F::vand(s, lit, F::vnot(s, F::vand(s, flush, small)));
+    F::vselect(s, kept, y, F::vsplat(s, F::zero()))
 }
 
 /// `u · e^{ln_e}` with the lanes where the part is dark (`ln_e` below the smallest subnormal
