@@ -420,8 +420,7 @@ fn render(
                 .expect("an output as long as the queries");
             for (pd, v) in pending.iter().zip(vertices.drain(..)) {
                 let p = &mut paths[pd.path];
-                let done =
-                    v.and_then(|v| finish(p, (&pd.hit, pd.to_light), v, pd.light_pdf, &sky));
+                let done = v.and_then(|v| finish(p, (&pd.hit, pd.to_light), v, pd.light_pdf, &sky));
                 if done.is_err() {
                     stats.errors += 1;
                     p.alive = false;

@@ -336,7 +336,12 @@ pub(crate) fn scaled_matrix<S: Simd, F: Real>(
     let col = scaled_column::<S, F>;
     let k = (e, lit, flush);
     (
-        [col(s, m[0], k), col(s, m[1], k), col(s, m[2], k), col(s, m[3], k)],
+        [
+            col(s, m[0], k),
+            col(s, m[1], k),
+            col(s, m[2], k),
+            col(s, m[3], k),
+        ],
         redo,
     )
 }
