@@ -186,10 +186,12 @@ pub(super) fn incident_vertices<T, S, K>(
         let mut start = 0;
         while start < qs.len() {
             let lambda = qs[start].at.wavelength();
+            // (At least one: a shading point's wavelength is finite, so equals itself.)
             let len = qs[start..]
                 .iter()
                 .take_while(|q| q.at.wavelength() == lambda)
-                .count();
+                .count()
+                .max(1);
             let range = start..start + len;
             pass(
                 (surface, kernel, side, &identity),
@@ -244,24 +246,26 @@ fn pass<T, S, K>(
             sample,
         })
     };
-    let Ok(first) = Bsdf::new(
+    let each_alone = |out: &mut [Result<IncidentVertex<T>, Error>]| {
+        for (q, o) in queries.iter().zip(out.iter_mut()) {
+            *o = vertex(q);
+        }
+    };
+    // An unusable wavelength (every lane gives its own error), a transmission side or a
+    // kernel the pairs do not run in lanes: lane by lane.
+    let first = Bsdf::new(
         surface,
         kernel.clone(),
         *identity,
         queries[0].at.wavelength(),
-    ) else {
-        // An unusable wavelength: every lane gives its own error.
-        for (q, o) in queries.iter().zip(out.iter_mut()) {
-            *o = vertex(q);
-        }
+    );
+    let Some(first) = first
+        .ok()
+        .filter(|b| b.eta.is_none() && b.kernel.kernel().pairs_in_lanes(surface.parts()))
+    else {
+        each_alone(out);
         return;
     };
-    if first.eta.is_some() || !first.kernel.kernel().pairs_in_lanes(surface.parts()) {
-        for (q, o) in queries.iter().zip(out.iter_mut()) {
-            *o = vertex(q);
-        }
-        return;
-    }
     // Pass 1, lane by lane: the sampler, the light's density, the draw, the checks and
     // geometries; the pairs to evaluate.
     let mut lanes: [Option<Lane<T>>; LANES] = [const { None }; LANES];
@@ -367,9 +371,7 @@ fn pass<T, S, K>(
         );
         if done.is_err() {
             // Not expected (every pair was checked in its own frame): each lane alone.
-            for (q, o) in queries.iter().zip(out.iter_mut()) {
-                *o = vertex(q);
-            }
+            each_alone(out);
             return;
         }
     }

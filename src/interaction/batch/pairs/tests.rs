@@ -81,6 +81,21 @@ fn pairs(seed: u64, n: usize) -> Vec<Pair> {
         .collect()
 }
 
+/// `pairs(seed, n)` as the columns `[sx, sy, sz, rx, ry, rz, 1/w]` in type `T`.
+fn columns<T: Real>(seed: u64, n: usize) -> [Vec<T>; 7] {
+    let ps = pairs(seed, n);
+    let col = |f: &dyn Fn(&Pair) -> f64| -> Vec<T> { ps.iter().map(|p| T::lit(f(p))).collect() };
+    [
+        col(&|p| p.0.x),
+        col(&|p| p.0.y),
+        col(&|p| p.0.z),
+        col(&|p| p.1.x),
+        col(&|p| p.1.y),
+        col(&|p| p.1.z),
+        col(&|p| p.2),
+    ]
+}
+
 /// The Stokes columns (specular, scattered) and the exit s vectors of a batch of `n`.
 struct Columns<T> {
     lobes: [Vec<T>; 8],
@@ -125,11 +140,7 @@ where
 {
     let surface = Frame::from_normal(Vector3::new(T::zero(), T::zero(), T::one())).unwrap();
     let k = T::lit(std::f64::consts::TAU / lambda);
-    let ps = pairs(seed, n);
-    let col = |f: &dyn Fn(&Pair) -> f64| -> Vec<T> { ps.iter().map(|p| T::lit(f(p))).collect() };
-    let (sx, sy, sz) = (col(&|p| p.0.x), col(&|p| p.0.y), col(&|p| p.0.z));
-    let (rx, ry, rz) = (col(&|p| p.1.x), col(&|p| p.1.y), col(&|p| p.1.z));
-    let inv_w = col(&|p| p.2);
+    let [sx, sy, sz, rx, ry, rz, inv_w] = columns::<T>(seed, n);
     let mut got = Columns::<T>::new(n);
     let before = PER_DIRECTION.with(Cell::get);
     got.write(|out, frames| {
@@ -246,8 +257,66 @@ where
     redone
 }
 
-/// Every combination, `n` pairs each, in type `T`; the pairs redone one at a time stay few.
-fn every_case<T: Real>(seed: u64, n: usize) {
+/// What [`every_case`] runs for one kernel and material: [`check`] or [`check_mueller`].
+trait Check {
+    fn run<T, S, Pol, Coh, Rough>(
+        kernel: &Kernel<Pol, Coh, Rough>,
+        material: &S,
+        case: (u64, usize, f64),
+        what: &str,
+    ) -> usize
+    where
+        T: Real,
+        S: Surface<T>,
+        Pol: PolarizationModel,
+        Coh: CoherenceModel + CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessModel + RoughnessWeights<T, S::Psd, Coh>;
+}
+
+/// [`check`]: `evaluate_pairs`.
+struct StokesPairs;
+/// [`check_mueller`]: `evaluate_pairs_mueller`.
+struct MuellerPairs;
+
+impl Check for StokesPairs {
+    fn run<T, S, Pol, Coh, Rough>(
+        kernel: &Kernel<Pol, Coh, Rough>,
+        material: &S,
+        case: (u64, usize, f64),
+        what: &str,
+    ) -> usize
+    where
+        T: Real,
+        S: Surface<T>,
+        Pol: PolarizationModel,
+        Coh: CoherenceModel + CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessModel + RoughnessWeights<T, S::Psd, Coh>,
+    {
+        check(kernel, material, case, what)
+    }
+}
+
+impl Check for MuellerPairs {
+    fn run<T, S, Pol, Coh, Rough>(
+        kernel: &Kernel<Pol, Coh, Rough>,
+        material: &S,
+        case: (u64, usize, f64),
+        what: &str,
+    ) -> usize
+    where
+        T: Real,
+        S: Surface<T>,
+        Pol: PolarizationModel,
+        Coh: CoherenceModel + CoherenceWeights<T, S::Psd>,
+        Rough: RoughnessModel + RoughnessWeights<T, S::Psd, Coh>,
+    {
+        check_mueller(kernel, material, case, what)
+    }
+}
+
+/// Every combination, `n` pairs each, in type `T`, through `C`; the pairs redone one at a time
+/// stay few.
+fn every_case<T: Real, C: Check>(seed: u64, n: usize) {
     let t = |x: f64| T::lit(x);
     let iso = GaussianPsd::<T, 2>::isotropic(t(0.02), t(1.0)).unwrap();
     let aniso = GaussianPsd::<T, 2>::from_autocorrelation(
@@ -267,26 +336,31 @@ fn every_case<T: Real>(seed: u64, n: usize) {
     };
     for (m, name) in [(&gold_iso, "gold"), (&gold_aniso, "gold, anisotropic")] {
         let case = |i: u64| (seed ^ (i << 32), n, 0.38 + 0.4 * (i as f64 / 6.0));
-        run(check(&Kernel::<Full, Partial>::default(), m, case(0), name));
-        run(check(
+        run(C::run(
+            &Kernel::<Full, Partial>::default(),
+            m,
+            case(0),
+            name,
+        ));
+        run(C::run(
             &Kernel::<OneShape, Partial>::default(),
             m,
             case(1),
             name,
         ));
-        run(check(
+        run(C::run(
             &Kernel::<Intensity, Partial>::default(),
             m,
             case(2),
             name,
         ));
-        run(check(
+        run(C::run(
             &Kernel::<Full, Incoherent>::default(),
             m,
             case(3),
             name,
         ));
-        run(check(
+        run(C::run(
             &Kernel::<Intensity, Incoherent>::default(),
             m,
             case(4),
@@ -294,13 +368,13 @@ fn every_case<T: Real>(seed: u64, n: usize) {
         ));
     }
     let case = (seed ^ (9 << 32), n, 0.55);
-    run(check(
+    run(C::run(
         &Kernel::<Full, Partial>::default(),
         &glass,
         case,
         "glass",
     ));
-    run(check(
+    run(C::run(
         &Kernel::<Intensity, Partial>::default(),
         &glass,
         case,
@@ -315,8 +389,8 @@ fn every_case<T: Real>(seed: u64, n: usize) {
 
 #[test]
 fn pairs_equal_the_batch_lanes_bit_for_bit() {
-    every_case::<f64>(0x5eed_0001, 203);
-    every_case::<f32>(0x5eed_0002, 203);
+    every_case::<f64, StokesPairs>(0x5eed_0001, 203);
+    every_case::<f32, StokesPairs>(0x5eed_0002, 203);
 }
 
 /// A pair the lanes cannot take (the Kirchhoff series) goes to the per-direction kernel, and
@@ -507,11 +581,7 @@ where
     use crate::interaction::polarization::{PolarizationLevel, Throughput};
     let surface = Frame::from_normal(Vector3::new(T::zero(), T::zero(), T::one())).unwrap();
     let k = T::lit(std::f64::consts::TAU / lambda);
-    let ps = pairs(seed, n);
-    let col = |f: &dyn Fn(&Pair) -> f64| -> Vec<T> { ps.iter().map(|p| T::lit(f(p))).collect() };
-    let (sx, sy, sz) = (col(&|p| p.0.x), col(&|p| p.0.y), col(&|p| p.0.z));
-    let (rx, ry, rz) = (col(&|p| p.1.x), col(&|p| p.1.y), col(&|p| p.1.z));
-    let inv_w = col(&|p| p.2);
+    let [sx, sy, sz, rx, ry, rz, inv_w] = columns::<T>(seed, n);
     let pairs = PairsSoa {
         to_source: DirectionsSoa {
             x: &sx,
@@ -633,67 +703,8 @@ where
     redone
 }
 
-/// [`check_mueller`] at every level and material of [`every_case`], in type `T`; the pairs
-/// redone one at a time stay few.
-fn every_mueller_case<T: Real>(seed: u64, n: usize) {
-    let t = |x: f64| T::lit(x);
-    let iso = GaussianPsd::<T, 2>::isotropic(t(0.02), t(1.0)).unwrap();
-    let aniso = GaussianPsd::<T, 2>::from_autocorrelation(
-        t(4e-4),
-        &Gaussian::new(Matrix2::new(t(2.0), t(0.6), t(0.6), t(0.5))).unwrap(),
-    )
-    .unwrap();
-    let gold = Complex::new(t(0.47), t(2.4));
-    let gold_iso = RoughConductor::new(iso, gold).unwrap();
-    let gold_aniso = RoughConductor::new(aniso, gold).unwrap();
-    let glass = RoughDielectric::new(iso, t(1.5)).unwrap();
-    let (mut redone, mut total) = (0, 0);
-    let mut run = |r: usize| {
-        redone += r;
-        total += n;
-    };
-    for (m, name) in [(&gold_iso, "gold"), (&gold_aniso, "gold, anisotropic")] {
-        let case = |i: u64| (seed ^ (i << 32), n, 0.38 + 0.4 * (i as f64 / 6.0));
-        run(check_mueller(
-            &Kernel::<Full, Partial>::default(),
-            m,
-            case(0),
-            name,
-        ));
-        run(check_mueller(
-            &Kernel::<OneShape, Partial>::default(),
-            m,
-            case(1),
-            name,
-        ));
-        run(check_mueller(
-            &Kernel::<Intensity, Partial>::default(),
-            m,
-            case(2),
-            name,
-        ));
-        run(check_mueller(
-            &Kernel::<Full, Incoherent>::default(),
-            m,
-            case(3),
-            name,
-        ));
-    }
-    let case = (seed ^ (9 << 32), n, 0.55);
-    run(check_mueller(
-        &Kernel::<Full, Partial>::default(),
-        &glass,
-        case,
-        "glass",
-    ));
-    assert!(
-        redone * 10 < total,
-        "{redone} of {total} pairs redone one at a time"
-    );
-}
-
 #[test]
 fn mueller_pairs_equal_the_per_direction_kernel() {
-    every_mueller_case::<f64>(0x5eed_0003, 203);
-    every_mueller_case::<f32>(0x5eed_0004, 203);
+    every_case::<f64, MuellerPairs>(0x5eed_0003, 203);
+    every_case::<f32, MuellerPairs>(0x5eed_0004, 203);
 }
