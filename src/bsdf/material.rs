@@ -64,7 +64,7 @@ use core::fmt::Debug;
 use nalgebra::Vector3;
 
 use super::sampler::{SamplesSoa, UniformsSoa};
-use super::vertices::{SideFn, VertexQuery};
+use super::vertex::{IncidentVertex, LightEval, ShadingPoint, SideFn, VertexQuery, to_mueller};
 use super::{
     Bsdf, BsdfSample, BsdfSurface, BsdfValue, DirectionSample, Interface, LobeFlags, LobeSampler,
     Part, SampledLobe, SurfaceCoherence,
@@ -84,54 +84,6 @@ use crate::packet::WavePacket;
 use crate::psd::{BlurMethod, ClosedForm, CorrelationPowers};
 use crate::real::Real;
 use crate::stokes::Stokes;
-
-/// Where a material is shaded: the shading frame (its `k` axis the normal n̂; for an
-/// interface, n̂ points into the medium above) and the wavelength in the medium above (µm; the
-/// vacuum wavelength for an object in air). As [`super::Bsdf::new`]'s `surface` and
-/// `wavelength`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ShadingPoint<T: Real> {
-    frame: Frame<T>,
-    wavelength: T,
-}
-
-impl<T: Real> ShadingPoint<T> {
-    /// The shading point of `frame` at `wavelength`.
-    ///
-    /// # Errors
-    /// [`Error::OutOfRange`] unless the wavelength is finite and positive (a material checks
-    /// its own wavenumbers when it is shaded, as [`super::Bsdf::new`]).
-    pub fn new(frame: Frame<T>, wavelength: T) -> Result<Self, Error> {
-        if !(wavelength > T::zero() && wavelength.is_finite()) {
-            return Err(Error::OutOfRange {
-                what: "wavelength at the shading point",
-                value: wavelength.to_f64(),
-                expected: "finite and > 0",
-            });
-        }
-        Ok(Self { frame, wavelength })
-    }
-
-    /// The shading frame.
-    #[must_use]
-    pub fn frame(&self) -> &Frame<T> {
-        &self.frame
-    }
-
-    /// The wavelength in the medium above.
-    #[must_use]
-    pub fn wavelength(&self) -> T {
-        self.wavelength
-    }
-
-    /// The point with its frame turned over, `(x̂, −ŷ, −n̂)` (right-handed).
-    fn flipped(&self) -> Self {
-        Self {
-            frame: self.frame.reversed(),
-            wavelength: self.wavelength,
-        }
-    }
-}
 
 /// A rough surface at a model level chosen at run time: what a renderer stores per material
 /// (module docs).
@@ -673,27 +625,6 @@ impl<T: Real> Material<T> {
     }
 }
 
-/// What [`Material::incident_vertex`] gives at one vertex of a backward path.
-#[derive(Debug, Clone)]
-pub struct IncidentVertex<T: Real> {
-    /// For the light's direction: its value and density, or `eval_incident`'s error; `None`
-    /// when no light direction was given.
-    pub light: Option<Result<LightEval<T>, Error>>,
-    /// The continuation, as [`Material::sample_incident`] draws and weighs it (`None` for an
-    /// evanescent draw).
-    pub sample: Option<BsdfSample<T, Mueller<T>>>,
-}
-
-/// The light's direction at one vertex of a backward path ([`IncidentVertex::light`]).
-#[derive(Debug, Clone, Copy)]
-pub struct LightEval<T: Real> {
-    /// Its value, [`Material::eval_incident`].
-    pub value: BsdfValue<T, Mueller<T>>,
-    /// The backward sampler's density for it, [`Material::pdf_incident`] (0 for a Dirac
-    /// lobe's direction): the other half of the multiple-importance weight.
-    pub pdf: T,
-}
-
 /// The weight of a drawn direction at one shading point, as a Mueller matrix, with its
 /// geometry ([`Material::with_incident`], [`Material::with_exit`]).
 pub(crate) type WeightFn<'w, T> =
@@ -805,22 +736,6 @@ trait Shade<T: Real>: Send + Sync + Debug {
 struct Model<S, Pol, Coh, Rough> {
     surface: S,
     kernel: Kernel<Pol, Coh, Rough>,
-}
-
-/// A value in BSDF form with Mueller throughputs.
-pub(super) fn to_mueller<T: Real, M: Throughput<T>>(
-    v: BsdfValue<T, M>,
-) -> BsdfValue<T, Mueller<T>> {
-    let r = v.response;
-    BsdfValue {
-        response: crate::interaction::polarization::MuellerResponse {
-            specular: r.specular.to_mueller(),
-            scattered: r.scattered.to_mueller(),
-            attenuation: r.attenuation,
-            side: r.side,
-        },
-        geometry: v.geometry,
-    }
 }
 
 /// A sample with a Mueller weight.

@@ -129,19 +129,20 @@ mod orders;
 mod path;
 mod sampler;
 pub mod sources;
+mod vertex;
 mod vertices;
 
 pub use bundle::{Bundle, BundleCoherence, BundlePdf, BundleSample, BundleValues};
 pub use flags::LobeFlags;
 pub use interface::Interface;
-pub use material::{IncidentVertex, LightEval, Material, ShadingPoint};
+pub use material::Material;
 pub use model::{BsdfKernel, BsdfSurface};
 pub use path::PathThroughput;
 pub use sampler::{
     DirectionSample, LobeSampler, NO_LOBE, Part, SampledLobe, SamplesSoa, UniformsSoa,
 };
 pub use sources::{HORIZON_RULE_Q, SurfaceCoherence, area_light, distant_disk};
-pub use vertices::VertexQuery;
+pub use vertex::{IncidentVertex, LightEval, ShadingPoint, VertexQuery};
 
 use nalgebra::{Matrix2, Unit, Vector3};
 

@@ -31,7 +31,7 @@
 
 use nalgebra::{Matrix4, Vector3};
 
-use super::material::{IncidentVertex, LightEval, ShadingPoint};
+use super::vertex::{IncidentVertex, LightEval, MuellerSample, SideFn, VertexQuery, to_mueller};
 use super::{Bsdf, BsdfKernel, BsdfSample, BsdfSurface, BsdfValue, SurfaceCoherence};
 use crate::error::Error;
 use crate::frame::Frame;
@@ -42,29 +42,6 @@ use crate::mueller::Mueller;
 use crate::numerics::unit_direction;
 use crate::psd::Psd;
 use crate::real::Real;
-
-/// One lane of [`super::Material::incident_vertices`]: the arguments of
-/// [`super::Material::incident_vertex`] for one vertex of a backward path.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct VertexQuery<T: Real> {
-    /// The shading frame and wavelength of the vertex.
-    pub at: ShadingPoint<T>,
-    /// The direction the light leaves along (toward the previous vertex or the camera).
-    pub exit: Vector3<T>,
-    /// The direction to a light for next-event estimation (`None`: no light sample).
-    pub to_light: Option<Vector3<T>>,
-    /// The uniform that chooses the lobe.
-    pub u_lobe: T,
-    /// The two uniforms of the point in the lobe.
-    pub u: [T; 2],
-}
-
-/// The shading point a lane runs in, from its own and its exit (a two-sided material turns it
-/// over for an exit below: `Material::side`).
-pub(super) type SideFn<'a, T> = dyn Fn(&ShadingPoint<T>, &Vector3<T>) -> ShadingPoint<T> + 'a;
-
-/// A drawn direction with a Mueller weight.
-type MuellerSample<T> = BsdfSample<T, Mueller<T>>;
 
 /// Lanes per pass (two pairs each: the light's and the drawn direction's); the buffers live on
 /// the stack.
@@ -226,7 +203,7 @@ fn pass<T, S, K>(
         let b = Bsdf::new(surface, kernel.clone(), *at.frame(), at.wavelength())?;
         let value = q.to_light.map(|d| {
             b.eval(&b.prepare_surface(d, coherence)?, q.exit)
-                .map(super::material::to_mueller)
+                .map(to_mueller)
         });
         let sampler = b.incident_sampler(q.exit, coherence)?;
         let pdf = q.to_light.map_or(T::zero(), |d| sampler.pdf(&d));
@@ -410,7 +387,7 @@ fn pass<T, S, K>(
             (None, Ask::Pair(i, g)) => {
                 let r = response(i, &g);
                 Some(Ok(LightEval {
-                    value: super::material::to_mueller(BsdfValue {
+                    value: to_mueller(BsdfValue {
                         response: r,
                         geometry: g,
                     }),
