@@ -9,11 +9,15 @@
 //! kernel's conditioning: the lanes and the one-at-a-time kernel round the tangential
 //! momentum `h_t = k (ŝ + r̂)_t` differently by a few `ε k`, an angle of up to `2ε/cos θ` per
 //! direction, so the value moves by `4ε/min(cos θ_i, cos θ_o) · |∂ ln M₀₀/∂θ|` relatively (the
-//! sensitivity measured by turning either direction by 10⁻⁷ rad, in f64). The exponent's
+//! derivatives measured by turning either direction by ±10⁻⁷ rad, in f64; the second
+//! order `e^{S δ + C δ²/2} − 1` where an ulp of angle is not small against the lobe). The exponent's
 //! magnitude `|E|` is taken as `|ln(p M₀₀)|` of the matrix before `1/p`, plus the coherent
 //! lobe's normalisation `ln(1 + (k w)²)`, which its Gaussian cancels, plus 4. Where the
 //! one-at-a-time part is 0 because its scale alone underflowed, the lanes' entries must be below
-//! `10⁴ MIN_POSITIVE`. The plane-wave levels, the Kirchhoff series and glass go lane by lane:
+//! `10⁴ MIN_POSITIVE`. A drawn direction whose value the type cannot resolve (the same
+//! directions in f64 give an `M₀₀` more than 10 % away: a coherent lobe narrower than the
+//! type's angles, near the horizon) gets the validity check alone, and at most one lane in 20
+//! may be such. The plane-wave levels, the Kirchhoff series and glass go lane by lane:
 //! bit for bit. Random lanes: frames tilted up to 60° from `+z`, exits and lights up to 89.9°
 //! (some exits below the frame, some lights below: errors), two wavelengths in runs, one lane
 //! in seven without a light; gold at the nine levels one- and two-sided. f64 and f32.
@@ -139,8 +143,36 @@ fn close<T: Real>(
 /// The value at a direction to the source in the lane's local coordinates.
 type LocalValue<'a, T> =
     dyn Fn(&Vector3<T>) -> Option<gmueller::bsdf::BsdfValue<T, Mueller<T>>> + 'a;
-/// `(k w, max |∂ ln M₀₀/∂θ|)` at a direction to the source.
-type Sensitivity<'a, T> = dyn Fn(&Vector3<T>) -> (f64, f64) + 'a;
+/// `(k w, (max |∂ ln M₀₀/∂θ|, max |∂² ln M₀₀/∂θ²|), M₀₀ in f64)` at a direction to the source.
+type Sensitivity<'a, T> = dyn Fn(&Vector3<T>) -> (f64, (f64, f64), Option<f64>) + 'a;
+
+/// Whether a value is not resolvable in `T`: the same directions in f64 give an `M₀₀` more
+/// than 10 % away from `T`'s one-at-a-time `local` (a lobe narrower than `T`'s angles, near the
+/// horizon). Such a lane is checked for validity alone, and they must stay rare.
+fn unresolvable<T: Real>(exact64: Option<f64>, local: &Mueller<T>) -> bool {
+    let l = local.matrix()[(0, 0)].to_f64();
+    exact64.is_some_and(|x| (x - l).abs() > 0.1 * l.abs().max(x.abs()))
+}
+
+/// `M₀₀ ≥ 0` and every entry at most `1.01 M₀₀` in magnitude.
+fn valid<T: Real>(m: &Mueller<T>, what: &str) -> Result<(), TestCaseError> {
+    let m = m.matrix();
+    let m00 = m[(0, 0)].to_f64();
+    prop_assert!(
+        m00 >= 0.0 && m.iter().all(|x| x.to_f64().abs() <= 1.01 * m00),
+        "{}: not a valid matrix {:?}",
+        what,
+        m
+    );
+    Ok(())
+}
+
+/// The relative change of a value whose `ln M₀₀` has the derivatives `(S, C)` along a turn of
+/// its directions by `δ = 4ε/min(cos θ_i, cos θ_o)` (module docs): `e^{S δ + C δ²/2} − 1`.
+fn conditioning<T: Real>((s, c): (f64, f64), g: &gmueller::interaction::Geometry<T>) -> f64 {
+    let delta = 4.0 * T::EPSILON.to_f64() / g.cos_i().min(g.cos_o()).to_f64();
+    (s * delta + 0.5 * c * delta * delta).exp_m1()
+}
 
 /// Lane `i` of the batch against `incident_vertex` (`want`) and, for the values, `local`: the
 /// value `Material::eval_incident` gives at the lane's local directions of a direction to the
@@ -150,7 +182,7 @@ fn same_vertex<T: Real>(
     want: &Result<IncidentVertex<T>, Error>,
     (local, sens, light): (&LocalValue<'_, T>, &Sensitivity<'_, T>, Option<Vector3<T>>),
     exact: bool,
-    i: usize,
+    (i, unresolved): (usize, &mut usize),
 ) -> Result<(), TestCaseError> {
     let (got, want) = match (got, want) {
         (Err(a), Err(b)) => {
@@ -187,9 +219,9 @@ fn same_vertex<T: Real>(
                 let l = local(&light.expect("a light")).expect("the light's local value");
                 let rl = &l.response;
                 let what = format!("lane {i}, light");
-                let (kw, s) = sens(&light.expect("a light"));
+                let (kw, s, _) = sens(&light.expect("a light"));
                 let g = &a.value.geometry;
-                let cond = 4.0 * T::EPSILON.to_f64() * s / g.cos_i().min(g.cos_o()).to_f64();
+                let cond = conditioning::<T>(s, g);
                 close(&ra.specular, &rl.specular, (1.0, cond, kw), &what)?;
                 close(&ra.scattered, &rl.scattered, (1.0, cond, kw), &what)?;
             }
@@ -211,9 +243,14 @@ fn same_vertex<T: Real>(
                 let p = a.sample.pdf.to_f64();
                 let l = local(&a.sample.direction).expect("the draw's local value");
                 let w = l.response.total().scaled(T::one() / a.sample.pdf).flushed();
-                let (kw, s) = sens(&a.sample.direction);
+                let (kw, s, exact64) = sens(&a.sample.direction);
                 let g = &a.geometry;
-                let cond = 4.0 * T::EPSILON.to_f64() * s / g.cos_i().min(g.cos_o()).to_f64();
+                let cond = conditioning::<T>(s, g);
+                if unresolvable(exact64, &l.response.total()) {
+                    valid(&a.weight, &format!("lane {i}, weight"))?;
+                    *unresolved += 1;
+                    return Ok(());
+                }
                 close(&a.weight, &w, (p, cond, kw), &format!("lane {i}, weight"))?;
             }
         }
@@ -250,6 +287,7 @@ fn check<T: Real>(
         .collect();
     m.incident_vertices(&sky, &qs, &mut out).unwrap();
     let axes = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
+    let mut unresolved = 0;
     for (i, (q, got)) in qs.iter().zip(&out).enumerate() {
         let want = m.incident_vertex(&q.at, q.exit, &sky, q.to_light, q.u_lobe, q.u);
         // The lane's frame as the material turns it (a two-sided material's exit below), and
@@ -297,32 +335,49 @@ fn check<T: Real>(
                 })
             };
             let Some(base) = m00(dl, el) else {
-                return (kw, 0.0);
+                return (kw, (0.0, 0.0), None);
             };
             let h = 1e-7;
-            let turn = |v: Vector3<f64>, axis: usize| {
+            let turn = |v: Vector3<f64>, axis: usize, by: f64| {
                 let t = v.cross(&[Vector3::x(), Vector3::y()][axis]).normalize();
-                v.normalize() + t * h
+                v.normalize() + t * by
             };
-            let mut s = 0f64;
-            for (d2, e2) in [
-                (turn(dl, 0), el),
-                (turn(dl, 1), el),
-                (dl, turn(el, 0)),
-                (dl, turn(el, 1)),
-            ] {
-                if let Some(m) = m00(d2, e2) {
-                    for (a, b) in m.iter().zip(&base) {
-                        if *a > 0.0 && *b > 0.0 {
-                            s = s.max((a / b).ln().abs() / h);
+            // The first and second derivatives of ln M₀₀ (central differences).
+            let (mut s, mut c) = (0f64, 0f64);
+            for which in 0..4 {
+                let at = |by: f64| {
+                    let (axis, light) = (which % 2, which < 2);
+                    if light {
+                        m00(turn(dl, axis, by), el)
+                    } else {
+                        m00(dl, turn(el, axis, by))
+                    }
+                };
+                if let (Some(p), Some(m)) = (at(h), at(-h)) {
+                    for ((a, b), z) in p.iter().zip(&m).zip(&base) {
+                        if *a > 0.0 && *b > 0.0 && *z > 0.0 {
+                            s = s.max((a / b).ln().abs() / (2.0 * h));
+                            c = c.max(((a / z).ln() + (b / z).ln()).abs() / (h * h));
                         }
                     }
                 }
             }
-            (kw, s)
+            (kw, (s, c), Some(base[2]))
         };
-        same_vertex(got, &want, (&local, &sens, q.to_light), exact, i)?;
+        same_vertex(
+            got,
+            &want,
+            (&local, &sens, q.to_light),
+            exact,
+            (i, &mut unresolved),
+        )?;
     }
+    prop_assert!(
+        unresolved * 20 <= n,
+        "{} of {} lanes not resolvable in this type",
+        unresolved,
+        n
+    );
     Ok(())
 }
 
@@ -412,6 +467,17 @@ fn every_level_and_case() {
             run::<f32>(0x5eed + level as u64, level, case).unwrap();
         }
     }
+}
+
+/// A fresh-seed search (`GMUELLER_PROPTEST_SEARCH=100`) found this f32 lane: a light's
+/// specular `M₀₀` of 1.25·10⁻³⁸ one at a time, 0 in the batch (the lanes put `M₀₀ e` below the
+/// smallest normal number and write the part as 0), beyond the bound's absolute
+/// `MIN_POSITIVE`: open (issue 39's stop note). Run: `cargo test --test integration
+/// known_f32_light_at_the_normal_edge -- --ignored`.
+#[test]
+#[ignore = "a known f32 corner the bound does not cover yet"]
+fn known_f32_light_at_the_normal_edge() {
+    run::<f32>(4098965456344639832, 4, 84).unwrap();
 }
 
 /// A short output is an error, and nothing is written.
