@@ -37,7 +37,9 @@ use crate::error::Error;
 use crate::frame::Frame;
 use crate::interaction::Geometry;
 use crate::interaction::batch::{DirectionsSoa, MuellerLobesSoa, MuellerSoa, PairsSoa};
-use crate::interaction::polarization::{MuellerResponse, PolarizationModel, Throughput};
+use crate::interaction::polarization::{
+    MuellerResponse, PolarizationModel, Throughput, ln_attenuation,
+};
 use crate::mueller::Mueller;
 use crate::numerics::unit_direction;
 use crate::psd::Psd;
@@ -357,11 +359,10 @@ fn pass<T, S, K>(
     let response = |i: usize, g: &Geometry<T>| {
         let matrix = |base: usize| Mueller(Matrix4::from_fn(|r, c| m[base + 4 * r + c][i]));
         let from = <<K::Pol as PolarizationModel>::Throughput<T> as Throughput<T>>::from_mueller;
-        let v = g.phase_factor();
         let r = MuellerResponse {
             specular: from(&matrix(0)),
             scattered: from(&matrix(16)),
-            attenuation: (-(v * v) * variance).exp(),
+            attenuation: ln_attenuation(variance, g).exp(),
             side: g.side(),
         };
         // The coherent lobe over its mass where it is not 0 (a zero stays zero under the

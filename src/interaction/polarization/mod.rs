@@ -165,14 +165,21 @@ fn front<T: Real, P: Psd<T, 2>, Pol, Coh>(
     prepared: &PreparedPacket<T, Pol, Coh>,
     g: &Geometry<T>,
 ) -> Front<T> {
-    let v = g.phase_factor();
-    let ln_alpha = -(v * v) * psd.variance();
+    let ln_alpha = ln_attenuation(psd.variance(), g);
     let ln_base = prepared.two_ln_k_over_2pi + g.ln_eta_sq;
     Front {
         attenuation: ln_alpha.exp(),
         ln_front: ln_base + ln_alpha,
         ln_base,
     }
+}
+
+/// `ln α = −v² σ²`, the Debye–Waller exponent of the geometry's phase factor `v` for a surface of
+/// height variance `σ²` (its exponential is every response's `attenuation`).
+#[inline]
+pub(crate) fn ln_attenuation<T: Real>(variance: T, g: &Geometry<T>) -> T {
+    let v = g.phase_factor();
+    -(v * v) * variance
 }
 
 /// `u` onto the cone of valid Stokes vectors: its polarized part scaled down to `u₀` where
