@@ -21,7 +21,10 @@
 //! the lane's local coordinates: each equals the one-at-a-time evaluation
 //! ([`super::Material::eval_incident`] in the frame of the unit axes, at the local directions)
 //! within the batch kernel's bound of `M₀₀` ([`crate::interaction::Kernel::evaluate_batch`];
-//! the `1/E` and `1/p` add `8 ε M₀₀`). Against `incident_vertex` in world coordinates they
+//! the `1/E` and `1/p` add `8 ε M₀₀`). Where the scale of a part alone underflows, the part is
+//! 0 (the scalar BSDF form's rule, which the lanes follow); the lanes' scale and the
+//! one-at-a-time scale round differently, so near the smallest normal number either may be 0
+//! where the other is not (below `10⁴ MIN_POSITIVE`). Against `incident_vertex` in world coordinates they
 //! also carry the kernel's conditioning under the rounding of that rotation (a few `ε` per
 //! direction): negligible except in a narrow specular lobe near the horizon, where `M` changes
 //! by `√(2E) δ √(2π p/cos θ_i)` relatively for a direction moved by `δ` (`E` the sample's
