@@ -14,9 +14,11 @@
 //! magnitude `|E|` is taken as `|ln(p M₀₀)|` of the matrix before `1/p`, plus the coherent
 //! lobe's normalisation `ln(1 + (k w)²)`, which its Gaussian cancels, plus 4. Where the
 //! one-at-a-time part is 0 because its scale alone underflowed, the lanes' entries must be below
-//! `10⁴ MIN_POSITIVE`, and the other way round (the two scales round differently). A drawn direction whose value the type cannot resolve (the same
-//! directions in f64 give an `M₀₀` more than 10 % away: a coherent lobe narrower than the
-//! type's angles, near the horizon) gets the validity check alone, and at most one lane in 20
+//! `10⁴ MIN_POSITIVE`, and the other way round (the two scales round differently). A drawn
+//! direction whose value the type cannot resolve (the same directions in f64 give an `M₀₀`
+//! more than 10 % away: a coherent lobe narrower than the type's angles, near the horizon) gets the validity check alone, and so does a weight whose
+//! one-at-a-time `M₀₀` is the value that is off (the lanes' within the bound of the same
+//! directions in f64, the one-at-a-time not: an f32 weight near 10⁻³⁶); at most one lane in 20
 //! may be such. The plane-wave levels, the Kirchhoff series and glass go lane by lane:
 //! bit for bit. Random lanes: frames tilted up to 60° from `+z`, exits and lights up to 89.9°
 //! (some exits below the frame, some lights below: errors), two wavelengths in runs, one lane
@@ -102,7 +104,6 @@ fn close<T: Real>(
     (e, extra, kw): (f64, f64, f64),
     what: &str,
 ) -> Result<(), TestCaseError> {
-    let eps = T::EPSILON.to_f64();
     if b.matrix().iter().all(|x| *x == T::zero()) {
         // The one-at-a-time part is 0 where its scale alone underflowed (its unscaled matrix,
         // below 10³ in these units, would have made the product normal): the lanes keep the
@@ -128,12 +129,7 @@ fn close<T: Real>(
         );
         return Ok(());
     }
-    let l = b.matrix()[(0, 0)].to_f64().abs();
-    let ln = (l * e).max(f64::MIN_POSITIVE).ln().abs() + (1.0 + kw * kw).ln() + 4.0;
-    let bound = 4.0 * eps * (4.0 + ln) * (1.0 + 3f64.sqrt()) * l
-        + 8.0 * eps * l
-        + extra * l
-        + T::MIN_POSITIVE.to_f64();
+    let bound = bound::<T>(b.matrix()[(0, 0)].to_f64().abs(), (e, extra, kw));
     for r in 0..4 {
         for c in 0..4 {
             let (x, y) = (a.matrix()[(r, c)].to_f64(), b.matrix()[(r, c)].to_f64());
@@ -150,6 +146,28 @@ fn close<T: Real>(
         }
     }
     Ok(())
+}
+
+/// The bound of [`close`] for an `M₀₀` of magnitude `l`.
+fn bound<T: Real>(l: f64, (e, extra, kw): (f64, f64, f64)) -> f64 {
+    let eps = T::EPSILON.to_f64();
+    let ln = (l * e).max(f64::MIN_POSITIVE).ln().abs() + (1.0 + kw * kw).ln() + 4.0;
+    4.0 * eps * (4.0 + ln) * (1.0 + 3f64.sqrt()) * l
+        + 8.0 * eps * l
+        + extra * l
+        + T::MIN_POSITIVE.to_f64()
+}
+
+/// Whether the one-at-a-time `M₀₀` (`one`) is the value that is off: the lanes' (`lanes`)
+/// is within [`bound`] of the same directions' `M₀₀` in f64 (`truth`), `one` is not. A
+/// fresh-seed search found such an f32 weight near 10⁻³⁶ (Intensity · Incoherent; the
+/// one-at-a-time value 1.8 % off, the lanes' 3·10⁻⁴), which no bound of the lanes against the
+/// one-at-a-time value covers.
+fn one_is_off<T: Real>(lanes: f64, one: f64, truth: Option<f64>, args: (f64, f64, f64)) -> bool {
+    truth.is_some_and(|t| {
+        let tol = bound::<T>(t.abs(), args);
+        (lanes - t).abs() <= tol && (one - t).abs() > tol
+    })
 }
 
 /// The value at a direction to the source in the lane's local coordinates.
@@ -260,6 +278,18 @@ fn same_vertex<T: Real>(
                 let g = &a.geometry;
                 let cond = conditioning::<T>(s, g);
                 if unresolvable(exact64, &l.response.total()) {
+                    valid(&a.weight, &format!("lane {i}, weight"))?;
+                    *unresolved += 1;
+                    return Ok(());
+                }
+                let (lanes, one) = (a.weight.matrix()[(0, 0)], w.matrix()[(0, 0)]);
+                if one_is_off::<T>(
+                    lanes.to_f64(),
+                    one.to_f64(),
+                    exact64.map(|x| x / p),
+                    (p, cond, kw),
+                ) {
+                    // Checked for validity alone, and counted with the unresolvable lanes.
                     valid(&a.weight, &format!("lane {i}, weight"))?;
                     *unresolved += 1;
                     return Ok(());
