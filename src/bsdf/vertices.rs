@@ -24,13 +24,14 @@
 //! the `1/E` and `1/p` add `8 ε M₀₀`). Where the scale of a part alone underflows, the part is
 //! 0 (the scalar BSDF form's rule, which the lanes follow); the lanes' scale and the
 //! one-at-a-time scale round differently, so near the smallest normal number either may be 0
-//! where the other is not (below `10⁴ MIN_POSITIVE`). Against `incident_vertex` in world coordinates they
-//! also carry the kernel's conditioning under the rounding of that rotation (a few `ε` per
-//! direction): negligible except in a narrow specular lobe near the horizon, where `M` changes
-//! by `√(2E) δ √(2π p/cos θ_i)` relatively for a direction moved by `δ` (`E` the sample's
-//! exponent in the lobe, `p` its density) — measured up to 3·10⁻¹¹ in `f64` and 1·10⁻² in
-//! `f32` at `cos θ_i ≈ 0.01`, `p ≈ 10⁷ sr⁻¹` (`tests/bsdf/vertices.rs`). A lane whose local
-//! direction to the source rounds below the surface (within `ε` of it) goes one at a time.
+//! where the other is not (below `10⁴ MIN_POSITIVE`). Against `incident_vertex` in world
+//! coordinates they also carry the kernel's conditioning under the rounding of that rotation
+//! (a few `ε` per direction): negligible except in a narrow specular lobe near the horizon,
+//! where `M` changes by `√(2E) δ √(2π p/cos θ_i)` relatively for a direction moved by `δ`
+//! (`E` the sample's exponent in the lobe, `p` its density) — measured up to 3·10⁻¹¹ in `f64`
+//! and 1·10⁻² in `f32` at `cos θ_i ≈ 0.01`, `p ≈ 10⁷ sr⁻¹` (`tests/bsdf/vertices.rs`). A lane
+//! whose local direction to the source rounds below the surface (within `ε` of it) goes one at
+//! a time.
 
 use nalgebra::{Matrix4, Vector3};
 

@@ -16,13 +16,14 @@
 //! one-at-a-time part is 0 because its scale alone underflowed, the lanes' entries must be below
 //! `10⁴ MIN_POSITIVE`, and the other way round (the two scales round differently). A drawn
 //! direction whose value the type cannot resolve (the same directions in f64 give an `M₀₀`
-//! more than 10 % away: a coherent lobe narrower than the type's angles, near the horizon) gets the validity check alone, and so does a weight whose
-//! one-at-a-time `M₀₀` is the value that is off (the lanes' within the bound of the same
-//! directions in f64, the one-at-a-time not: an f32 weight near 10⁻³⁶); at most one lane in 20
-//! may be such. The plane-wave levels, the Kirchhoff series and glass go lane by lane:
-//! bit for bit. Random lanes: frames tilted up to 60° from `+z`, exits and lights up to 89.9°
-//! (some exits below the frame, some lights below: errors), two wavelengths in runs, one lane
-//! in seven without a light; gold at the nine levels one- and two-sided. f64 and f32.
+//! more than 10 % away: a coherent lobe narrower than the type's angles, near the horizon)
+//! gets the validity check alone, and so does a weight whose one-at-a-time `M₀₀` is the value
+//! that is off (the lanes' within the bound of the same directions in f64, the one-at-a-time
+//! not: an f32 weight near 10⁻³⁶); at most one lane in 20 may be such. The plane-wave
+//! levels, the Kirchhoff series and glass go lane by lane: bit for bit. Random lanes: frames
+//! tilted up to 60° from `+z`, exits and lights up to 89.9° (some exits below the frame, some
+//! lights below: errors), two wavelengths in runs, one lane in seven without a light; gold at
+//! the nine levels one- and two-sided. f64 and f32.
 
 use crate::common;
 use crate::common::Lcg;
@@ -155,8 +156,8 @@ fn bound<T: Real>(l: f64, (e, extra, kw): (f64, f64, f64)) -> f64 {
 /// Whether the one-at-a-time `M₀₀` (`one`) is the value that is off: the lanes' (`lanes`)
 /// is within [`bound`] of the same directions' `M₀₀` in f64 (`truth`), `one` is not. A
 /// fresh-seed search found such an f32 weight near 10⁻³⁶ (Intensity · Incoherent; the
-/// one-at-a-time value 1.8 % off, the lanes' 3·10⁻⁴), which no bound of the lanes against the
-/// one-at-a-time value covers.
+/// one-at-a-time value 1.8 % off, the lanes' 3·10⁻⁴), which the bound of the lanes against the
+/// one-at-a-time value does not cover.
 fn one_is_off<T: Real>(lanes: f64, one: f64, truth: Option<f64>, args: (f64, f64, f64)) -> bool {
     truth.is_some_and(|t| {
         let tol = bound::<T>(t.abs(), args);
