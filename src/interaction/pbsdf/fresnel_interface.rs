@@ -25,7 +25,8 @@ use crate::real::Real;
 /// ```
 /// `F_spec` is the s/p frame of the specular (mirror or Snell) direction
 /// ([`Geometry::specular_sp`]); exit directions of the coherent lobe that differ from it (finite
-/// coherence) receive the light by the minimal rotation, as in [`super::FresnelReflection`].
+/// coherence) receive the light by the minimal rotation (S2.3's reflection beyond 90°), as in
+/// [`super::FresnelReflection`].
 ///
 /// Why `√η_t`: the kernel returns radiance in the exit medium with the factor `1/λ_t² = η_t²/λ²`
 /// ([`crate::interaction`], module formula), and the specular lobe integrates to

@@ -21,7 +21,11 @@ use crate::real::Real;
 /// ```
 /// `J` maps the incident s/p frame to the s/p frame of the *specular* direction; the coherent
 /// lobe's exit directions `r̂ ≠ r_spec` (finite coherence) receive it by the minimal rotation
-/// `r_spec → r̂` ([`crate::frame::frame_change_mueller`], the identity at `r̂ = r_spec`). Without
+/// `r_spec → r̂` ([`crate::frame::frame_change_mueller`], the identity at `r̂ = r_spec`). Beyond
+/// 90° from `r_spec` (`r_spec·r̂ < 0`, where the lobe is far below any visible level) that frame
+/// change is S2.3's reflection instead: the minimal rotation to `−r̂`, onto the exit frame with
+/// `p̂` reversed, then `diag(1, −1)` (`tests/interaction/batch/pairs.rs` checks both cases
+/// against a literal construction). Without
 /// that transport the output depended on the arbitrary choice of ŝ at normal incidence (a jump
 /// of the Stokes vector across the `Frame::sp` normal-incidence switch; `tests/extremes.rs`,
 /// `normal_incidence_switch_is_invisible_in_a_fixed_frame`).
