@@ -15,7 +15,8 @@
 //! `kernel_batch_interface/{f64,f32}`: the same at a rough glass interface, exits around
 //! Snell's direction, or alternating with the mirror direction, against the per-direction one.
 //! `kernel_batch_levels/{f64,f32}`: `evaluate_batch` at the Intensity and Full levels at a rough
-//! glass interface, exits near the lobes and over both hemispheres.
+//! glass interface, exits near the lobes and over both hemispheres; at Intensity also without
+//! the exit frames.
 //! `kernel_batch_spectral/{f64,f32}`: `evaluate_batch_spectral` on 4 wavelengths × the same
 //! 1024 exits against 4 `evaluate_batch` calls, at first order and (`-series`) with the
 //! Kirchhoff series at `vσ ≈ 1`.
@@ -638,6 +639,17 @@ where
 {
     /// Times `evaluate_batch` (both lobes and the exit frames) on `exits`, as `case`.
     fn bench(&self, g: &mut BenchmarkGroup<'_, WallTime>, case: &str, exits: &[Vector3<T>]) {
+        self.bench_with(g, case, exits, true);
+    }
+
+    /// [`BatchScene::bench`], with the exit frames only when `with_frames`.
+    fn bench_with(
+        &self,
+        g: &mut BenchmarkGroup<'_, WallTime>,
+        case: &str,
+        exits: &[Vector3<T>],
+        with_frames: bool,
+    ) {
         let columns = |k: usize| exits.iter().map(|e| e[k]).collect::<Vec<T>>();
         let (x, y, z) = (columns(0), columns(1), columns(2));
         let n = exits.len();
@@ -665,7 +677,7 @@ where
                         self.interface,
                         dirs,
                         &mut out,
-                        Some(&mut frames),
+                        with_frames.then_some(&mut frames),
                     )
                     .unwrap();
                 black_box(out.scattered.s[0][n - 1])
@@ -735,7 +747,7 @@ fn batch_interface_for<T: Real>(c: &mut Criterion, prec: &str) {
 /// two-shape packet of [`batch_partial_for`]: 1024 exits alternating around the mirror and Snell
 /// directions (`lobe-1024`, as `mixed-1024` of [`batch_interface_for`]), and 1024 exits uniform
 /// in solid angle over both hemispheres, `θ_o` up to 87° (`hemisphere-1024`: mostly off the
-/// lobes).
+/// lobes). `Intensity-no-frames-*` asks for `S0` alone, without the exit frames.
 fn batch_levels_for<T: Real>(c: &mut Criterion, prec: &str) {
     const M: usize = 1024;
     let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
@@ -791,6 +803,15 @@ fn batch_levels_for<T: Real>(c: &mut Criterion, prec: &str) {
             interface: Some(eta),
         }
         .bench(&mut g, &format!("Intensity-{case}"), exits);
+        // What a renderer that ignores polarization asks for: S0, no exit frames.
+        BatchScene {
+            kernel: &intensity,
+            material: &material,
+            packet: &packet,
+            surface: &surf,
+            interface: Some(eta),
+        }
+        .bench_with(&mut g, &format!("Intensity-no-frames-{case}"), exits, false);
     }
     g.finish();
 }

@@ -12,7 +12,8 @@
 //!
 //! (valgrind has no AVX-512, so the dispatch takes AVX2 + FMA under it). It prints a checksum
 //! so that the work is not optimised away. A third argument picks another workload: `exits`
-//! (the default, above), `pairs` (`Kernel::evaluate_pairs` on 65,536 pairs of one surface
+//! (the default, above), `exits-intensity` (the same at the `Intensity` level, `S0` only and no
+//! exit frames), `pairs` (`Kernel::evaluate_pairs` on 65,536 pairs of one surface
 //! width), `pairs-horizon` (each pair its own width, the horizon rule), `pairs-scalar` or
 //! `pairs-horizon-scalar` (the same pairs one at a time through the renderer layer),
 //! `pairs-material` or `pairs-horizon-material` (`Material::eval_incident_pairs`), and
@@ -22,7 +23,7 @@
 use gmueller::Real;
 use gmueller::frame::Frame;
 use gmueller::interaction::batch::{DirectionsSoa, ExitFramesSoa, LobesSoa, StokesSoa};
-use gmueller::interaction::{Full, Kernel, Partial, RoughSurface};
+use gmueller::interaction::{Full, Intensity, Kernel, Partial, RoughSurface};
 use gmueller::packet::{CoherenceShape, WavePacket};
 use gmueller::psd::GaussianPsd;
 use gmueller::stokes::Stokes;
@@ -33,9 +34,10 @@ use num_complex::Complex;
 /// The number of exits of one pass.
 const M: usize = 65_536;
 
-/// `reps` passes of `evaluate_batch` over the `M` exits; the sum of the last pass's scattered
-/// `S0`.
-fn run<T: Real>(reps: usize) -> f64 {
+/// `reps` passes of `evaluate_batch` over the `M` exits at the `Full` level (with the exit
+/// frames) or, with `intensity`, at the `Intensity` level (`S0` only, no frames: what a
+/// renderer that ignores polarization asks for); the sum of the last pass's scattered `S0`.
+fn run<T: Real>(reps: usize, intensity: bool) -> f64 {
     let eta = Complex::new(T::lit(1.5), T::zero());
     let psd = GaussianPsd::<T, 2>::isotropic(T::lit(0.02), T::lit(2.0)).unwrap();
     let material = RoughSurface {
@@ -43,7 +45,6 @@ fn run<T: Real>(reps: usize) -> f64 {
         specular: gmueller::interaction::pbsdf::FresnelReflection::new(eta).unwrap(),
         scatter: gmueller::interaction::pbsdf::RayleighRice::new(eta).unwrap(),
     };
-    let kernel = Kernel::<Full, Partial>::default();
     let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
     let theta_i = 30f64.to_radians();
     let travel = Vector3::new(theta_i.sin(), 0.0, -theta_i.cos()).map(T::lit);
@@ -84,17 +85,23 @@ fn run<T: Real>(reps: usize) -> f64 {
             y: &y,
             z: &z,
         };
-        kernel
-            .evaluate_batch(
-                &material,
-                &packet,
-                &surface,
-                None,
-                dirs,
-                &mut out,
-                Some(&mut frames),
-            )
-            .unwrap();
+        if intensity {
+            Kernel::<Intensity, Partial>::default()
+                .evaluate_batch(&material, &packet, &surface, None, dirs, &mut out, None)
+                .unwrap();
+        } else {
+            Kernel::<Full, Partial>::default()
+                .evaluate_batch(
+                    &material,
+                    &packet,
+                    &surface,
+                    None,
+                    dirs,
+                    &mut out,
+                    Some(&mut frames),
+                )
+                .unwrap();
+        }
     }
     out.scattered.s[0].iter().map(|v| v.to_f64()).sum::<f64>()
 }
@@ -218,8 +225,10 @@ fn main() {
     let reps = args.next().and_then(|r| r.parse().ok()).unwrap_or(1);
     let what = args.next().unwrap_or_else(|| "exits".into());
     let sum = match (precision.as_str(), what.as_str()) {
-        ("f64", "exits") => run::<f64>(reps),
-        (_, "exits") => run::<f32>(reps),
+        ("f64", "exits") => run::<f64>(reps, false),
+        (_, "exits") => run::<f32>(reps, false),
+        ("f64", "exits-intensity") => run::<f64>(reps, true),
+        (_, "exits-intensity") => run::<f32>(reps, true),
         ("f64", w) => run_pairs::<f64>(
             reps,
             w.ends_with("scalar"),
