@@ -306,11 +306,12 @@ proptest! {
 /// matrix `diag(r_s, r_p)` (Born & Wolf, `r_p = (η² c − q)/(η² c + q)`) into the s/p basis of
 /// the mirror direction, carried to the exit's by the minimal rotation `r_spec → r̂` (Rodrigues)
 /// and S2.4's `T` of the two bases; beyond 90° from `r_spec`, by S2.3's reflection (the minimal
-/// rotation to `−r̂`, the exit basis with `p̂` reversed, then `diag(1, −1)`). Returns the two matrices and, per lobe, the exponent
-/// `½ h_tᵀ G⁻¹ h_t + (kσ(cos θ_i + cos θ_o))²`, whose rounding the result inherits, and the
-/// exponent's gradient `|G⁻¹ h_t|` in `h_t`, which scales the rounding of `h_t` itself, and
-/// `M′₀₀ = ½ Σ |J′ᵢⱼ|²` of the lobe's unscaled Jones matrix (`J′` the Rayleigh–Rice factors
-/// without `2k cos θ_i`, or the Fresnel matrix).
+/// rotation to `−r̂`, the exit basis with `p̂` reversed, then `diag(1, −1)`).
+///
+/// Returns the two matrices and, per lobe: the exponent `½ h_tᵀ G⁻¹ h_t + (kσ(cos θ_i +
+/// cos θ_o))²`, whose rounding the result inherits; its gradient `|G⁻¹ h_t|` in `h_t`, which
+/// scales the rounding of `h_t` itself; and `M′₀₀ = ½ Σ |J′ᵢⱼ|²` of the lobe's unscaled Jones
+/// matrix (`J′` the Rayleigh–Rice factors without `2k cos θ_i`, or the Fresnel matrix).
 fn literal_pair(
     sc: &Scene,
     s: Vector3<f64>,
