@@ -795,23 +795,16 @@ fn batch_levels_for<T: Real>(c: &mut Criterion, prec: &str) {
             interface: Some(eta),
         }
         .bench(&mut g, &format!("Full-{case}"), exits);
-        BatchScene {
+        let scene = BatchScene {
             kernel: &intensity,
             material: &material,
             packet: &packet,
             surface: &surf,
             interface: Some(eta),
-        }
-        .bench(&mut g, &format!("Intensity-{case}"), exits);
+        };
+        scene.bench(&mut g, &format!("Intensity-{case}"), exits);
         // What a renderer that ignores polarization asks for: S0, no exit frames.
-        BatchScene {
-            kernel: &intensity,
-            material: &material,
-            packet: &packet,
-            surface: &surf,
-            interface: Some(eta),
-        }
-        .bench_with(&mut g, &format!("Intensity-no-frames-{case}"), exits, false);
+        scene.bench_with(&mut g, &format!("Intensity-no-frames-{case}"), exits, false);
     }
     g.finish();
 }

@@ -657,8 +657,9 @@ fn lane_specular_where_the_coherence_polarizes_and_fresnel_cancels() {
 fn lane_batch_holds_its_bound_at_grazing_incidence() {
     fn run<T: Real, Coh>(kernel: &Kernel<Full, Coh>)
     where
-        Coh: CoherenceModel + CoherenceWeights<T, GaussianPsd<T, 2>>,
-        gmueller::interaction::roughness::FirstOrder: RoughnessWeights<T, GaussianPsd<T, 2>, Coh>,
+        Coh: CoherenceModel + CoherenceWeights<T, GaussianMixturePsd<T, 2>>,
+        gmueller::interaction::roughness::FirstOrder:
+            RoughnessWeights<T, GaussianMixturePsd<T, 2>, Coh>,
     {
         let t = T::lit;
         let surface = Frame::new(Vector3::x(), Vector3::y(), Vector3::z()).unwrap();
@@ -680,7 +681,9 @@ fn lane_batch_holds_its_bound_at_grazing_incidence() {
                     t(0.5),
                 )
                 .unwrap();
+                // One component as a mixture: the instantiations of the proptests above.
                 let psd = GaussianPsd::<T, 2>::isotropic(t(0.002), t(ell)).unwrap();
+                let psd = GaussianMixturePsd::new(vec![psd]).unwrap();
                 let gold = RoughConductor::new(psd, Complex::new(t(0.47), t(2.4))).unwrap();
                 let mut d: [Vec<T>; 3] = Default::default();
                 for _ in 0..24 {
