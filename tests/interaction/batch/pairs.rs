@@ -388,10 +388,10 @@ fn literal_pair(
 }
 
 /// `Kernel::evaluate_pairs_mueller` (f64) against [`literal_pair`] for the scene's pairs: every
-/// entry of each lobe within `(10⁻¹² + 8 ε (e + |ln M₀₀| + k |G⁻¹ h_t|)) M₀₀ + MIN_POSITIVE
-/// max(1, M′₀₀)`
-/// of the literal matrix (`M₀₀` the literal one). `e` is the lobe's exponent: `exp` turns its
-/// rounding into a relative error `ε e`. The last term is the exponent's conditioning: both
+/// entry of each lobe within `8 ε (16 + e + |ln M₀₀| + k |G⁻¹ h_t|) M₀₀ + MIN_POSITIVE
+/// max(1, M′₀₀)` of the literal matrix (`M₀₀` the literal one). `128 ε` covers the two routes'
+/// matrix algebra (both a few dozen operations on entries at most `M₀₀`). `e` is the lobe's
+/// exponent: `exp` turns its rounding into a relative error `ε e`. The last term is the exponent's conditioning: both
 /// sides form `h_t = k(ŝ + r̂)_t` from unit vectors each rounded by up to `2 ε`, so `h_t` may
 /// differ by `4 ε k` on either side, and the exponent by `|G⁻¹ h_t|` times that (found needed:
 /// without it the specular lobe of a wide coherence, `e ≈ 130`, differed by 1.6·10⁻¹¹
@@ -483,7 +483,7 @@ where
             let m00 = want[lobe][(0, 0)];
             let [e, gradient, unscaled] = terms[lobe];
             let ln = if m00 > 0.0 { m00.ln().abs() } else { 0.0 };
-            let bound = (1e-12 + 8.0 * f64::EPSILON * (e + ln + k * gradient)) * m00
+            let bound = (8.0 * f64::EPSILON * (16.0 + e + ln + k * gradient)) * m00
                 + f64::MIN_POSITIVE * unscaled.max(1.0);
             for e in 0..entries {
                 let (g, w) = (got.m[e][i], want[lobe][(e / 4, e % 4)]);
